@@ -1,0 +1,21 @@
+#!/usr/bin/env bash
+# The two commands of the project (see README.md):
+#   bash run.sh main   set everything up, build, run the paper's five-push experiment
+#   bash run.sh test   set everything up, build, run the whole test suite (CTest + pytest)
+set -euo pipefail
+root="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
+cd "$root"
+case "${1:-}" in
+  main)
+    bash scripts/setup.sh
+    .venv/bin/anklehip run paper_five_pushes --out results/paper_five_pushes --plots
+    ;;
+  test)
+    bash scripts/setup.sh
+    export PATH="$root/.venv/bin:$PATH"
+    ctest --test-dir "${ANKLEHIP_BUILD_DIR:-build}" --output-on-failure --no-tests=error
+    .venv/bin/python -m pytest -q tests
+    ;;
+  *)
+    echo "usage: bash run.sh main|test" >&2; exit 2 ;;
+esac
