@@ -1,0 +1,439 @@
+/*
+ * controller.c — the four-phase ankle/hip balance controller (Nenchev & Nishio, ICRA 2010;
+ * our reading in DESIGN section 4 and docs/controller.md).
+ *
+ * Structure of one tick (ahc_step):
+ *   1. classify the inputs (fault bits); on a "hold" fault freeze the reference and return;
+ *   2. ZMP low-pass filter (DESIGN lesson 1), kinematics, disturbance estimate d (lesson 5);
+ *   3. phase transitions, decided on the state at the start of the tick (phase_transitions);
+ *   4. the control law of the (possibly new) phase, integrated over one tick (law_*):
+ *      acceleration laws (eqs. 11, 16) with semi-implicit Euler  v += h a(x, v); x += h v,
+ *      rate laws (eqs. 23, 25) with explicit Euler               x += h v(x);
+ *   5. joint-limit clamp, outputs.
+ * Reference states (th1, dth1, th2, dth2) are the controller's own (admittance view); the
+ * kinematics (r_x, r_z, C1, C12) use the measured angles unless kinematics_source says otherwise.
+ */
+#include <math.h>
+#include <string.h>
+
+#include "ahc/controller.h"
+
+static double clampd(double v, double lo, double hi) { return v < lo ? lo : (v > hi ? hi : v); }
+
+/* Context of one tick: measured/derived quantities shared by the laws. */
+typedef struct {
+    double h;
+    double rx, rz;   /* CoM projection and height (kinematics angles) */
+    double a;        /* k_m lg2 C12 = second entry of J_cx (eq. 20) */
+    double ratio;    /* reactionless ratio (eq. 15) */
+    double Ja;       /* whole-body inertia about the ankle (eq. 11 denominator) */
+    double d;        /* disturbance moment estimate */
+} tick_ctx;
+
+/* ------------------------------------------------------------------------------------------- */
+
+int ahc_init(ahc_controller *c, const ahc_params *p)
+{
+    int rc;
+    if (!c) return AHC_ERR_NULL;
+    memset(c, 0, sizeof *c);
+    rc = ahc_params_validate(p, NULL, 0);
+    if (rc != AHC_OK) {
+        c->valid = 0;
+        if (p) c->p = *p;
+        return rc;
+    }
+    c->p = *p;
+    c->valid = 1;
+    ahc_reset(c);
+    return AHC_OK;
+}
+
+static void compute_derived(ahc_controller *c)
+{
+    const ahc_params *p = &c->p;
+    c->m = p->m1 + p->m2;
+    c->km = p->m2 / c->m;
+    c->J2 = p->I2 + p->m2 * p->lg2 * p->lg2;
+    ahc_com(p, 0.0, 0.0, NULL, &c->rz_erect);
+    c->zmp_alpha = p->zmp_filter_tau > 0.0 ? 1.0 - exp(-p->sample_period / p->zmp_filter_tau) : 1.0;
+}
+
+int ahc_update_params(ahc_controller *c, const ahc_params *p)
+{
+    int rc;
+    if (!c || !p) return AHC_ERR_NULL;
+    rc = ahc_params_validate(p, NULL, 0);
+    if (rc != AHC_OK) return rc;
+    if (!c->valid) return ahc_init(c, p);
+    c->p = *p;
+    compute_derived(c);
+    return AHC_OK;
+}
+
+void ahc_reset(ahc_controller *c)
+{
+    ahc_params p;
+    int valid;
+    if (!c) return;
+    p = c->p;
+    valid = c->valid;
+    memset(c, 0, sizeof *c);
+    c->p = p;
+    c->valid = valid;
+    if (!valid) return;
+    compute_derived(c);
+    c->phase = AHC_PHASE_ANKLE;
+    c->push_sign = 1;
+    ahc_quintic_init(&c->kw_spline, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, p.T_ah);
+    ahc_quintic_init(&c->rxd_spline, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, p.T_ah);
+}
+
+double ahc_time(const ahc_controller *c)
+{
+    return (double)c->tick * c->p.sample_period;
+}
+
+/* ------------------------------------------------------------------------------------------- */
+/* Phase entries. Each keeps th1, dth1, th2, dth2 continuous (bumpless). */
+
+static void enter_ankle(ahc_controller *c)
+{
+    /* Eq. 11 takes over the ankle with its state (th1, dth1) = current reference angle and the
+     * last commanded rate; the hip keeps the eq. 25 regulator (with its bumpless offset). */
+    c->phase = AHC_PHASE_ANKLE;
+    c->phase_time = 0.0;
+    c->fallback_timer = 0.0;
+    c->k_w = 0.0;
+}
+
+static void enter_ankle_to_hip(ahc_controller *c, const tick_ctx *k, int sign)
+{
+    /* DESIGN lesson 2: r_x_d starts at the current CoM projection with the velocity v0 that
+     * makes eq. 23 (k_w = 0, r_x_d = r_x) reproduce the current ankle rate exactly:
+     *   dth1 = r_z/(r_z^2 + a^2) * v0   =>   v0 = dth1 (r_z^2 + a^2)/r_z,
+     * i.e. the CoM velocity as eq. 23 sees it; zero acceleration; ends at (0, 0, 0). */
+    const double n2 = k->rz * k->rz + k->a * k->a;
+    const double v0 = (fabs(k->rz) > 1e-9) ? c->dth1 * n2 / k->rz : 0.0;
+    c->phase = AHC_PHASE_ANKLE_TO_HIP;
+    c->push_sign = sign;
+    c->phase_time = 0.0;
+    c->fallback_timer = 0.0;
+    ahc_quintic_init(&c->kw_spline, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, c->p.T_ah);
+    ahc_quintic_init(&c->rxd_spline, k->rx, v0, 0.0, 0.0, 0.0, 0.0, c->p.T_ah);
+    c->hip_bump = 0.0; /* eq. 16 takes the hip with state (th2, dth2): continuous */
+}
+
+static void enter_hip(ahc_controller *c)
+{
+    c->phase = AHC_PHASE_HIP;
+    c->phase_time = 0.0;
+    c->fallback_timer = 0.0;
+    c->k_w = 1.0;
+    c->rxd = 0.0;
+    c->drxd = 0.0;
+    c->hip_bump = 0.0;
+}
+
+static void enter_hip_to_ankle(ahc_controller *c)
+{
+    /* Eq. 25 regulator dth2 = -Kp_theta th2 + b, with the bumpless offset b = dth2 + Kp_theta th2
+     * at entry, decaying as exp(-Kp_theta t): the hip rate is continuous. */
+    c->phase = AHC_PHASE_HIP_TO_ANKLE;
+    c->phase_time = 0.0;
+    c->fallback_timer = 0.0;
+    c->hip_bump = c->dth2 + c->p.Kp_theta * c->th2;
+}
+
+/* ------------------------------------------------------------------------------------------- */
+
+static int zmp_beyond_limit(const ahc_controller *c, int *sign)
+{
+    if (c->zmp_f >= c->p.zmp_limit_front) { *sign = 1; return 1; }
+    if (c->zmp_f <= c->p.zmp_limit_back) { *sign = -1; return 1; }
+    return 0;
+}
+
+/* All phase switches in one place (DESIGN section 4; docs/controller.md, "phases"). */
+static void phase_transitions(ahc_controller *c, const tick_ctx *k)
+{
+    const ahc_params *p = &c->p;
+    int sign = 1;
+
+    if (!p->hip_strategy_enabled) {
+        /* Ankle strategy only: reaching p_lim changes nothing. */
+        if (c->phase != AHC_PHASE_ANKLE) enter_ankle(c);
+        return;
+    }
+
+    switch (c->phase) {
+    case AHC_PHASE_ANKLE:
+        /* 0 -> 1: the (filtered) ZMP reaches the safety limit on either side. */
+        if (zmp_beyond_limit(c, &sign)) enter_ankle_to_hip(c, k, sign);
+        break;
+    case AHC_PHASE_ANKLE_TO_HIP:
+        /* 1 -> 2: after T_ah (round(T_ah / h) ticks in phase 1); the duration the splines were
+         * built with, in case T_ah was changed during the transition. */
+        if (c->phase_time >= c->kw_spline.T - 0.5 * k->h) enter_hip(c);
+        break;
+    case AHC_PHASE_HIP: {
+        /* 2 -> 3: paper: r_z back in the band near erect AND p on the side opposite to the push;
+         * fallback (DESIGN lesson 3): |d| small and hip near erect for fallback_dwell. */
+        const double drz = k->rz - c->rz_erect;
+        const int paper = drz >= p->rz_band_low && drz <= p->rz_band_high &&
+                          (double)c->push_sign * c->zmp_f < 0.0;
+        const int quiet = fabs(k->d) <= p->fallback_disturbance_tol && fabs(c->th2) <= p->fallback_hip_tol;
+        c->fallback_timer = quiet ? c->fallback_timer + k->h : 0.0;
+        if (paper || (quiet && c->fallback_timer >= p->fallback_dwell - 0.5 * k->h))
+            enter_hip_to_ankle(c);
+        break;
+    }
+    case AHC_PHASE_HIP_TO_ANKLE:
+        /* A new push while returning: back to the hip strategy (k_w = 1 and r_x_d = 0 already). */
+        if (zmp_beyond_limit(c, &sign)) {
+            c->push_sign = sign;
+            enter_hip(c);
+        } else if (fabs(c->th2) <= p->return_hip_angle_tol && fabs(c->dth2) <= p->return_hip_rate_tol) {
+            /* 3 -> 0: hip back at erect. */
+            enter_ankle(c);
+        }
+        break;
+    default:
+        enter_ankle(c);
+        break;
+    }
+}
+
+/* ------------------------------------------------------------------------------------------- */
+/* Control laws; each integrates the reference over one tick. */
+
+/* Eq. 11: th1'' = (d - Ca th1' - Ka th1) / (I + m lg^2). Semi-implicit Euler. */
+static void law_ankle_strategy(ahc_controller *c, const tick_ctx *k)
+{
+    const double acc = (k->d - c->p.Ca * c->dth1 - c->p.Ka * c->th1) / k->Ja;
+    c->dth1 += k->h * acc;
+    c->th1 += k->h * c->dth1;
+}
+
+/* Eq. 16: th2'' = (m2 g (p - r_x) - Ch th2' - Kh th2) / (I2 + m2 lg2^2), with
+ * m2 g (p - r_x) = k_m d. Semi-implicit Euler. */
+static void law_hip_strategy(ahc_controller *c, const tick_ctx *k)
+{
+    const double acc = (c->km * k->d - c->p.Ch * c->dth2 - c->p.Kh * c->th2) / c->J2;
+    c->dth2 += k->h * acc;
+    c->th2 += k->h * c->dth2;
+}
+
+/* Eq. 25: th2' = -Kp_theta th2 (+ decaying bumpless offset). Explicit Euler. */
+static void law_hip_regulator(ahc_controller *c, const tick_ctx *k)
+{
+    c->dth2 = -c->p.Kp_theta * c->th2 + c->hip_bump;
+    c->th2 += k->h * c->dth2;
+    c->hip_bump *= exp(-c->p.Kp_theta * k->h);
+}
+
+/* Eqs. 23-24: th1' = r_z/(r_z^2 + a^2) r_x_ref' + k_w ratio th2',
+ *             r_x_ref' = r_x_d' + Kpr (r_x_d - r_x)   (feed-forward: DESIGN lesson 2).
+ * Uses the hip rate commanded this tick. Explicit Euler. */
+static void law_ankle_reactionless(ahc_controller *c, const tick_ctx *k)
+{
+    const double n2 = k->rz * k->rz + k->a * k->a;
+    const double rdot = c->drxd + c->p.Kpr * (c->rxd - k->rx);
+    c->dth1 = (n2 > 1e-12 ? k->rz / n2 * rdot : 0.0) + c->k_w * k->ratio * c->dth2;
+    c->th1 += k->h * c->dth1;
+}
+
+/* ------------------------------------------------------------------------------------------- */
+
+static unsigned classify(const ahc_params *p, const ahc_sensors *s)
+{
+    unsigned f = 0;
+    if (!isfinite(s->theta_ankle))
+        f |= AHC_FAULT_THETA_ANKLE_NONFINITE;
+    else if (s->theta_ankle < p->ankle_min - p->angle_fault_margin ||
+             s->theta_ankle > p->ankle_max + p->angle_fault_margin)
+        f |= AHC_FAULT_ANGLE_RANGE;
+    if (!isfinite(s->theta_hip))
+        f |= AHC_FAULT_THETA_HIP_NONFINITE;
+    else if (s->theta_hip < p->hip_min - p->angle_fault_margin ||
+             s->theta_hip > p->hip_max + p->angle_fault_margin)
+        f |= AHC_FAULT_ANGLE_RANGE;
+    if (!isfinite(s->zmp_x))
+        f |= AHC_FAULT_ZMP_NONFINITE;
+    else if (s->zmp_x > p->toe_x + p->zmp_fault_margin || s->zmp_x < p->heel_x - p->zmp_fault_margin)
+        f |= AHC_FAULT_ZMP_OUTSIDE_FOOT;
+    if (!isfinite(s->fz))
+        f |= AHC_FAULT_FZ_NONFINITE;
+    else if (s->fz < p->fz_lifted)
+        f |= AHC_FAULT_LIFTED;
+    return f;
+}
+
+static int finite4(double a, double b, double c, double d)
+{
+    return isfinite(a) && isfinite(b) && isfinite(c) && isfinite(d);
+}
+
+static void write_outputs(ahc_controller *c, const tick_ctx *k, ahc_outputs *out)
+{
+    memset(out, 0, sizeof *out); /* deterministic padding bytes: outputs can be compared with memcmp */
+    out->theta_ankle_ref = c->th1;
+    out->theta_hip_ref = c->th2;
+    out->dtheta_ankle_ref = c->dth1;
+    out->dtheta_hip_ref = c->dth2;
+    out->phase = c->phase;
+    out->com_x = k->rx;
+    out->com_z = k->rz;
+    out->disturbance_moment = k->d;
+    out->k_w = c->phase == AHC_PHASE_ANKLE ? 0.0 : c->k_w;
+    out->com_x_desired = c->phase == AHC_PHASE_ANKLE ? k->rx : c->rxd;
+    out->fault = c->fault;
+    c->last_out = *out;
+}
+
+void ahc_step(ahc_controller *c, const ahc_sensors *s, ahc_outputs *out)
+{
+    const ahc_params *p = &c->p;
+    tick_ctx k;
+    double kin1, kin2, e;
+    unsigned f;
+
+    memset(&k, 0, sizeof k);
+    if (!c->valid) {
+        memset(out, 0, sizeof *out);
+        out->fault = AHC_FAULT_NOT_INITIALIZED;
+        c->tick++;
+        return;
+    }
+    k.h = p->sample_period;
+    f = classify(p, s);
+
+    if (f & AHC_FAULT_HOLD_MASK) {
+        /* Hold a safe reference: angles frozen, rates zero, timers paused, no NaN anywhere. */
+        c->holding = 1;
+        c->dth1 = 0.0;
+        c->dth2 = 0.0;
+        c->hip_bump = 0.0;
+        c->fallback_timer = 0.0;
+        c->fault = f;
+        ahc_com(p, c->started ? c->last_th1 : c->th1, c->started ? c->last_th2 : c->th2, &k.rx, &k.rz);
+        k.d = 0.0;
+        write_outputs(c, &k, out);
+        c->tick++;
+        return;
+    }
+
+    if (!c->started) {
+        /* Bumpless start from the robot's current posture. */
+        c->th1 = clampd(s->theta_ankle, p->ankle_min, p->ankle_max);
+        c->th2 = clampd(s->theta_hip, p->hip_min, p->hip_max);
+        c->dth1 = c->dth2 = 0.0;
+        c->started = 1;
+    }
+    if (c->holding) {
+        /* Recovery: restart the ZMP filter from the fresh sample. */
+        c->holding = 0;
+        c->zmp_f_valid = 0;
+    }
+    c->last_th1 = s->theta_ankle;
+    c->last_th2 = s->theta_hip;
+
+    /* ZMP low-pass filter, exact discretisation of tau y' = u - y (DESIGN lesson 1). */
+    if (!c->zmp_f_valid) {
+        c->zmp_f = s->zmp_x;
+        c->zmp_f_valid = 1;
+    } else {
+        c->zmp_f += c->zmp_alpha * (s->zmp_x - c->zmp_f);
+    }
+
+    /* Kinematics. */
+    kin1 = p->kinematics_source == AHC_KIN_REFERENCE ? c->th1 : s->theta_ankle;
+    kin2 = p->kinematics_source == AHC_KIN_REFERENCE ? c->th2 : s->theta_hip;
+    ahc_com(p, kin1, kin2, &k.rx, &k.rz);
+    k.a = c->km * p->lg2 * cos(kin1 + kin2);
+    k.ratio = ahc_reactionless_ratio(p, kin1, kin2);
+    k.Ja = ahc_ankle_inertia(p, kin2);
+
+    /* Disturbance estimate d (DESIGN lesson 5). */
+    e = c->zmp_f - k.rx;
+    switch (p->feet_offset_mode) {
+    case AHC_FEET_MODEL:
+        /* Quasi-static moment balance about the ankle projection with the feet included:
+         * (m + m_f) g p = m g r_x + m_f g x_f + tau_push  =>  tau_push = m g (p - r_x) + m_f g (p - x_f). */
+        k.d = c->m * p->g * e + p->feet_mass * p->g * (c->zmp_f - p->feet_com_x);
+        break;
+    case AHC_FEET_CALIBRATE:
+        if (!c->calib_done) {
+            c->calib_sum += e;
+            c->calib_n++;
+            if ((double)c->calib_n * k.h >= p->feet_calibration_time - 0.5 * k.h) {
+                c->calib_bias = c->calib_sum / (double)c->calib_n;
+                c->calib_done = 1;
+            }
+            k.d = 0.0;
+        } else {
+            k.d = c->m * p->g * (e - c->calib_bias);
+        }
+        break;
+    default:
+        k.d = c->m * p->g * e;
+        break;
+    }
+
+    phase_transitions(c, &k);
+
+    {
+        const double th1_0 = c->th1, th2_0 = c->th2;
+        switch (c->phase) {
+        case AHC_PHASE_ANKLE:
+            law_hip_regulator(c, &k);
+            law_ankle_strategy(c, &k);
+            break;
+        case AHC_PHASE_ANKLE_TO_HIP:
+            ahc_quintic_eval(&c->kw_spline, c->phase_time, &c->k_w, NULL, NULL);
+            ahc_quintic_eval(&c->rxd_spline, c->phase_time, &c->rxd, &c->drxd, NULL);
+            law_hip_strategy(c, &k);
+            law_ankle_reactionless(c, &k);
+            break;
+        case AHC_PHASE_HIP:
+            c->k_w = 1.0;
+            c->rxd = 0.0;
+            c->drxd = 0.0;
+            law_hip_strategy(c, &k);
+            law_ankle_reactionless(c, &k);
+            break;
+        default: /* AHC_PHASE_HIP_TO_ANKLE */
+            c->k_w = 1.0;
+            c->rxd = 0.0;
+            c->drxd = 0.0;
+            law_hip_regulator(c, &k);
+            law_ankle_reactionless(c, &k);
+            break;
+        }
+        c->phase_time += k.h;
+
+        /* Last-resort guard (cannot happen with validated params and healthy inputs). */
+        if (!finite4(c->th1, c->dth1, c->th2, c->dth2) || !isfinite(c->hip_bump)) {
+            c->th1 = th1_0;
+            c->th2 = th2_0;
+            c->dth1 = c->dth2 = c->hip_bump = 0.0;
+        }
+    }
+
+    /* Joint limits: clamp the reference and stop its rate. */
+    f = 0;
+    if (c->th1 < p->ankle_min || c->th1 > p->ankle_max) {
+        c->th1 = clampd(c->th1, p->ankle_min, p->ankle_max);
+        c->dth1 = 0.0;
+        f |= AHC_FAULT_REF_SATURATED;
+    }
+    if (c->th2 < p->hip_min || c->th2 > p->hip_max) {
+        c->th2 = clampd(c->th2, p->hip_min, p->hip_max);
+        c->dth2 = 0.0;
+        c->hip_bump = 0.0;
+        f |= AHC_FAULT_REF_SATURATED;
+    }
+    c->fault = f;
+    write_outputs(c, &k, out);
+    c->tick++;
+}

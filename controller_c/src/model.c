@@ -1,0 +1,67 @@
+/*
+ * model.c — kinematics of the planar double inverted pendulum (DESIGN section 4) and the quintic
+ * splines. Pure functions, no state.
+ */
+#include <math.h>
+
+#include "ahc/controller.h"
+
+void ahc_com(const ahc_params *p, double th1, double th2, double *rx, double *rz)
+{
+    const double m = p->m1 + p->m2;
+    const double s1 = sin(th1), c1 = cos(th1);
+    const double s12 = sin(th1 + th2), c12 = cos(th1 + th2);
+    if (rx) *rx = (p->m1 * p->lg1 * s1 + p->m2 * (p->l1 * s1 + p->lg2 * s12)) / m;
+    if (rz) *rz = (p->m1 * p->lg1 * c1 + p->m2 * (p->l1 * c1 + p->lg2 * c12)) / m;
+}
+
+/* Paper eq. 20: J_cx = [r_z, k_m lg2 C12]. */
+void ahc_com_jacobian_x(const ahc_params *p, double th1, double th2, double J[2])
+{
+    double rz = 0.0;
+    ahc_com(p, th1, th2, NULL, &rz);
+    J[0] = rz;
+    J[1] = p->m2 / (p->m1 + p->m2) * p->lg2 * cos(th1 + th2);
+}
+
+/* Paper eq. 15. */
+double ahc_reactionless_ratio(const ahc_params *p, double th1, double th2)
+{
+    const double c1 = cos(th1), c12 = cos(th1 + th2);
+    const double num = p->m2 * p->lg2 * c12;
+    const double den = (p->m1 * p->lg1 + p->m2 * p->l1) * c1 + num;
+    if (fabs(den) < 1e-12) return 0.0;
+    return -num / den;
+}
+
+double ahc_ankle_inertia(const ahc_params *p, double th2)
+{
+    return p->I1 + p->m1 * p->lg1 * p->lg1 + p->I2 +
+           p->m2 * (p->l1 * p->l1 + p->lg2 * p->lg2 + 2.0 * p->l1 * p->lg2 * cos(th2));
+}
+
+void ahc_quintic_init(ahc_quintic *q, double x0, double v0, double a0,
+                      double x1, double v1, double a1, double T)
+{
+    /* x(t) = c0 + c1 t + c2 t^2 + c3 t^3 + c4 t^4 + c5 t^5; closed-form solution of the six
+     * boundary conditions. */
+    const double T2 = T * T, T3 = T2 * T, T4 = T3 * T, T5 = T4 * T;
+    const double dx = x1 - x0;
+    q->T = T;
+    q->c[0] = x0;
+    q->c[1] = v0;
+    q->c[2] = 0.5 * a0;
+    q->c[3] = (20.0 * dx - (8.0 * v1 + 12.0 * v0) * T - (3.0 * a0 - a1) * T2) / (2.0 * T3);
+    q->c[4] = (-30.0 * dx + (14.0 * v1 + 16.0 * v0) * T + (3.0 * a0 - 2.0 * a1) * T2) / (2.0 * T4);
+    q->c[5] = (12.0 * dx - 6.0 * (v1 + v0) * T - (a0 - a1) * T2) / (2.0 * T5);
+}
+
+void ahc_quintic_eval(const ahc_quintic *q, double t, double *x, double *v, double *a)
+{
+    const double *c = q->c;
+    if (t < 0.0) t = 0.0;
+    if (t > q->T) t = q->T;
+    if (x) *x = c[0] + t * (c[1] + t * (c[2] + t * (c[3] + t * (c[4] + t * c[5]))));
+    if (v) *v = c[1] + t * (2.0 * c[2] + t * (3.0 * c[3] + t * (4.0 * c[4] + t * 5.0 * c[5])));
+    if (a) *a = 2.0 * c[2] + t * (6.0 * c[3] + t * (12.0 * c[4] + t * 20.0 * c[5]));
+}

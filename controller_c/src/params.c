@@ -1,0 +1,328 @@
+/*
+ * params.c — defaults, the parameter metadata table (single source of truth for the FMU's
+ * parameter variables), validation, and name helpers.
+ */
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "ahc/controller.h"
+
+void ahc_params_default(ahc_params *p)
+{
+    memset(p, 0, sizeof *p);
+    /* model: hoap2_model.h (DESIGN section 5) */
+    p->g = AHC_HOAP2_G;
+    p->m1 = AHC_HOAP2_M1;
+    p->l1 = AHC_HOAP2_L1;
+    p->lg1 = AHC_HOAP2_LG1;
+    p->I1 = AHC_HOAP2_I1;
+    p->m2 = AHC_HOAP2_M2;
+    p->lg2 = AHC_HOAP2_LG2;
+    p->I2 = AHC_HOAP2_I2;
+    p->feet_mass = AHC_HOAP2_FEET_MASS;
+    p->feet_com_x = AHC_HOAP2_FEET_COM_X;
+    p->feet_com_z = AHC_HOAP2_FEET_COM_Z;
+    p->toe_x = AHC_HOAP2_TOE_X;
+    p->heel_x = AHC_HOAP2_HEEL_X;
+    p->ankle_height = AHC_HOAP2_ANKLE_HEIGHT;
+    p->ankle_min = AHC_HOAP2_ANKLE_MIN;
+    p->ankle_max = AHC_HOAP2_ANKLE_MAX;
+    p->hip_min = AHC_HOAP2_HIP_MIN;
+    p->hip_max = AHC_HOAP2_HIP_MAX;
+
+    /* gains: paper values read as N mm/rad -> SI (DESIGN section 4, docs/controller.md) */
+    p->Ka = 40.0;      /* paper 40000 N mm/rad   */
+    p->Ca = 10.0;      /* paper 10000 N mm s/rad */
+    p->Kh = 4.0;       /* paper 4000 N mm/rad    */
+    p->Ch = 1.0;       /* paper 1000 N mm s/rad  */
+    p->Kpr = 100.0;    /* paper, 1/s             */
+    p->Kp_theta = 15.0;/* paper, 1/s             */
+
+    /* phase logic. ZMP limits: the paper's 45 mm leaves 12.5 mm to the toe, too little for the
+     * transition (DESIGN lesson 4); defaults keep ~40 % of each half-sole as margin. The paper's
+     * numbers are in ahc_params_paper(). */
+    p->hip_strategy_enabled = 1;
+    p->zmp_limit_front = 0.035;
+    p->zmp_limit_back = -0.0225;
+    p->T_ah = 1.0;                 /* paper: 1 s */
+    p->rz_band_low = -0.002;       /* paper: 264.5 mm < r_z < 266.5 mm, a 2 mm band below erect */
+    p->rz_band_high = 0.001;
+    p->fallback_disturbance_tol = 0.1;  /* ~1.6 mm of p - r_x with m g = 63.8 N */
+    p->fallback_hip_tol = 0.05;
+    p->fallback_dwell = 0.5;
+    p->return_hip_angle_tol = 0.005;
+    p->return_hip_rate_tol = 0.05;
+
+    /* sensing */
+    p->zmp_filter_tau = 0.02;      /* DESIGN lesson 1: 10-30 ms */
+    p->feet_offset_mode = AHC_FEET_MODEL;
+    p->feet_calibration_time = 0.2;
+    p->kinematics_source = AHC_KIN_MEASURED;
+
+    /* faults */
+    p->fz_lifted = 10.0;           /* ~14 % of the robot's weight (70 N) */
+    p->zmp_fault_margin = 0.02;
+    p->angle_fault_margin = 0.1;
+
+    p->sample_period = AHC_HOAP2_SAMPLE_PERIOD;
+}
+
+void ahc_params_paper(ahc_params *p)
+{
+    ahc_params_default(p);
+    p->zmp_limit_front = 0.045;  /* paper: p_lim = 45 mm (12.5 mm from the toe) */
+    p->zmp_limit_back = -0.025;  /* same 12.5 mm margin at the heel (our symmetric extension) */
+}
+
+/* ------------------------------------------------------------------------------------------- */
+
+#define PI_D(field, unit, lo, hi, strict, desc) \
+    { #field, unit, desc, lo, hi, offsetof(ahc_params, field), 0, strict }
+#define PI_I(field, lo, hi, desc) \
+    { #field, "", desc, lo, hi, offsetof(ahc_params, field), 1, 0 }
+
+/* Append new rows at the end only: the FMU derives value references from the row index. */
+static const ahc_param_info k_table[] = {
+    PI_D(g, "m/s2", 0.0, 100.0, 1, "Gravitational acceleration"),
+    PI_D(m1, "kg", 0.0, 1000.0, 1, "Mass of link 1 (both legs, ankle to hip)"),
+    PI_D(l1, "m", 0.0, 10.0, 1, "Length of link 1, ankle axis to hip axis"),
+    PI_D(lg1, "m", 0.0, 10.0, 1, "Distance ankle axis to CoM of link 1"),
+    PI_D(I1, "kg.m2", 0.0, 100.0, 0, "Inertia of link 1 about its CoM (pitch)"),
+    PI_D(m2, "kg", 0.0, 1000.0, 1, "Mass of link 2 (upper body)"),
+    PI_D(lg2, "m", 0.0, 10.0, 1, "Distance hip axis to CoM of link 2"),
+    PI_D(I2, "kg.m2", 0.0, 100.0, 0, "Inertia of link 2 about its CoM (pitch)"),
+    PI_D(feet_mass, "kg", 0.0, 1000.0, 0, "Mass of both feet (used by feet_offset_mode = 1)"),
+    PI_D(feet_com_x, "m", -1.0, 1.0, 0, "Feet CoM x forward of the ankle axis"),
+    PI_D(feet_com_z, "m", 0.0, 1.0, 0, "Feet CoM height above the sole (informational; not used by the control laws)"),
+    PI_D(toe_x, "m", 0.0, 1.0, 1, "Toe edge x from the ankle axis (> 0)"),
+    PI_D(heel_x, "m", -1.0, 0.0, 0, "Heel edge x from the ankle axis (< 0)"),
+    PI_D(ankle_height, "m", 0.0, 1.0, 0, "Ankle axis height above the sole (informational; not used by the control laws)"),
+    PI_D(ankle_min, "rad", -3.2, 0.0, 0, "Ankle joint lower limit"),
+    PI_D(ankle_max, "rad", 0.0, 3.2, 0, "Ankle joint upper limit"),
+    PI_D(hip_min, "rad", -3.2, 0.0, 0, "Hip joint lower limit"),
+    PI_D(hip_max, "rad", 0.0, 3.2, 0, "Hip joint upper limit"),
+    PI_D(Ka, "N.m/rad", 0.0, 1e6, 1, "Ankle virtual stiffness (eq. 11; paper 40000 N.mm/rad)"),
+    PI_D(Ca, "N.m.s/rad", 0.0, 1e6, 0, "Ankle virtual damping (eq. 11; paper 10000 N.mm.s/rad)"),
+    PI_D(Kh, "N.m/rad", 0.0, 1e6, 1, "Hip virtual stiffness (eq. 16; paper 4000 N.mm/rad)"),
+    PI_D(Ch, "N.m.s/rad", 0.0, 1e6, 0, "Hip virtual damping (eq. 16; paper 1000 N.mm.s/rad)"),
+    PI_D(Kpr, "1/s", 0.0, 1e6, 1, "CoM projection feedback gain (eq. 24)"),
+    PI_D(Kp_theta, "1/s", 0.0, 1e6, 1, "Hip return regulator gain (eq. 25)"),
+    PI_I(hip_strategy_enabled, 0.0, 1.0,
+         "1: ankle and hip strategies with transitions; 0: ankle strategy only"),
+    PI_D(zmp_limit_front, "m", 0.0, 1.0, 1,
+         "ZMP safety limit on the toe side (x coordinate) that starts the ankle-to-hip transition"),
+    PI_D(zmp_limit_back, "m", -1.0, 0.0, 0,
+         "ZMP safety limit on the heel side (x coordinate, < 0) for pushes from the front"),
+    PI_D(T_ah, "s", 0.0, 100.0, 1, "Duration of the ankle-to-hip transition"),
+    PI_D(rz_band_low, "m", -1.0, 0.0, 0,
+         "Hip-to-ankle trigger: lower edge of the CoM height band relative to erect"),
+    PI_D(rz_band_high, "m", 0.0, 1.0, 0,
+         "Hip-to-ankle trigger: upper edge of the CoM height band relative to erect"),
+    PI_D(fallback_disturbance_tol, "N.m", 0.0, 100.0, 0,
+         "Hip-to-ankle fallback: disturbance moment magnitude below this"),
+    PI_D(fallback_hip_tol, "rad", 0.0, 3.2, 0,
+         "Hip-to-ankle fallback: hip reference magnitude below this"),
+    PI_D(fallback_dwell, "s", 0.0, 100.0, 0,
+         "Hip-to-ankle fallback: time both fallback conditions must hold"),
+    PI_D(return_hip_angle_tol, "rad", 0.0, 1.0, 1,
+         "Return to the ankle strategy when |hip reference| is below this"),
+    PI_D(return_hip_rate_tol, "rad/s", 0.0, 10.0, 1,
+         "Return to the ankle strategy when |hip reference rate| is below this"),
+    PI_D(zmp_filter_tau, "s", 0.0, 10.0, 0, "Time constant of the ZMP low-pass filter (0 = off)"),
+    PI_I(feet_offset_mode, 0.0, 2.0,
+         "Feet in the disturbance estimate: 0 ignore (paper), 1 model, 2 calibrate at rest"),
+    PI_D(feet_calibration_time, "s", 0.0, 100.0, 0,
+         "Averaging time of the at-rest calibration (feet_offset_mode = 2)"),
+    PI_I(kinematics_source, 0.0, 1.0,
+         "Angles for r_x, r_z, C1, C12: 0 measured, 1 controller reference"),
+    PI_D(fz_lifted, "N", 0.0, 1e4, 0, "Normal force below which the robot counts as lifted"),
+    PI_D(zmp_fault_margin, "m", 0.0, 1.0, 0,
+         "ZMP beyond a sole edge by more than this is a sensor fault"),
+    PI_D(angle_fault_margin, "rad", 0.0, 3.2, 0,
+         "Measured angle beyond its joint limit by more than this is a sensor fault"),
+    PI_D(sample_period, "s", 0.0, 1.0, 1, "Control period; one ahc_step advances by this"),
+};
+
+#define TABLE_LEN (sizeof k_table / sizeof k_table[0])
+
+const ahc_param_info *ahc_param_table(size_t *count)
+{
+    if (count) *count = TABLE_LEN;
+    return k_table;
+}
+
+const ahc_param_info *ahc_param_find(const char *name)
+{
+    size_t i;
+    if (!name) return NULL;
+    for (i = 0; i < TABLE_LEN; ++i)
+        if (strcmp(k_table[i].name, name) == 0) return &k_table[i];
+    return NULL;
+}
+
+/* ------------------------------------------------------------------------------------------- */
+
+static int fail(char *msg, size_t n, int code, const char *fmt, ...)
+{
+    if (msg && n > 0) {
+        va_list ap;
+        va_start(ap, fmt);
+        vsnprintf(msg, n, fmt, ap);
+        va_end(ap);
+    }
+    return code;
+}
+
+static double field_value(const ahc_params *p, const ahc_param_info *e)
+{
+    const char *base = (const char *)p + e->offset;
+    if (e->is_int) {
+        int v;
+        memcpy(&v, base, sizeof v);
+        return (double)v;
+    }
+    {
+        double v;
+        memcpy(&v, base, sizeof v);
+        return v;
+    }
+}
+
+/* Stability of semi-implicit Euler on x'' = -k x - c x' with step h (Jury criterion on
+ * lambda^2 - (2 - hc - h^2 k) lambda + (1 - hc)): 0 < hc < 2 and 4 - 2hc - h^2 k > 0. */
+static int symplectic_stable(double h, double k, double c)
+{
+    return h * c < 2.0 && 4.0 - 2.0 * h * c - h * h * k > 0.0;
+}
+
+int ahc_params_validate(const ahc_params *p, char *msg, size_t msg_size)
+{
+    size_t i;
+    double h, Jmin;
+    if (msg && msg_size > 0) msg[0] = '\0';
+    if (!p) return fail(msg, msg_size, AHC_ERR_NULL, "params pointer is NULL");
+
+    for (i = 0; i < TABLE_LEN; ++i) {
+        const ahc_param_info *e = &k_table[i];
+        const double v = field_value(p, e);
+        if (!isfinite(v))
+            return fail(msg, msg_size, AHC_ERR_NONFINITE, "%s = %g must be finite", e->name, v);
+        if (e->strict_min && !(v > e->min))
+            return fail(msg, msg_size, AHC_ERR_RANGE, "%s = %.6g must be > %.6g", e->name, v, e->min);
+        if (v < e->min)
+            return fail(msg, msg_size, AHC_ERR_RANGE, "%s = %.6g must be >= %.6g", e->name, v, e->min);
+        if (v > e->max)
+            return fail(msg, msg_size, AHC_ERR_RANGE, "%s = %.6g must be <= %.6g", e->name, v, e->max);
+    }
+
+    if (!(p->heel_x < 0.0))
+        return fail(msg, msg_size, AHC_ERR_RANGE, "heel_x = %.6g must be < 0", p->heel_x);
+    if (!(p->zmp_limit_back < 0.0))
+        return fail(msg, msg_size, AHC_ERR_RANGE,
+                    "zmp_limit_back = %.6g must be < 0 (x coordinate on the heel side)",
+                    p->zmp_limit_back);
+    if (!(p->zmp_limit_front < p->toe_x))
+        return fail(msg, msg_size, AHC_ERR_INCONSISTENT,
+                    "zmp_limit_front = %.6g lies outside the foot (toe at %.6g)",
+                    p->zmp_limit_front, p->toe_x);
+    if (!(p->zmp_limit_back > p->heel_x))
+        return fail(msg, msg_size, AHC_ERR_INCONSISTENT,
+                    "zmp_limit_back = %.6g lies outside the foot (heel at %.6g)",
+                    p->zmp_limit_back, p->heel_x);
+    if (!(p->lg1 <= p->l1))
+        return fail(msg, msg_size, AHC_ERR_INCONSISTENT,
+                    "lg1 = %.6g must be <= l1 = %.6g (CoM of link 1 lies on the link)", p->lg1, p->l1);
+    if (!(p->ankle_min < p->ankle_max))
+        return fail(msg, msg_size, AHC_ERR_INCONSISTENT, "ankle_min = %.6g must be < ankle_max = %.6g",
+                    p->ankle_min, p->ankle_max);
+    if (!(p->hip_min < p->hip_max))
+        return fail(msg, msg_size, AHC_ERR_INCONSISTENT, "hip_min = %.6g must be < hip_max = %.6g",
+                    p->hip_min, p->hip_max);
+    if (!(p->rz_band_low < p->rz_band_high))
+        return fail(msg, msg_size, AHC_ERR_INCONSISTENT,
+                    "rz_band_low = %.6g must be < rz_band_high = %.6g", p->rz_band_low, p->rz_band_high);
+
+    h = p->sample_period;
+    if (!(p->T_ah >= 2.0 * h))
+        return fail(msg, msg_size, AHC_ERR_INCONSISTENT,
+                    "T_ah = %.6g must be at least two sample periods (sample_period = %.6g)", p->T_ah, h);
+    if (p->feet_offset_mode == AHC_FEET_CALIBRATE && !(p->feet_calibration_time >= h))
+        return fail(msg, msg_size, AHC_ERR_INCONSISTENT,
+                    "feet_calibration_time = %.6g must be >= sample_period = %.6g with feet_offset_mode = 2",
+                    p->feet_calibration_time, h);
+
+    /* Discrete-time stability of the reference integrators at this sample period. */
+    Jmin = p->I1 + p->m1 * p->lg1 * p->lg1 + p->I2 + p->m2 * (p->l1 - p->lg2) * (p->l1 - p->lg2);
+    if (!symplectic_stable(h, p->Ka / Jmin, p->Ca / Jmin))
+        return fail(msg, msg_size, AHC_ERR_INCONSISTENT,
+                    "sample_period = %.6g too large for the ankle law (Ka = %.6g, Ca = %.6g): "
+                    "semi-implicit Euler unstable", h, p->Ka, p->Ca);
+    {
+        const double J2 = p->I2 + p->m2 * p->lg2 * p->lg2;
+        if (!(J2 > 0.0) || !symplectic_stable(h, p->Kh / J2, p->Ch / J2))
+            return fail(msg, msg_size, AHC_ERR_INCONSISTENT,
+                        "sample_period = %.6g too large for the hip law (Kh = %.6g, Ch = %.6g): "
+                        "semi-implicit Euler unstable", h, p->Kh, p->Ch);
+    }
+    if (!(h * p->Kp_theta < 1.0))
+        return fail(msg, msg_size, AHC_ERR_INCONSISTENT,
+                    "Kp_theta = %.6g too large for sample_period = %.6g (need Kp_theta * h < 1)",
+                    p->Kp_theta, h);
+    if (!(h * p->Kpr < 1.0))
+        return fail(msg, msg_size, AHC_ERR_INCONSISTENT,
+                    "Kpr = %.6g too large for sample_period = %.6g (need Kpr * h < 1)", p->Kpr, h);
+    return AHC_OK;
+}
+
+/* ------------------------------------------------------------------------------------------- */
+
+const char *ahc_phase_name(int phase)
+{
+    switch (phase) {
+    case AHC_PHASE_ANKLE: return "ankle";
+    case AHC_PHASE_ANKLE_TO_HIP: return "ankle_to_hip";
+    case AHC_PHASE_HIP: return "hip";
+    case AHC_PHASE_HIP_TO_ANKLE: return "hip_to_ankle";
+    default: return "unknown";
+    }
+}
+
+const char *ahc_error_string(int code)
+{
+    switch (code) {
+    case AHC_OK: return "ok";
+    case AHC_ERR_NULL: return "NULL argument";
+    case AHC_ERR_NONFINITE: return "non-finite parameter";
+    case AHC_ERR_RANGE: return "parameter out of range";
+    case AHC_ERR_INCONSISTENT: return "inconsistent parameters";
+    default: return "unknown error";
+    }
+}
+
+const char *ahc_fault_string(unsigned fault, char *msg, size_t msg_size)
+{
+    static const struct { unsigned bit; const char *name; } names[] = {
+        { AHC_FAULT_THETA_ANKLE_NONFINITE, "theta_ankle_nonfinite" },
+        { AHC_FAULT_THETA_HIP_NONFINITE, "theta_hip_nonfinite" },
+        { AHC_FAULT_ZMP_NONFINITE, "zmp_nonfinite" },
+        { AHC_FAULT_FZ_NONFINITE, "fz_nonfinite" },
+        { AHC_FAULT_ZMP_OUTSIDE_FOOT, "zmp_outside_foot" },
+        { AHC_FAULT_LIFTED, "lifted" },
+        { AHC_FAULT_ANGLE_RANGE, "angle_range" },
+        { AHC_FAULT_REF_SATURATED, "ref_saturated" },
+        { AHC_FAULT_NOT_INITIALIZED, "not_initialized" },
+    };
+    size_t i, used = 0;
+    if (!msg || msg_size == 0) return msg;
+    msg[0] = '\0';
+    for (i = 0; i < sizeof names / sizeof names[0]; ++i) {
+        if (fault & names[i].bit) {
+            int n = snprintf(msg + used, msg_size - used, "%s%s", used ? "," : "", names[i].name);
+            if (n < 0 || (size_t)n >= msg_size - used) break;
+            used += (size_t)n;
+        }
+    }
+    return msg;
+}
