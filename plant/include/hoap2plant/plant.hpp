@@ -1,0 +1,133 @@
+// The HOAP-2 plant as a time-stepped simulator: contact-mode state machine driven by CVODE root
+// functions, joint servos, sole sensors, push input, fall detection, snapshots.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "hoap2plant/model.hpp"
+
+namespace hoap2plant {
+
+struct Stats {
+  std::int64_t steps = 0;      // CVODE internal steps
+  std::int64_t rhs_evals = 0;  // RHS evaluations (incl. finite-difference Jacobian)
+  std::int64_t root_evals = 0; // root-function evaluations
+  std::int64_t mode_switches = 0;
+  std::int64_t impacts = 0;
+  std::int64_t reinits = 0;
+};
+
+struct Outputs {
+  double t = 0;
+  double theta_ankle = 0, theta_hip = 0, dtheta_ankle = 0, dtheta_hip = 0;
+  double zmp_x = 0;        // from the sole load cells (as the robot's electronics compute it)
+  double fz = 0;           // sum of the sole load cells [N]
+  double f_toe = 0, f_heel = 0;  // load cells (with noise/bias if enabled) [N]
+  double zmp_true = 0;     // centre of pressure of the constrained dynamics (no sensor model)
+  double fz_true = 0, fx = 0, moment_ankle = 0;  // ground reaction (world), moment about ankle
+  double com_x = 0, com_z = 0;  // whole-robot CoM rel. to the ankle's ground projection / ankle
+  double foot_pitch = 0;
+  int contact_mode = 0;
+  bool fallen = false;
+  double required_mu = 0;  // |Fx| / Fz
+  double energy = 0;       // kinetic + potential [J]
+  double tau_ankle = 0, tau_hip = 0;  // joint torques applied (servo + passive damping) [N m]
+};
+
+// Plain-old-data snapshot: everything that determines the future (bit for bit).
+struct Snapshot {
+  std::uint32_t magic = 0x48325053u;  // "H2PS"
+  std::uint32_t version = 1;
+  double t = 0;
+  double y[10] = {};
+  std::int32_t mode = 0;
+  std::int32_t fallen = 0;
+  double pivot[2] = {};
+  double t_fall = 0;
+  double inputs[3] = {};
+  std::uint64_t rng = 0;
+  Stats stats;
+  Outputs out;
+};
+
+struct ModeEvent {
+  double t;
+  int from, to;
+  const char* why;
+};
+
+class Plant {
+ public:
+  explicit Plant(const Params& p);
+  ~Plant();
+  Plant(const Plant&) = delete;
+  Plant& operator=(const Plant&) = delete;
+
+  // Start at rest, foot flat, in static equilibrium under the servo set-points
+  // (theta_ankle_init, theta_hip_init). Returns false (see message()) on failure.
+  bool initialize(double t0);
+  void set_inputs(double theta_ankle_ref, double theta_hip_ref, double push_force);
+  enum class Result { Ok, Fallen, Error };
+  // Advance from the current time t to t + h. On a fall the state stops at the fall time.
+  Result do_step(double h);
+
+  const Outputs& outputs() const { return out_; }
+  const Stats& stats() const { return stats_; }
+  double time() const { return t_; }
+  bool fallen() const { return fallen_; }
+  double fall_time() const { return t_fall_; }
+  ContactMode mode() const { return mode_; }
+  const std::string& message() const { return msg_; }
+  const Model& model() const { return model_; }
+  Vec5 q() const;
+  Vec5 qd() const;
+
+  Snapshot snapshot() const;
+  bool restore(const Snapshot& s);
+
+  std::function<void(const std::string&)> logger;  // events (mode switches, falls)
+  std::vector<ModeEvent> history;  // diagnostics (first 100000 switches), not in the snapshot
+
+  // CVODE callbacks
+  int rhs(double t, const double* y, double* ydot);
+  int roots(double t, const double* y, double* g);
+
+ private:
+  void evaluate_outputs();
+  void resolve_mode(const char* why);
+  void set_mode(ContactMode m, const char* why);
+  bool handle_roots(double t, const int* found);
+  bool cvode_reinit();
+  bool ensure_cvode();
+  void accumulate_stats();
+  void log(const std::string& s) {
+    if (logger) logger(s);
+  }
+  double gauss();
+
+  Model model_;
+  double t_ = 0;
+  double y_[10] = {};
+  ContactMode mode_ = ContactMode::Flat;
+  Vec2 pivot_ = Vec2::Zero();
+  bool fallen_ = false;
+  double t_fall_ = 0;
+  double in_[3] = {0, 0, 0};
+  std::uint64_t rng_ = 0;
+  Stats stats_;
+  Outputs out_;
+  std::string msg_;
+  // CVODE
+  void* sunctx_ = nullptr;
+  void* cvode_ = nullptr;
+  void* nv_ = nullptr;
+  void* mat_ = nullptr;
+  void* ls_ = nullptr;
+};
+
+const char* mode_name(ContactMode m);
+
+}  // namespace hoap2plant

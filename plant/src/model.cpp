@@ -1,0 +1,222 @@
+// HOAP-2 sagittal model: closed-form kinematics of a 3-body planar chain on a floating foot,
+// M(q) = sum_i m_i Jv_i^T Jv_i + I_i s_i s_i^T, h = sum_i m_i Jv_i^T (Jdot_i qd + g e_z),
+// and the constrained dynamics of the contact modes (see model.hpp for the coordinates).
+#include "hoap2plant/model.hpp"
+
+#include <cmath>
+
+namespace hoap2plant {
+
+namespace {
+// Body-frame offset (cx, cz) rotated by absolute pitch a.
+inline Vec2 rot(double a, double cx, double cz) {
+  const double c = std::cos(a), s = std::sin(a);
+  return Vec2(cx * c + cz * s, -cx * s + cz * c);
+}
+// d/da of rot(a, ...) = (r_z, -r_x).
+inline Vec2 drot(const Vec2& r) { return Vec2(r.y(), -r.x()); }
+}  // namespace
+
+double soft_sat(double u, double L) {
+  if (!(L > 0)) return u;
+  const double a = 0.8 * L, au = std::fabs(u);
+  if (au <= a) return u;
+  const double w = L - a;
+  const double v = a + w * std::tanh((au - a) / w);
+  return u < 0 ? -v : v;
+}
+
+Vec2 Model::foot_point(const Vec5& q, double cx, double cz) const {
+  return Vec2(q[0], q[1]) + rot(q[2], cx, cz);
+}
+
+void Model::foot_point_jac(const Vec5& q, const Vec5& qd, double cx, double cz,
+                           Eigen::Matrix<double, 2, 5>& J, Vec2& bias) const {
+  const Vec2 r = rot(q[2], cx, cz);
+  J.setZero();
+  J(0, 0) = 1.0;
+  J(1, 1) = 1.0;
+  J.col(2) = drot(r);
+  bias = -r * qd[2] * qd[2];
+}
+
+void Model::push_point(const Vec5& q, const Vec5& qd, Vec2& pos, Eigen::Matrix<double, 2, 5>& J,
+                       Vec2& bias) const {
+  const double a1 = q[2] + q[3], a2 = a1 + q[4];
+  const double w1 = qd[2] + qd[3], w2 = w1 + qd[4];
+  const double d = P.h_push - P.ankle_height - P.l1;  // along link 2 from the hip
+  const Vec2 rh = rot(a1, 0.0, P.l1), rp = rot(a2, 0.0, d);
+  pos = Vec2(q[0], q[1]) + rh + rp;
+  J.setZero();
+  J(0, 0) = 1.0;
+  J(1, 1) = 1.0;
+  J.col(2) = drot(rh) + drot(rp);
+  J.col(3) = drot(rh) + drot(rp);
+  J.col(4) = drot(rp);
+  bias = -rh * w1 * w1 - rp * w2 * w2;
+}
+
+void Model::kinematics(const Vec5& q, const Vec5& qd, Kinematics& k) const {
+  const Vec2 A(q[0], q[1]);
+  const double a0 = q[2], a1 = q[2] + q[3], a2 = a1 + q[4];
+  const double w0 = qd[2], w1 = qd[2] + qd[3], w2 = w1 + qd[4];
+  // foot CoM (relative to the ankle axis: forward feet_com_x, up feet_com_z - ankle_height)
+  const Vec2 rf = rot(a0, P.feet_com_x, P.feet_com_z - P.ankle_height);
+  const Vec2 r1 = rot(a1, 0.0, P.lg1);
+  const Vec2 rh = rot(a1, 0.0, P.l1);
+  const Vec2 r2 = rot(a2, 0.0, P.lg2);
+  for (auto& J : k.J) {
+    J.setZero();
+    J(0, 0) = 1.0;
+    J(1, 1) = 1.0;
+  }
+  k.p[0] = A + rf;
+  k.J[0].col(2) = drot(rf);
+  k.b[0] = -rf * w0 * w0;
+  k.p[1] = A + r1;
+  k.J[1].col(2) = drot(r1);
+  k.J[1].col(3) = drot(r1);
+  k.b[1] = -r1 * w1 * w1;
+  k.p[2] = A + rh + r2;
+  k.J[2].col(2) = drot(rh) + drot(r2);
+  k.J[2].col(3) = drot(rh) + drot(r2);
+  k.J[2].col(4) = drot(r2);
+  k.b[2] = -rh * w1 * w1 - r2 * w2 * w2;
+  const double S[3][5] = {{0, 0, 1, 0, 0}, {0, 0, 1, 1, 0}, {0, 0, 1, 1, 1}};
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 5; ++j) k.s[i][j] = S[i][j];
+}
+
+void Model::mass_bias(const Vec5& q, const Vec5& qd, Mat5& M, Vec5& h) const {
+  Kinematics k;
+  kinematics(q, qd, k);
+  const double m[3] = {P.feet_mass, P.m1, P.m2};
+  const double I[3] = {P.feet_inertia, P.I1, P.I2};
+  M.setZero();
+  h.setZero();
+  for (int i = 0; i < 3; ++i) {
+    Eigen::Map<const Eigen::Matrix<double, 5, 1>> s(k.s[i]);
+    M.noalias() += m[i] * k.J[i].transpose() * k.J[i] + I[i] * s * s.transpose();
+    const Vec2 acc = k.b[i] + Vec2(0.0, P.g);
+    h.noalias() += m[i] * k.J[i].transpose() * acc;
+  }
+}
+
+Vec2 Model::com(const Vec5& q) const {
+  Kinematics k;
+  kinematics(q, Vec5::Zero(), k);
+  return (P.feet_mass * k.p[0] + P.m1 * k.p[1] + P.m2 * k.p[2]) / P.mass();
+}
+
+double Model::kinetic_energy(const Vec5& q, const Vec5& qd) const {
+  Mat5 M;
+  Vec5 h;
+  mass_bias(q, qd, M, h);
+  return 0.5 * qd.dot(M * qd);
+}
+
+double Model::potential_energy(const Vec5& q) const { return P.mass() * P.g * com(q).y(); }
+
+void Model::joint_torques(const Vec5& q, const Vec5& qd, double ref1, double ref2, double& tau1,
+                          double& tau2) const {
+  auto servo = [](double e, double w, double kp, double kd, double vmax, double tmax) {
+    if (kd > 0) {
+      const double wcmd = soft_sat(kp / kd * e, vmax);  // position loop -> velocity command
+      return soft_sat(kd * (wcmd - w), tmax);           // velocity loop -> torque (limited)
+    }
+    return soft_sat(kp * e, tmax);
+  };
+  tau1 = -P.damping_ankle * qd[3];
+  tau2 = -P.damping_hip * qd[4];
+  if (P.servo_on) {
+    tau1 += servo(ref1 - q[3], qd[3], P.kp_ankle, P.kd_ankle, P.vel_max_ankle, P.tau_max_ankle);
+    tau2 += servo(ref2 - q[4], qd[4], P.kp_hip, P.kd_hip, P.vel_max_hip, P.tau_max_hip);
+  }
+}
+
+Vec5 Model::applied(const Vec5& q, const Vec5& qd, double ref1, double ref2, double push) const {
+  Vec5 Q = Vec5::Zero();
+  joint_torques(q, qd, ref1, ref2, Q[3], Q[4]);
+  if (push != 0.0) {
+    Vec2 pos, bias;
+    Eigen::Matrix<double, 2, 5> J;
+    push_point(q, qd, pos, J, bias);
+    Q.noalias() += J.transpose() * Vec2(push, 0.0);
+  }
+  return Q;
+}
+
+Model::Dyn Model::dynamics(ContactMode mode, const Vec5& q, const Vec5& qd, double ref1,
+                           double ref2, double push, const Vec2& pivot) const {
+  Mat5 M;
+  Vec5 h;
+  mass_bias(q, qd, M, h);
+  const Vec5 Q = applied(q, qd, ref1, ref2, push);
+  Dyn d;
+  d.qdd.setZero();
+  d.Qc.setZero();
+  switch (mode) {
+    case ContactMode::Flat: {
+      // Foot fixed: qdd_foot = 0 exactly; joints from the reduced system; the constraint force
+      // on (x, z, phi) is Qc_a = M_ab qdd_b + h_a - Q_a.
+      const Eigen::Matrix2d Mbb = M.block<2, 2>(3, 3);
+      const Eigen::Vector2d rhs = Q.tail<2>() - h.tail<2>();
+      const Eigen::Vector2d qb = Mbb.ldlt().solve(rhs);
+      d.qdd.tail<2>() = qb;
+      d.Qc.head<3>() = M.block<3, 2>(0, 3) * qb + h.head<3>() - Q.head<3>();
+      break;
+    }
+    case ContactMode::Toe:
+    case ContactMode::Heel: {
+      const double cx = mode == ContactMode::Toe ? P.toe_x : P.heel_x;
+      Eigen::Matrix<double, 2, 5> J;
+      Vec2 bias;
+      foot_point_jac(q, qd, cx, -P.ankle_height, J, bias);
+      const Vec2 c = foot_point(q, cx, -P.ankle_height) - pivot;
+      const Vec2 cd = J * qd;
+      const double a = P.baumgarte;
+      const Vec2 stab = bias + 2.0 * a * cd + a * a * c;
+      const Eigen::LDLT<Mat5> ldlt(M);
+      const Vec5 qf = ldlt.solve(Q - h);
+      const Eigen::Matrix<double, 5, 2> MiJt = ldlt.solve(J.transpose());
+      const Eigen::Matrix2d A = J * MiJt;
+      const Vec2 lambda = A.ldlt().solve(-stab - J * qf);
+      d.qdd = qf + MiJt * lambda;
+      d.Qc = J.transpose() * lambda;
+      break;
+    }
+    case ContactMode::Airborne:
+      d.qdd = M.ldlt().solve(Q - h);
+      break;
+  }
+  return d;
+}
+
+Vec5 Model::impact(ContactMode mode, const Vec5& q, const Vec5& qd) const {
+  Mat5 M;
+  Vec5 h;
+  mass_bias(q, qd, M, h);
+  const Eigen::LDLT<Mat5> ldlt(M);
+  Eigen::MatrixXd J;
+  if (mode == ContactMode::Flat) {
+    J = Eigen::MatrixXd::Zero(3, 5);
+    J.block<3, 3>(0, 0).setIdentity();
+  } else if (mode == ContactMode::Toe || mode == ContactMode::Heel) {
+    Eigen::Matrix<double, 2, 5> Jp;
+    Vec2 bias;
+    foot_point_jac(q, qd, mode == ContactMode::Toe ? P.toe_x : P.heel_x, -P.ankle_height, Jp,
+                   bias);
+    J = Jp;
+  } else {
+    return qd;
+  }
+  // Plastic impact: qd+ = qd- - M^-1 J^T (J M^-1 J^T)^-1 J qd-  (momentum-consistent, J qd+ = 0)
+  const Eigen::MatrixXd MiJt = ldlt.solve(J.transpose());
+  const Eigen::MatrixXd A = J * MiJt;
+  const Eigen::VectorXd imp = A.ldlt().solve(J * qd);
+  Vec5 out = qd - MiJt * imp;
+  if (mode == ContactMode::Flat) out.head<3>().setZero();
+  return out;
+}
+
+}  // namespace hoap2plant

@@ -1,0 +1,232 @@
+"""FMU-level tests of Hoap2Plant.fmu (each test says what it establishes).
+
+Uses the packed FMU from the `fmu_path` fixture (tests/conftest.py: ANKLEHIP_FMU_DIR or
+<build>/fmus). Physics tests of the plant library itself are the CTests `plant.*`
+(plant/tests/test_plant_physics.cpp); the Pinocchio cross-check is tests/test_plant_crosscheck.py.
+"""
+from __future__ import annotations
+
+import shutil
+import subprocess
+import sys
+import zipfile
+from pathlib import Path
+
+import numpy as np
+import pytest
+from fmpy import read_model_description, simulate_fmu
+from fmpy.fmi2 import FMU2Slave, fmi2Discard, fmi2LastSuccessfulTime, fmi2Terminated
+from fmpy.validation import validate_fmu
+
+G = 9.81
+MASS = 1.79 + 4.71 + 0.66  # nominal HOAP-2 (ahc/hoap2_model.h)
+
+
+@pytest.fixture(scope="module")
+def plant_fmu(fmu_path) -> Path:
+    return fmu_path("Hoap2Plant")
+
+
+@pytest.fixture(scope="module")
+def unzipped(plant_fmu, tmp_path_factory) -> Path:
+    d = tmp_path_factory.mktemp("hoap2plant")
+    with zipfile.ZipFile(plant_fmu) as z:
+        z.extractall(d)
+    return d
+
+
+class Slave:
+    """Small FMPy wrapper: named access, 1 ms steps."""
+
+    def __init__(self, unzipped: Path, params: dict | None = None, name="plant", inputs: dict | None = None):
+        self.md = read_model_description(str(unzipped / "modelDescription.xml"))
+        self.vr = {v.name: v.valueReference for v in self.md.modelVariables}
+        self.type = {v.name: v.type for v in self.md.modelVariables}
+        self.fmu = FMU2Slave(guid=self.md.guid, unzipDirectory=str(unzipped),
+                             modelIdentifier=self.md.coSimulation.modelIdentifier, instanceName=name)
+        self.fmu.instantiate(loggingOn=False)
+        self.fmu.setupExperiment(startTime=0.0)
+        self.fmu.enterInitializationMode()
+        for k, v in (params or {}).items():
+            self.set(k, v)
+        for k, v in (inputs or {}).items():
+            self.set(k, v)
+        self.fmu.exitInitializationMode()
+        self.t = 0.0
+
+    def set(self, name, value):
+        t = self.type[name]
+        if t == "Real":
+            self.fmu.setReal([self.vr[name]], [float(value)])
+        elif t == "Integer":
+            self.fmu.setInteger([self.vr[name]], [int(value)])
+        else:
+            self.fmu.setBoolean([self.vr[name]], [bool(value)])
+
+    def get(self, name):
+        t = self.type[name]
+        if t == "Real":
+            return self.fmu.getReal([self.vr[name]])[0]
+        if t == "Integer":
+            return self.fmu.getInteger([self.vr[name]])[0]
+        return self.fmu.getBoolean([self.vr[name]])[0]
+
+    def step(self, h=1e-3):
+        self.fmu.doStep(currentCommunicationPoint=self.t, communicationStepSize=h)
+        self.t += h
+
+    def free(self):
+        self.fmu.terminate()
+        self.fmu.freeInstance()
+
+
+def test_validates(plant_fmu):
+    """The FMU's modelDescription.xml and archive pass FMPy's validation with no problems."""
+    assert validate_fmu(str(plant_fmu)) == []
+
+
+def test_self_contained_binary(unzipped):
+    """The binary needs only libc/libm/ld-linux (SUNDIALS, libstdc++ linked statically) and exports
+    only fmi2* functions, so it loads on a machine where only the FMU exists."""
+    so = unzipped / "binaries" / "linux64" / "Hoap2Plant.so"
+    dyn = subprocess.run(["readelf", "-d", str(so)], capture_output=True, text=True, check=True).stdout
+    needed = sorted(l.split("[")[1].rstrip("]") for l in dyn.splitlines() if "(NEEDED)" in l)
+    assert set(needed) <= {"libc.so.6", "libm.so.6", "ld-linux-x86-64.so.2"}, needed
+    syms = subprocess.run(["nm", "-D", "--defined-only", str(so)], capture_output=True, text=True, check=True).stdout
+    names = [l.split()[-1] for l in syms.splitlines() if l.strip()]
+    assert names and all(n.startswith("fmi2") for n in names), [n for n in names if not n.startswith("fmi2")]
+    undef = subprocess.run(["nm", "-D", "--undefined-only", str(so)], capture_output=True, text=True, check=True).stdout
+    assert "sundials" not in undef.lower() and "CVode" not in undef and "N_V" not in undef
+
+
+def test_standalone_simulation_with_input_csv(plant_fmu, tmp_path):
+    """From an empty directory holding only the .fmu, fmpy.simulate_fmu runs the plant with an
+    input CSV (a 25 N, 60 ms push on the back): the foot rocks onto the toe, lands flat again and
+    the robot stands (fz = m g at the end), in a fresh process with an empty library path."""
+    work = tmp_path / "empty"
+    work.mkdir()
+    shutil.copy(plant_fmu, work / "Hoap2Plant.fmu")
+    (work / "push.csv").write_text("time,theta_ankle_ref,theta_hip_ref,push_force\n"
+                                   "0,0,0,0\n0.1,0,0,0\n0.1,0,0,25\n0.16,0,0,25\n0.16,0,0,0\n1.5,0,0,0\n")
+    script = (
+        "import numpy as np, fmpy\n"
+        "inp = np.genfromtxt('push.csv', delimiter=',', names=True)\n"
+        "r = fmpy.simulate_fmu('Hoap2Plant.fmu', stop_time=1.5, step_size=1e-3, output_interval=1e-3, input=inp,\n"
+        "                      output=['contact_mode', 'fz', 'foot_pitch', 'fallen', 'impacts'])\n"
+        "np.save('out.npy', r)\n"
+    )
+    env = {"PATH": "/usr/bin:/bin", "LD_LIBRARY_PATH": ""}
+    subprocess.run([sys.executable, "-c", script], cwd=work, env=env, check=True, timeout=120)
+    r = np.load(work / "out.npy")
+    modes = r["contact_mode"].astype(int)
+    assert 1 in modes, "never rocked onto the toe"
+    assert modes[-1] == 0 and not r["fallen"].any()
+    assert r["foot_pitch"].max() > 0.01
+    assert r["impacts"][-1] >= 1
+    assert r["fz"][-1] == pytest.approx(MASS * G, rel=1e-6)
+
+
+@pytest.mark.parametrize("ankle,hip", [(0.0, 0.0), (0.05, 0.0), (0.03, 0.25), (-0.02, -0.2)])
+def test_static_leaned_posture(unzipped, ankle, hip):
+    """Started settled in a leaned posture (theta_*_init = set-points) the plant is in static
+    equilibrium: zmp_x from the sole sensors equals the CoM ground projection (feet included),
+    fz = m g, flat contact, no mode switches (the 60 s version is the CTest plant.static_standing)."""
+    s = Slave(unzipped, {"theta_ankle_init": ankle, "theta_hip_init": hip},
+              inputs={"theta_ankle_ref": ankle, "theta_hip_ref": hip})
+    for _ in range(2000):
+        s.step()
+    assert s.get("zmp_x") == pytest.approx(s.get("com_x"), abs=1e-12)
+    assert s.get("fz") == pytest.approx(MASS * G, rel=1e-12)
+    assert s.get("contact_mode") == 0 and s.get("mode_switches") == 0
+    assert abs(s.get("theta_ankle") - ankle) < 0.01 and abs(s.get("theta_hip") - hip) < 0.01
+    assert s.get("cvode_steps") > 0 and s.get("rhs_evals") > 0
+    s.free()
+
+
+def test_fall_discard_terminated_protocol(unzipped):
+    """A too-large push (60 N for 0.3 s) ends in a detected fall: doStep returns fmi2Discard,
+    fmi2Terminated is true, fmi2LastSuccessfulTime is the fall time inside the failing step,
+    `fallen` is true, and later steps are refused with Discard as well."""
+    s = Slave(unzipped)
+    s.set("push_force", 60.0)
+    status = None
+    for _ in range(3000):
+        try:
+            s.step()
+        except Exception as e:  # FMPy raises on fmi2Discard
+            status = getattr(e, "status", None)
+            break
+    assert status == fmi2Discard
+    t_fail_start = s.t
+    assert s.fmu.getBooleanStatus(fmi2Terminated)
+    t_last = s.fmu.getRealStatus(fmi2LastSuccessfulTime)
+    assert t_fail_start < t_last <= t_fail_start + 1e-3
+    assert s.get("fallen")
+    assert abs(s.get("foot_pitch")) == pytest.approx(0.3, abs=1e-6)
+    s.fmu.freeInstance()
+
+
+def test_state_serialization_bit_for_bit(unzipped):
+    """A serialized FMU state taken while the foot rocks on its toe, de-serialized into a fresh
+    instance, continues bit for bit like the uninterrupted run (CVODE re-initialized identically;
+    contact mode, pivot, noise generator and statistics restored)."""
+    params = {"sensor_noise": 0.2, "seed": 42}
+    a = Slave(unzipped, params, name="a")
+    a.set("push_force", 25.0)
+    for i in range(400):
+        if i == 60:
+            a.set("push_force", 0.0)
+        if i == 100:
+            assert a.get("contact_mode") == 1
+            blob = a.fmu.serializeFMUstate(a.fmu.getFMUstate())
+            t_snap = a.t
+        a.step()
+    names = ["theta_ankle", "theta_hip", "zmp_x", "fz", "foot_pitch", "f_toe", "energy"]
+    ref_final = [a.get(n) for n in names] + [a.get("contact_mode"), a.get("rhs_evals")]
+    b = Slave(unzipped, params, name="b")
+    st = b.fmu.deSerializeFMUstate(blob)
+    b.fmu.setFMUstate(st)
+    b.t = t_snap
+    for i in range(100, 400):
+        b.step()
+    got = [b.get(n) for n in names] + [b.get("contact_mode"), b.get("rhs_evals")]
+    assert got == ref_final  # exact equality
+    a.free()
+    b.free()
+
+
+def test_sensor_noise_seeded(unzipped):
+    """Sole-sensor noise is off by default and, when on, reproducible per seed and different
+    between seeds; its standard deviation is the parameter's."""
+    def run(params):
+        s = Slave(unzipped, params)
+        v = []
+        for _ in range(500):
+            s.step()
+            v.append(s.get("f_toe"))
+        s.free()
+        return np.array(v)
+
+    clean = run({})
+    assert np.ptp(clean) < 1e-9
+    a, b, c = run({"sensor_noise": 0.5, "seed": 3}), run({"sensor_noise": 0.5, "seed": 3}), run({"sensor_noise": 0.5, "seed": 4})
+    assert np.array_equal(a, b) and not np.array_equal(a, c)
+    assert np.std(a - clean) == pytest.approx(0.5, rel=0.15)
+
+
+def test_non_finite_input_contained(unzipped):
+    """A NaN/Inf input is contained: the step returns fmi2Warning (logged), the last finite value
+    is held, and no output becomes non-finite."""
+    s = Slave(unzipped)
+    for _ in range(10):
+        s.step()
+    s.set("push_force", float("nan"))
+    s.set("theta_hip_ref", float("inf"))
+    s.step()  # fmi2Warning does not raise in FMPy
+    s.set("push_force", 0.0)
+    s.set("theta_hip_ref", 0.0)
+    s.step()
+    for n in ["theta_ankle", "theta_hip", "zmp_x", "fz", "fx", "com_x", "energy"]:
+        assert np.isfinite(s.get(n)), n
+    assert s.get("contact_mode") == 0
+    s.free()
