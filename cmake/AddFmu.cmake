@@ -1,0 +1,84 @@
+# add_fmu(NAME <ModelName> SOURCES <src>... [LINK <lib>...] [INCLUDE_DIRS <dir>...]
+#         [DOCUMENTATION <file>...] [OUTPUT_DIR <dir>])
+#
+# Turns a model (sources defining fmuglue::modelInfo() and fmuglue::createModel(), see
+# fmu/common/README.md) into ${ANKLEHIP_FMU_DIR}/<ModelName>.fmu:
+#   <ModelName>       shared library <ModelName>.so with the FMI 2.0 API of the glue; only fmi2*
+#                     symbols exported (hidden visibility + version script), libstdc++/libgcc
+#                     linked statically, no undefined symbols; LINK libraries must be static.
+#   <ModelName>_gen   generator built from the same sources: writes modelDescription.xml and
+#                     documentation/index.html from the variable table.
+#   <ModelName>_fmu   (ALL) packs into OUTPUT_DIR (default ${ANKLEHIP_FMU_DIR}) modelDescription.xml, binaries/linux64/<ModelName>.so and
+#                     documentation/ (index.html + DOCUMENTATION files) with `cmake -E tar --format=zip`.
+# Works with CMake 3.25 and 4.x.
+include_guard(GLOBAL)
+
+set(_ADD_FMU_GLUE_SRC "${CMAKE_CURRENT_LIST_DIR}/../fmu/common/src")
+get_filename_component(_ADD_FMU_GLUE_SRC "${_ADD_FMU_GLUE_SRC}" ABSOLUTE)
+
+function(add_fmu)
+  cmake_parse_arguments(FMU "" "NAME;OUTPUT_DIR" "SOURCES;LINK;INCLUDE_DIRS;DOCUMENTATION" ${ARGN})
+  if(NOT FMU_NAME OR NOT FMU_SOURCES)
+    message(FATAL_ERROR "add_fmu: NAME and SOURCES are required")
+  endif()
+  if(NOT TARGET fmuglue)
+    message(FATAL_ERROR "add_fmu: target fmuglue (fmu/common) must be defined first")
+  endif()
+  if(NOT ANKLEHIP_FMU_DIR)
+    set(ANKLEHIP_FMU_DIR "${CMAKE_BINARY_DIR}/fmus")
+  endif()
+  if(FMU_OUTPUT_DIR)
+    set(ANKLEHIP_FMU_DIR "${FMU_OUTPUT_DIR}")
+  endif()
+  set(name ${FMU_NAME})
+
+  # Model sources compiled once, used by the shared library and by the generator.
+  add_library(${name}_objs OBJECT ${FMU_SOURCES})
+  target_link_libraries(${name}_objs PUBLIC fmuglue ${FMU_LINK})
+  target_include_directories(${name}_objs PRIVATE ${FMU_INCLUDE_DIRS})
+  set_target_properties(${name}_objs PROPERTIES POSITION_INDEPENDENT_CODE ON
+    CXX_VISIBILITY_PRESET hidden C_VISIBILITY_PRESET hidden VISIBILITY_INLINES_HIDDEN ON)
+  target_compile_options(${name}_objs PRIVATE -ffunction-sections -fdata-sections)
+
+  # The FMU binary.
+  set(vscript "${CMAKE_CURRENT_BINARY_DIR}/${name}_exports.map")
+  file(WRITE "${vscript}" "{\n  global:\n    fmi2*;\n  local:\n    *;\n};\n")
+  add_library(${name} SHARED "${_ADD_FMU_GLUE_SRC}/fmi2_api.cpp" $<TARGET_OBJECTS:${name}_objs>)
+  target_link_libraries(${name} PRIVATE fmuglue ${FMU_LINK})
+  target_include_directories(${name} PRIVATE "${_ADD_FMU_GLUE_SRC}")
+  set_target_properties(${name} PROPERTIES PREFIX "" OUTPUT_NAME "${name}" SUFFIX ".so"
+    POSITION_INDEPENDENT_CODE ON CXX_VISIBILITY_PRESET hidden C_VISIBILITY_PRESET hidden
+    VISIBILITY_INLINES_HIDDEN ON LINK_DEPENDS "${vscript}")
+  target_link_options(${name} PRIVATE -static-libstdc++ -static-libgcc
+    "LINKER:--version-script=${vscript}" "LINKER:--no-undefined" "LINKER:--exclude-libs,ALL"
+    "LINKER:--as-needed" "LINKER:--gc-sections" $<$<CONFIG:Release,MinSizeRel>:-s>)
+
+  # The generator of modelDescription.xml / documentation.
+  add_executable(${name}_gen "${_ADD_FMU_GLUE_SRC}/gen_main.cpp" $<TARGET_OBJECTS:${name}_objs>)
+  target_link_libraries(${name}_gen PRIVATE fmuglue ${FMU_LINK})
+
+  # Packing.
+  set(stage "${CMAKE_CURRENT_BINARY_DIR}/${name}.fmu.d")
+  set(fmu "${ANKLEHIP_FMU_DIR}/${name}.fmu")
+  set(doc_cmds "")
+  foreach(doc IN LISTS FMU_DOCUMENTATION)
+    get_filename_component(doc_abs "${doc}" ABSOLUTE)
+    list(APPEND doc_cmds COMMAND "${CMAKE_COMMAND}" -E copy "${doc_abs}" "${stage}/documentation/")
+    list(APPEND doc_deps "${doc_abs}")
+  endforeach()
+  add_custom_command(OUTPUT "${fmu}"
+    COMMAND "${CMAKE_COMMAND}" -E rm -rf "${stage}"
+    COMMAND "${CMAKE_COMMAND}" -E make_directory "${stage}/binaries/linux64" "${stage}/documentation" "${ANKLEHIP_FMU_DIR}"
+    COMMAND $<TARGET_FILE:${name}_gen> "${stage}"
+    COMMAND "${CMAKE_COMMAND}" -E copy $<TARGET_FILE:${name}> "${stage}/binaries/linux64/${name}.so"
+    ${doc_cmds}
+    COMMAND "${CMAKE_COMMAND}" -E rm -f "${fmu}"
+    COMMAND "${CMAKE_COMMAND}" -E chdir "${stage}" "${CMAKE_COMMAND}" -E tar cf "${fmu}" --format=zip
+            modelDescription.xml binaries documentation
+    DEPENDS ${name} ${name}_gen ${doc_deps}
+    COMMENT "Packing ${name}.fmu"
+    VERBATIM)
+  add_custom_target(${name}_fmu ALL DEPENDS "${fmu}")
+  set_property(TARGET ${name}_fmu PROPERTY FMU_FILE "${fmu}")
+  set_property(TARGET ${name}_fmu PROPERTY FMU_STAGE_DIR "${stage}")
+endfunction()

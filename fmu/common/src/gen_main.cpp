@@ -1,0 +1,118 @@
+// Build-time generator: writes modelDescription.xml and documentation/index.html of one FMU
+// from its ModelInfo (the same table the FMU uses at run time).
+//   <Name>_gen <out-dir>        writes <out-dir>/modelDescription.xml, <out-dir>/documentation/index.html
+//   <Name>_gen --markdown       prints the variable table as Markdown (for docs/)
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <iostream>
+#include <sstream>
+#include <string>
+
+#include "fmuglue/glue.hpp"
+
+using namespace fmuglue;
+
+namespace {
+const char* causality(Causality c) {
+  switch (c) {
+    case Causality::Parameter: return "parameter";
+    case Causality::CalculatedParameter: return "calculatedParameter";
+    case Causality::Input: return "input";
+    case Causality::Output: return "output";
+    case Causality::Local: return "local";
+    case Causality::Independent: return "independent";
+  }
+  return "";
+}
+const char* variability(Variability v) {
+  switch (v) {
+    case Variability::Constant: return "constant";
+    case Variability::Fixed: return "fixed";
+    case Variability::Tunable: return "tunable";
+    case Variability::Discrete: return "discrete";
+    case Variability::Continuous: return "continuous";
+  }
+  return "";
+}
+const char* type(Type t) {
+  switch (t) {
+    case Type::Real: return "Real";
+    case Type::Integer: return "Integer";
+    case Type::Boolean: return "Boolean";
+    case Type::String: return "String";
+  }
+  return "";
+}
+std::string g(double v) {
+  if (std::isnan(v)) return "";
+  char b[40];
+  std::snprintf(b, sizeof b, "%.6g", v);
+  return b;
+}
+std::string startText(const Variable& v) {
+  Initial i = effectiveInitial(v);
+  if (v.causality != Causality::Input && i == Initial::Calculated) return "(calculated)";
+  if (v.type == Type::String) return v.start_string;
+  if (v.type == Type::Boolean) return v.start != 0.0 ? "true" : "false";
+  return g(v.start);
+}
+std::string html(const std::string& s) {
+  std::string o;
+  for (char c : s) {
+    if (c == '<') o += "&lt;";
+    else if (c == '>') o += "&gt;";
+    else if (c == '&') o += "&amp;";
+    else o += c;
+  }
+  return o;
+}
+}  // namespace
+
+int main(int argc, char** argv) {
+  const ModelInfo& info = modelInfo();
+  std::string problems = validateModelInfo(info);
+  if (!problems.empty()) {
+    std::cerr << info.model_name << ": invalid variable table:\n" << problems;
+    return 1;
+  }
+  if (argc == 2 && std::string(argv[1]) == "--markdown") {
+    std::cout << "| name | vr | type | causality | variability | unit | start | min | max | description |\n"
+              << "|---|---|---|---|---|---|---|---|---|---|\n";
+    for (const auto& v : info.variables)
+      std::cout << "| `" << v.name << "` | " << v.vr << " | " << type(v.type) << " | " << causality(v.causality)
+                << " | " << variability(v.variability) << " | " << v.unit << " | " << startText(v) << " | "
+                << g(v.min) << " | " << g(v.max) << " | " << v.description << " |\n";
+    return 0;
+  }
+  if (argc != 2) {
+    std::cerr << "usage: " << argv[0] << " <out-dir> | --markdown\n";
+    return 2;
+  }
+  std::string dir = argv[1];
+  {
+    std::ofstream f(dir + "/modelDescription.xml", std::ios::binary);
+    f << modelDescriptionXml(info);
+    if (!f) { std::cerr << "cannot write " << dir << "/modelDescription.xml\n"; return 1; }
+  }
+  {
+    std::ofstream f(dir + "/documentation/index.html", std::ios::binary);
+    f << "<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>" << html(info.model_name)
+      << "</title></head><body>\n<h1>" << html(info.model_name) << "</h1>\n<p>" << html(info.description)
+      << "</p>\n<p>FMI 2.0 co-simulation FMU, GUID " << modelGuid(info) << ". Default experiment: "
+      << g(info.default_experiment.start_time) << " to " << g(info.default_experiment.stop_time)
+      << " s, step " << g(info.default_experiment.step_size) << " s.</p>\n"
+      << "<p>Log categories: logEvents, logStatusWarning, logStatusDiscard, logStatusError, logStatusFatal, logCalls";
+    for (const auto& c : info.extra_log_categories) f << ", " << html(c.name);
+    f << ".</p>\n<table border=\"1\" cellspacing=\"0\" cellpadding=\"3\">\n<tr><th>name</th><th>vr</th><th>type</th>"
+         "<th>causality</th><th>variability</th><th>unit</th><th>start</th><th>min</th><th>max</th><th>description</th></tr>\n";
+    for (const auto& v : info.variables)
+      f << "<tr><td>" << html(v.name) << "</td><td>" << v.vr << "</td><td>" << type(v.type) << "</td><td>"
+        << causality(v.causality) << "</td><td>" << variability(v.variability) << "</td><td>" << html(v.unit)
+        << "</td><td>" << html(startText(v)) << "</td><td>" << g(v.min) << "</td><td>" << g(v.max) << "</td><td>"
+        << html(v.description) << "</td></tr>\n";
+    f << "</table>\n</body></html>\n";
+    if (!f) { std::cerr << "cannot write " << dir << "/documentation/index.html\n"; return 1; }
+  }
+  return 0;
+}

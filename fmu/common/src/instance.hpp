@@ -1,0 +1,94 @@
+// Private to the glue: one FMU instance (state machine, variable store, logging settings).
+#pragma once
+
+#include <cstdarg>
+#include <string>
+#include <vector>
+
+#include "fmuglue/glue.hpp"
+
+namespace fmuglue {
+
+enum class State : unsigned {
+  Instantiated = 1u << 0,
+  InitializationMode = 1u << 1,
+  StepComplete = 1u << 2,
+  StepInProgress = 1u << 3,
+  StepFailed = 1u << 4,
+  StepCanceled = 1u << 5,
+  Terminated = 1u << 6,
+  Error = 1u << 7,
+  Fatal = 1u << 8,
+};
+const char* stateName(State s);
+
+struct Value {
+  double r = 0.0;
+  int i = 0;  // Integer and Boolean
+  std::string s;
+};
+
+class Instance {
+ public:
+  Instance(const ModelInfo& info, std::string name, std::string resources,
+           const fmi2CallbackFunctions* functions, bool loggingOn);
+
+  // --- logging ---
+  void vlog(int category, fmi2Status status, const char* fmt, va_list ap);
+  void log(int category, fmi2Status status, const char* fmt, ...)
+#if defined(__GNUC__)
+      __attribute__((format(printf, 4, 5)))
+#endif
+      ;
+  // Logs under logStatusError and returns fmi2Error.
+  fmi2Status error(const char* fmt, ...)
+#if defined(__GNUC__)
+      __attribute__((format(printf, 2, 3)))
+#endif
+      ;
+  bool logEnabled(int category) const;
+  int categoryCount() const { return static_cast<int>(categoryOn_.size()); }
+  fmi2Status setDebugLogging(bool on, size_t n, const fmi2String categories[]);
+
+  // --- state machine ---
+  bool allowed(unsigned mask, const char* function);
+
+  // --- store ---
+  int indexOf(fmi2ValueReference vr) const {
+    return vr < vrIndex_.size() ? vrIndex_[vr] : -1;
+  }
+  void resetStore();
+  // Whether variable `idx` may be set in the current state (and why not).
+  bool settable(int idx, std::string& why) const;
+
+  const ModelInfo& info;
+  std::string name;
+  std::string resources;
+  fmi2CallbackFunctions callbacks{};
+  std::string guid;
+  State state = State::Instantiated;
+  double time = 0.0;
+  double startTime = 0.0;
+  double stopTime = 0.0;
+  bool stopTimeDefined = false;
+  double tolerance = 0.0;
+  bool toleranceDefined = false;
+  double lastSuccessfulTime = 0.0;
+  bool terminatedFlag = false;
+  bool initDirty = true;
+  std::vector<Value> store;
+  std::unique_ptr<Model> model;
+  Context ctx;
+
+ private:
+  std::vector<int> vrIndex_;
+  std::vector<bool> categoryOn_;
+};
+
+// Serialized-state codec (state_format.cpp).
+std::vector<std::uint8_t> encodeState(Instance& inst);
+// Decodes and applies; on failure nothing is changed and `err` says why.
+bool decodeState(Instance& inst, const std::uint8_t* p, std::size_t n, std::string& err);
+std::uint64_t fnv1a64(const void* p, std::size_t n, std::uint64_t h = 1469598103934665603ull);
+
+}  // namespace fmuglue

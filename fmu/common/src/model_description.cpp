@@ -1,0 +1,293 @@
+// modelDescription.xml generation, table validation and the deterministic GUID.
+#include <cctype>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <set>
+#include <sstream>
+
+#include "instance.hpp"
+
+namespace fmuglue {
+
+namespace {
+
+const char* causalityName(Causality c) {
+  switch (c) {
+    case Causality::Parameter: return "parameter";
+    case Causality::CalculatedParameter: return "calculatedParameter";
+    case Causality::Input: return "input";
+    case Causality::Output: return "output";
+    case Causality::Local: return "local";
+    case Causality::Independent: return "independent";
+  }
+  return "local";
+}
+const char* variabilityName(Variability v) {
+  switch (v) {
+    case Variability::Constant: return "constant";
+    case Variability::Fixed: return "fixed";
+    case Variability::Tunable: return "tunable";
+    case Variability::Discrete: return "discrete";
+    case Variability::Continuous: return "continuous";
+  }
+  return "continuous";
+}
+const char* initialName(Initial i) {
+  switch (i) {
+    case Initial::Exact: return "exact";
+    case Initial::Approx: return "approx";
+    case Initial::Calculated: return "calculated";
+    default: return "";
+  }
+}
+
+std::string esc(const std::string& s) {
+  std::string o;
+  o.reserve(s.size());
+  for (char c : s) {
+    switch (c) {
+      case '&': o += "&amp;"; break;
+      case '<': o += "&lt;"; break;
+      case '>': o += "&gt;"; break;
+      case '"': o += "&quot;"; break;
+      case '\'': o += "&apos;"; break;
+      default: o += c;
+    }
+  }
+  return o;
+}
+
+// Shortest decimal text that reads back to exactly the same double.
+std::string num(double v) {
+  char buf[40];
+  for (int prec = 1; prec <= 17; ++prec) {
+    std::snprintf(buf, sizeof buf, "%.*g", prec, v);
+    if (std::strtod(buf, nullptr) == v) break;
+  }
+  return buf;
+}
+
+struct BaseUnit {
+  const char* name;
+  int kg, m, s, rad;
+};
+const BaseUnit kUnits[] = {
+    {"m", 0, 1, 0, 0},        {"kg", 1, 0, 0, 0},        {"s", 0, 0, 1, 0},         {"rad", 0, 0, 0, 1},
+    {"N", 1, 1, -2, 0},       {"N.m", 1, 2, -2, 0},      {"N.m/rad", 1, 2, -2, -1}, {"N.m.s/rad", 1, 2, -1, -1},
+    {"rad/s", 0, 0, -1, 1},   {"rad/s2", 0, 0, -2, 1},   {"m/s", 0, 1, -1, 0},      {"m/s2", 0, 1, -2, 0},
+    {"kg.m2", 1, 2, 0, 0},    {"1/s", 0, 0, -1, 0},      {"s-1", 0, 0, -1, 0},      {"Hz", 0, 0, -1, 0},
+    {"N/m", 1, 0, -2, 0},     {"N.s/m", 1, 0, -1, 0},    {"N/rad", 1, 1, -2, -1},   {"N.m.s", 1, 2, -1, 0},
+    {"m/rad", 0, 1, 0, -1},   {"1/rad", 0, 0, 0, -1},
+};
+
+
+bool hasStart(const Variable& v) {
+  if (v.causality == Causality::Independent) return false;
+  if (v.causality == Causality::Input) return true;
+  Initial i = effectiveInitial(v);
+  return i == Initial::Exact || i == Initial::Approx;
+}
+
+// The XML with a given GUID string (the GUID itself is a hash of the XML with an empty GUID).
+std::string xmlWithGuid(const ModelInfo& info, const std::string& guid) {
+  std::ostringstream o;
+  o << "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n";
+  o << "<fmiModelDescription fmiVersion=\"2.0\" modelName=\"" << esc(info.model_name) << "\" guid=\"" << guid
+    << "\"";
+  if (!info.description.empty()) o << "\n  description=\"" << esc(info.description) << "\"";
+  if (!info.author.empty()) o << "\n  author=\"" << esc(info.author) << "\"";
+  if (!info.version.empty()) o << "\n  version=\"" << esc(info.version) << "\"";
+  if (!info.copyright.empty()) o << "\n  copyright=\"" << esc(info.copyright) << "\"";
+  if (!info.license.empty()) o << "\n  license=\"" << esc(info.license) << "\"";
+  o << "\n  generationTool=\"anklehip fmuglue " << kGlueInterfaceVersion << "\""
+    << "\n  variableNamingConvention=\"structured\" numberOfEventIndicators=\"0\">\n";
+  o << "  <CoSimulation modelIdentifier=\"" << esc(info.model_name) << "\" needsExecutionTool=\"false\""
+    << " canHandleVariableCommunicationStepSize=\"" << (info.can_handle_variable_step ? "true" : "false") << "\""
+    << " canInterpolateInputs=\"false\" maxOutputDerivativeOrder=\"0\" canRunAsynchronuously=\"false\""
+    << " canBeInstantiatedOnlyOncePerProcess=\"false\" canNotUseMemoryManagementFunctions=\"true\""
+    << " canGetAndSetFMUstate=\"true\" canSerializeFMUstate=\"true\" providesDirectionalDerivative=\"false\"/>\n";
+
+  std::set<std::string> units;
+  for (const auto& v : info.variables)
+    if (v.type == Type::Real && !v.unit.empty()) units.insert(v.unit);
+  if (!units.empty()) {
+    o << "  <UnitDefinitions>\n";
+    for (const auto& u : units) {
+      const BaseUnit* bu = nullptr;
+      for (const auto& k : kUnits)
+        if (u == k.name) bu = &k;
+      if (bu) {
+        o << "    <Unit name=\"" << esc(u) << "\"><BaseUnit";
+        if (bu->kg) o << " kg=\"" << bu->kg << "\"";
+        if (bu->m) o << " m=\"" << bu->m << "\"";
+        if (bu->s) o << " s=\"" << bu->s << "\"";
+        if (bu->rad) o << " rad=\"" << bu->rad << "\"";
+        o << "/></Unit>\n";
+      } else {
+        o << "    <Unit name=\"" << esc(u) << "\"/>\n";
+      }
+    }
+    o << "  </UnitDefinitions>\n";
+  }
+
+  o << "  <LogCategories>\n"
+       "    <Category name=\"logEvents\" description=\"Discrete events (phase changes, contact changes, faults)\"/>\n"
+       "    <Category name=\"logStatusWarning\" description=\"Warnings\"/>\n"
+       "    <Category name=\"logStatusDiscard\" description=\"Discarded steps\"/>\n"
+       "    <Category name=\"logStatusError\" description=\"Errors (illegal calls, invalid values)\"/>\n"
+       "    <Category name=\"logStatusFatal\" description=\"Fatal errors\"/>\n"
+       "    <Category name=\"logCalls\" description=\"Every fmi2 function call\"/>\n";
+  for (const auto& c : info.extra_log_categories)
+    o << "    <Category name=\"" << esc(c.name) << "\" description=\"" << esc(c.description) << "\"/>\n";
+  o << "  </LogCategories>\n";
+
+  const auto& de = info.default_experiment;
+  o << "  <DefaultExperiment startTime=\"" << num(de.start_time) << "\" stopTime=\"" << num(de.stop_time)
+    << "\" tolerance=\"" << num(de.tolerance) << "\" stepSize=\"" << num(de.step_size) << "\"/>\n";
+
+  o << "  <ModelVariables>\n";
+  int index = 0;
+  for (const auto& v : info.variables) {
+    ++index;
+    o << "    <!-- index " << index << " -->\n";
+    o << "    <ScalarVariable name=\"" << esc(v.name) << "\" valueReference=\"" << v.vr << "\" description=\""
+      << esc(v.description) << "\" causality=\"" << causalityName(v.causality) << "\" variability=\""
+      << variabilityName(v.variability) << "\"";
+    if (v.initial != Initial::Default && v.causality != Causality::Input && v.causality != Causality::Independent)
+      o << " initial=\"" << initialName(v.initial) << "\"";
+    o << ">\n      ";
+    bool st = hasStart(v);
+    switch (v.type) {
+      case Type::Real:
+        o << "<Real";
+        if (!v.unit.empty()) o << " unit=\"" << esc(v.unit) << "\"";
+        if (!std::isnan(v.min)) o << " min=\"" << num(v.min) << "\"";
+        if (!std::isnan(v.max)) o << " max=\"" << num(v.max) << "\"";
+        if (st) o << " start=\"" << num(v.start) << "\"";
+        o << "/>";
+        break;
+      case Type::Integer:
+        o << "<Integer";
+        if (!std::isnan(v.min)) o << " min=\"" << static_cast<long long>(v.min) << "\"";
+        if (!std::isnan(v.max)) o << " max=\"" << static_cast<long long>(v.max) << "\"";
+        if (st) o << " start=\"" << static_cast<long long>(v.start) << "\"";
+        o << "/>";
+        break;
+      case Type::Boolean:
+        o << "<Boolean";
+        if (st) o << " start=\"" << (v.start != 0.0 ? "true" : "false") << "\"";
+        o << "/>";
+        break;
+      case Type::String:
+        o << "<String";
+        if (st) o << " start=\"" << esc(v.start_string) << "\"";
+        o << "/>";
+        break;
+    }
+    o << "\n    </ScalarVariable>\n";
+  }
+  o << "  </ModelVariables>\n";
+
+  o << "  <ModelStructure>\n";
+  std::ostringstream outs, inits;
+  index = 0;
+  for (const auto& v : info.variables) {
+    ++index;
+    Initial ini = effectiveInitial(v);
+    if (v.causality == Causality::Output) {
+      outs << "      <Unknown index=\"" << index << "\"" << (info.outputs_depend_on_inputs ? "" : " dependencies=\"\"")
+           << "/>\n";
+    }
+    if ((v.causality == Causality::Output && (ini == Initial::Approx || ini == Initial::Calculated)) ||
+        v.causality == Causality::CalculatedParameter)
+      inits << "      <Unknown index=\"" << index << "\"/>\n";
+  }
+  if (!outs.str().empty()) o << "    <Outputs>\n" << outs.str() << "    </Outputs>\n";
+  if (!inits.str().empty()) o << "    <InitialUnknowns>\n" << inits.str() << "    </InitialUnknowns>\n";
+  o << "  </ModelStructure>\n";
+  o << "</fmiModelDescription>\n";
+  return o.str();
+}
+
+}  // namespace
+
+Initial effectiveInitial(const Variable& v) {
+  if (v.causality == Causality::Input) return Initial::Exact;  // inputs carry a start value, no attribute
+  if (v.causality == Causality::Independent) return Initial::Calculated;
+  if (v.initial != Initial::Default) return v.initial;
+  switch (v.causality) {
+    case Causality::Parameter: return Initial::Exact;
+    case Causality::CalculatedParameter: return Initial::Calculated;
+    default: return v.variability == Variability::Constant ? Initial::Exact : Initial::Calculated;
+  }
+}
+
+std::string validateModelInfo(const ModelInfo& info) {
+  std::ostringstream err;
+  if (info.model_name.empty()) err << "model_name is empty\n";
+  for (char ch : info.model_name)
+    if (!(std::isalnum(static_cast<unsigned char>(ch)) || ch == '_')) {
+      err << "model_name \"" << info.model_name << "\" must be a C identifier\n";
+      break;
+    }
+  std::set<std::string> names;
+  std::set<fmi2ValueReference> vrs;
+  for (const auto& v : info.variables) {
+    std::string w = "variable \"" + v.name + "\": ";
+    if (v.name.empty()) err << "a variable has an empty name\n";
+    if (!names.insert(v.name).second) err << w << "duplicate name\n";
+    if (!vrs.insert(v.vr).second) err << w << "duplicate value reference " << v.vr << "\n";
+    if (v.vr > (1u << 20)) err << w << "value reference " << v.vr << " is too large (max 2^20)\n";
+    if (v.description.empty()) err << w << "missing description\n";
+    if (v.type != Type::Real && v.variability == Variability::Continuous)
+      err << w << "only Real variables can be continuous\n";
+    if (v.type != Type::Real && !v.unit.empty()) err << w << "only Real variables have units\n";
+    bool okVar = true;
+    switch (v.causality) {
+      case Causality::Parameter:
+      case Causality::CalculatedParameter:
+        okVar = v.variability == Variability::Fixed || v.variability == Variability::Tunable;
+        break;
+      case Causality::Input: okVar = v.variability == Variability::Discrete || v.variability == Variability::Continuous; break;
+      case Causality::Output: okVar = v.variability != Variability::Fixed && v.variability != Variability::Tunable; break;
+      case Causality::Independent: okVar = v.variability == Variability::Continuous && v.type == Type::Real; break;
+      case Causality::Local: okVar = true; break;
+    }
+    if (!okVar) err << w << "illegal causality/variability combination\n";
+    if (v.initial != Initial::Default) {
+      bool okIni = true;
+      switch (v.causality) {
+        case Causality::Parameter: okIni = v.initial == Initial::Exact; break;
+        case Causality::CalculatedParameter: okIni = v.initial != Initial::Exact; break;
+        case Causality::Input:
+        case Causality::Independent: okIni = false; break;
+        default:
+          okIni = v.variability == Variability::Constant ? v.initial == Initial::Exact : true;
+      }
+      if (!okIni) err << w << "illegal initial attribute for this causality/variability\n";
+    }
+    if ((v.type == Type::Real || v.type == Type::Integer) && hasStart(v)) {
+      if (!std::isfinite(v.start)) err << w << "start value is not finite\n";
+      if (!std::isnan(v.min) && v.start < v.min) err << w << "start " << v.start << " < min " << v.min << "\n";
+      if (!std::isnan(v.max) && v.start > v.max) err << w << "start " << v.start << " > max " << v.max << "\n";
+    }
+    if (!std::isnan(v.min) && !std::isnan(v.max) && v.min > v.max) err << w << "min > max\n";
+  }
+  return err.str();
+}
+
+std::string modelGuid(const ModelInfo& info) {
+  std::string body = xmlWithGuid(info, "");
+  std::uint64_t a = fnv1a64(body.data(), body.size());
+  std::uint64_t b = fnv1a64(body.data(), body.size(), a ^ 0x9e3779b97f4a7c15ull);
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "{%08x-%04x-%04x-%04x-%012llx}", static_cast<unsigned>(a >> 32),
+                static_cast<unsigned>((a >> 16) & 0xffff), static_cast<unsigned>(a & 0xffff),
+                static_cast<unsigned>(b >> 48), static_cast<unsigned long long>(b & 0xffffffffffffull));
+  return buf;
+}
+
+std::string modelDescriptionXml(const ModelInfo& info) { return xmlWithGuid(info, modelGuid(info)); }
+
+}  // namespace fmuglue

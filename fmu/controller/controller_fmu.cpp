@@ -1,0 +1,319 @@
+// AnkleHipController.fmu: the C99 controller library (controller_c, ahc_*) behind the FMI 2.0
+// co-simulation glue. Signals per DESIGN section 3; every ahc_params field is a parameter
+// generated from ahc_param_table() with start values from ahc_params_default() (one source of
+// truth). Sample grid rule (docs/fmu.md): fmi2DoStep(t, h) executes exactly the control ticks
+// k >= 1 with t0 + k*T in (t, t+h], counted with an integer tick counter:
+//   ticks_due = floor((t + h - t0) / T + 1e-9), run ticks while ticks_done < ticks_due.
+// Outputs are held between ticks (zero-order hold).
+#include <cmath>
+#include <cstring>
+#include <string>
+
+#include "ahc/controller.h"
+#include "fmuglue/glue.hpp"
+
+using namespace fmuglue;
+
+namespace {
+
+namespace vr {
+enum : fmi2ValueReference {
+  theta_ankle = 0, theta_hip = 1, zmp_x = 2, fz = 3,
+  theta_ankle_ref = 10, theta_hip_ref = 11, dtheta_ankle_ref = 12, dtheta_hip_ref = 13, phase = 14,
+  com_x = 15, com_z = 16, disturbance_moment = 17, k_w = 18, com_x_desired = 19, fault = 20,
+  first_param = 100  // parameter i of ahc_param_table() has value reference 100 + i
+};
+}
+
+// Parameters that may be changed between steps (they do not enter derived constants or the
+// phase timing): gains, thresholds, fault limits.
+const char* const kTunable[] = {"Ka", "Ca", "Kh", "Ch", "Kpr", "Kp_theta", "zmp_limit_front", "zmp_limit_back",
+                                "rz_band_low", "rz_band_high", "fallback_disturbance_tol", "fallback_hip_tol",
+                                "fallback_dwell", "return_hip_angle_tol", "return_hip_rate_tol", "fz_lifted",
+                                "zmp_fault_margin", "angle_fault_margin"};
+
+bool isTunable(const char* name) {
+  for (const char* t : kTunable)
+    if (std::strcmp(t, name) == 0) return true;
+  return false;
+}
+
+ModelInfo makeInfo() {
+  ahc_params def;
+  ahc_params_default(&def);
+  const double weight = (def.m1 + def.m2 + def.feet_mass) * def.g;
+
+  ModelInfo m;
+  m.model_name = "AnkleHipController";
+  m.description =
+      "Ankle and hip balance strategies with smooth transitions (Nenchev & Nishio, ICRA 2010) for the "
+      "HOAP-2 humanoid; sampled controller on its own grid (sample_period)";
+  m.author = "anklehip project";
+  m.version = "0.1.0";
+  m.license = "see the project repository";
+  m.default_experiment = {0.0, 5.0, 1e-6, def.sample_period};
+  m.outputs_depend_on_inputs = false;
+
+  auto in = [&](const char* n, fmi2ValueReference r, const char* unit, const char* d, double start) {
+    Variable v;
+    v.name = n; v.vr = r; v.type = Type::Real; v.causality = Causality::Input;
+    v.variability = Variability::Continuous; v.unit = unit; v.description = d; v.start = start;
+    m.variables.push_back(v);
+  };
+  auto out = [&](const char* n, fmi2ValueReference r, Type t, const char* unit, const char* d) {
+    Variable v;
+    v.name = n; v.vr = r; v.type = t; v.causality = Causality::Output;
+    v.variability = Variability::Discrete;  // sampled: changes only at control ticks
+    v.unit = unit; v.description = d;
+    m.variables.push_back(v);
+  };
+  in("theta_ankle", vr::theta_ankle, "rad", "Measured ankle angle theta1 (leg link pitch relative to the foot)", 0.0);
+  in("theta_hip", vr::theta_hip, "rad", "Measured hip angle theta2 (upper body pitch relative to the leg link)", 0.0);
+  in("zmp_x", vr::zmp_x, "m", "Measured ZMP x from the ankle's ground projection (+ toward the toes)", 0.0);
+  in("fz", vr::fz, "N", "Total normal ground force (start: the model's weight)", weight);
+
+  out("theta_ankle_ref", vr::theta_ankle_ref, Type::Real, "rad", "Ankle joint set point");
+  out("theta_hip_ref", vr::theta_hip_ref, Type::Real, "rad", "Hip joint set point");
+  out("dtheta_ankle_ref", vr::dtheta_ankle_ref, Type::Real, "rad/s", "Ankle reference rate");
+  out("dtheta_hip_ref", vr::dtheta_hip_ref, Type::Real, "rad/s", "Hip reference rate");
+  out("phase", vr::phase, Type::Integer, "", "Phase: 0 ankle, 1 ankle-to-hip, 2 hip, 3 hip-to-ankle");
+  out("com_x", vr::com_x, Type::Real, "m", "CoM ground projection r_x (two-link model, measured angles)");
+  out("com_z", vr::com_z, Type::Real, "m", "CoM height r_z above the ankle joint");
+  out("disturbance_moment", vr::disturbance_moment, Type::Real, "N.m", "Disturbance estimate m g (p - r_x)");
+  out("k_w", vr::k_w, Type::Real, "1", "Reactionless weight of eq. 23 (0 ankle strategy, 1 hip strategy)");
+  out("com_x_desired", vr::com_x_desired, Type::Real, "m", "Desired CoM projection r_x_d (= com_x in phase 0)");
+  out("fault", vr::fault, Type::Integer, "", "Fault bit mask (AHC_FAULT_*; 0 = healthy, docs/fmu.md)");
+
+  size_t count = 0;
+  const ahc_param_info* table = ahc_param_table(&count);
+  for (size_t i = 0; i < count; ++i) {
+    const ahc_param_info& p = table[i];
+    Variable v;
+    v.name = p.name;
+    v.vr = vr::first_param + static_cast<fmi2ValueReference>(i);
+    v.type = p.is_int ? Type::Integer : Type::Real;
+    v.causality = Causality::Parameter;
+    v.variability = isTunable(p.name) ? Variability::Tunable : Variability::Fixed;
+    v.unit = p.is_int ? "" : p.unit;
+    v.description = std::string(p.description) + (p.strict_min ? " (must be > min)" : "");
+    const char* base = reinterpret_cast<const char*>(&def) + p.offset;
+    if (p.is_int) {
+      int x;
+      std::memcpy(&x, base, sizeof x);
+      v.start = x;
+    } else {
+      std::memcpy(&v.start, base, sizeof(double));
+    }
+    v.min = std::isfinite(p.min) ? p.min : kNoBound;
+    v.max = std::isfinite(p.max) ? p.max : kNoBound;
+    m.variables.push_back(v);
+  }
+  return m;
+}
+
+class ControllerModel final : public Model {
+ public:
+  void reset(Context&) override {
+    std::memset(&ctl_, 0, sizeof ctl_);
+    ticks_ = 0;
+    t0_ = 0.0;
+    lastPhase_ = 0;
+    lastFault_ = 0;
+    nonfinite_ = 0;
+  }
+
+  fmi2Status exit_initialization(Context& ctx) override {
+    ahc_params p;
+    readParams(ctx, p);
+    char msg[256] = {0};
+    int rc = ahc_params_validate(&p, msg, sizeof msg);
+    if (rc != AHC_OK) {
+      ctx.log(kLogStatusError, fmi2Error, "invalid parameter: %s (%s)", msg, ahc_error_string(rc));
+      return fmi2Error;
+    }
+    rc = ahc_init(&ctl_, &p);
+    if (rc != AHC_OK) {
+      ctx.log(kLogStatusError, fmi2Error, "ahc_init failed: %s", ahc_error_string(rc));
+      return fmi2Error;
+    }
+    t0_ = ctx.start_time();
+    ticks_ = 0;
+    lastPhase_ = AHC_PHASE_ANKLE;
+    lastFault_ = 0;
+    nonfinite_ = 0;
+    writeInitialOutputs(ctx, p);
+    return fmi2OK;
+  }
+
+  void update_initial_outputs(Context& ctx) override {
+    ahc_params p;
+    readParams(ctx, p);
+    writeInitialOutputs(ctx, p);
+  }
+
+  fmi2Status tunable_parameters_changed(Context& ctx) override {
+    ahc_params p = ctl_.p;
+    readParams(ctx, p, /*tunableOnly=*/true);
+    char msg[256] = {0};
+    int rc = ahc_params_validate(&p, msg, sizeof msg);
+    if (rc != AHC_OK) {
+      ctx.log(kLogStatusError, fmi2Error, "invalid tunable parameter: %s", msg);
+      return fmi2Error;
+    }
+    ctl_.p = p;
+    return fmi2OK;
+  }
+
+  StepResult do_step(Context& ctx, double t, double h, bool) override {
+    StepResult r;
+    ahc_sensors s;
+    s.theta_ankle = ctx.real(vr::theta_ankle);
+    s.theta_hip = ctx.real(vr::theta_hip);
+    s.zmp_x = ctx.real(vr::zmp_x);
+    s.fz = ctx.real(vr::fz);
+    const bool bad = !std::isfinite(s.theta_ankle) || !std::isfinite(s.theta_hip) || !std::isfinite(s.zmp_x) ||
+                     !std::isfinite(s.fz);
+    if (bad) {
+      if (!nonfinite_)
+        ctx.log(kLogStatusWarning, fmi2Warning,
+                "t=%.9g: non-finite input (theta_ankle=%g theta_hip=%g zmp_x=%g fz=%g): holding a safe reference, "
+                "fault output set",
+                t, s.theta_ankle, s.theta_hip, s.zmp_x, s.fz);
+      nonfinite_ = 1;
+      r.status = fmi2Warning;
+    } else if (nonfinite_) {
+      ctx.log(kLogEvents, fmi2OK, "t=%.9g: inputs finite again", t);
+      nonfinite_ = 0;
+    }
+    const double T = ctl_.p.sample_period;
+    const double due_d = std::floor((t + h - t0_) / T + 1e-9);
+    const unsigned long long due = due_d > 0.0 ? static_cast<unsigned long long>(due_d) : 0ull;
+    ahc_outputs o = ctl_.last_out;
+    bool ticked = false;
+    while (ticks_ < due) {
+      ahc_step(&ctl_, &s, &o);
+      ++ticks_;
+      ticked = true;
+      if (o.phase != lastPhase_) {
+        ctx.log(kLogEvents, fmi2OK, "t=%.9g: phase %d (%s) -> %d (%s)", t0_ + static_cast<double>(ticks_) * T,
+                lastPhase_, ahc_phase_name(lastPhase_), o.phase, ahc_phase_name(o.phase));
+        lastPhase_ = o.phase;
+      }
+      if (o.fault != lastFault_) {
+        char buf[256];
+        ahc_fault_string(o.fault, buf, sizeof buf);
+        ctx.log(kLogEvents, fmi2OK, "t=%.9g: fault mask 0x%x (%s)", t0_ + static_cast<double>(ticks_) * T, o.fault,
+                o.fault ? buf : "healthy");
+        lastFault_ = o.fault;
+      }
+    }
+    if (ticked) writeOutputs(ctx, o);
+    return r;
+  }
+
+  void save_state(StateWriter& w) const override {
+    w.u64(sizeof(ahc_controller));
+    w.pod(ctl_);
+    w.u64(ticks_);
+    w.f64(t0_);
+    w.i32(lastPhase_);
+    w.u32(lastFault_);
+    w.i32(nonfinite_);
+  }
+
+  bool load_state(StateReader& r, std::string& err) override {
+    std::uint64_t size = 0;
+    if (!r.u64(size) || size != sizeof(ahc_controller)) {
+      err = "controller state size mismatch";
+      return false;
+    }
+    ahc_controller c;
+    std::uint64_t ticks = 0;
+    double t0 = 0;
+    std::int32_t phase = 0, nonfinite = 0;
+    std::uint32_t fault = 0;
+    if (!r.pod(c) || !r.u64(ticks) || !r.f64(t0) || !r.i32(phase) || !r.u32(fault) || !r.i32(nonfinite)) {
+      err = "controller state truncated";
+      return false;
+    }
+    if (phase < 0 || phase > 3 || !std::isfinite(t0)) {
+      err = "controller state corrupt";
+      return false;
+    }
+    ctl_ = c;
+    ticks_ = ticks;
+    t0_ = t0;
+    lastPhase_ = phase;
+    lastFault_ = fault;
+    nonfinite_ = nonfinite;
+    return true;
+  }
+
+ private:
+  static void readParams(Context& ctx, ahc_params& p, bool tunableOnly = false) {
+    if (!tunableOnly) ahc_params_default(&p);
+    size_t count = 0;
+    const ahc_param_info* table = ahc_param_table(&count);
+    for (size_t i = 0; i < count; ++i) {
+      if (tunableOnly && !isTunable(table[i].name)) continue;
+      char* base = reinterpret_cast<char*>(&p) + table[i].offset;
+      const fmi2ValueReference r = vr::first_param + static_cast<fmi2ValueReference>(i);
+      if (table[i].is_int) {
+        int x = ctx.integer(r);
+        std::memcpy(base, &x, sizeof x);
+      } else {
+        double x = ctx.real(r);
+        std::memcpy(base, &x, sizeof x);
+      }
+    }
+  }
+
+  // Outputs before the first tick: hold the measured posture (bumpless start), rates 0.
+  static void writeInitialOutputs(Context& ctx, const ahc_params& p) {
+    auto fin = [](double x) { return std::isfinite(x) ? x : 0.0; };
+    const double th1 = fin(ctx.real(vr::theta_ankle)), th2 = fin(ctx.real(vr::theta_hip));
+    double rx = 0.0, rz = 0.0;
+    ahc_com(&p, th1, th2, &rx, &rz);
+    ctx.set_real(vr::theta_ankle_ref, th1);
+    ctx.set_real(vr::theta_hip_ref, th2);
+    ctx.set_real(vr::dtheta_ankle_ref, 0.0);
+    ctx.set_real(vr::dtheta_hip_ref, 0.0);
+    ctx.set_integer(vr::phase, AHC_PHASE_ANKLE);
+    ctx.set_real(vr::com_x, fin(rx));
+    ctx.set_real(vr::com_z, fin(rz));
+    ctx.set_real(vr::disturbance_moment, 0.0);
+    ctx.set_real(vr::k_w, 0.0);
+    ctx.set_real(vr::com_x_desired, fin(rx));
+    ctx.set_integer(vr::fault, 0);
+  }
+
+  static void writeOutputs(Context& ctx, const ahc_outputs& o) {
+    ctx.set_real(vr::theta_ankle_ref, o.theta_ankle_ref);
+    ctx.set_real(vr::theta_hip_ref, o.theta_hip_ref);
+    ctx.set_real(vr::dtheta_ankle_ref, o.dtheta_ankle_ref);
+    ctx.set_real(vr::dtheta_hip_ref, o.dtheta_hip_ref);
+    ctx.set_integer(vr::phase, o.phase);
+    ctx.set_real(vr::com_x, o.com_x);
+    ctx.set_real(vr::com_z, o.com_z);
+    ctx.set_real(vr::disturbance_moment, o.disturbance_moment);
+    ctx.set_real(vr::k_w, o.k_w);
+    ctx.set_real(vr::com_x_desired, o.com_x_desired);
+    ctx.set_integer(vr::fault, static_cast<int>(o.fault));
+  }
+
+  ahc_controller ctl_{};
+  unsigned long long ticks_ = 0;
+  double t0_ = 0.0;
+  int lastPhase_ = 0;
+  unsigned lastFault_ = 0;
+  int nonfinite_ = 0;
+};
+
+}  // namespace
+
+const ModelInfo& fmuglue::modelInfo() {
+  static const ModelInfo info = makeInfo();
+  return info;
+}
+
+std::unique_ptr<Model> fmuglue::createModel() { return std::make_unique<ControllerModel>(); }

@@ -1,0 +1,324 @@
+// Hoap2Plant.fmu: the HOAP-2 sagittal plant (plant/, hoap2plant::Plant) behind the FMI 2.0
+// co-simulation glue (fmu/common). Signals per DESIGN section 3; model parameters carry the same
+// names as the controller's ahc_params fields where they mean the same thing; start values come
+// from hoap2plant::default_params() (which reads ahc/hoap2_model.h: one source of truth).
+// Outputs are sampled at the communication points (no direct feed-through).
+#include <cmath>
+#include <cstring>
+#include <memory>
+#include <string>
+
+#include "fmuglue/glue.hpp"
+#include "hoap2plant/plant.hpp"
+
+using namespace fmuglue;
+using hoap2plant::Params;
+using hoap2plant::Plant;
+
+namespace {
+
+namespace vr {
+enum : fmi2ValueReference {
+  // inputs
+  theta_ankle_ref = 0, theta_hip_ref = 1, push_force = 2,
+  // outputs
+  theta_ankle = 10, theta_hip = 11, dtheta_ankle = 12, dtheta_hip = 13, zmp_x = 14, fz = 15, fx = 16,
+  com_x = 17, com_z = 18, foot_pitch = 19, contact_mode = 20, fallen = 21, f_toe = 22, f_heel = 23,
+  required_mu = 24, zmp_true = 25, fz_true = 26, energy = 27, tau_ankle = 28, tau_hip = 29,
+  moment_ankle = 30,
+  cvode_steps = 40, rhs_evals = 41, root_evals = 42, mode_switches = 43, impacts = 44,
+  // parameters: 100 + index into kParams; then the non-Real ones
+  first_real_param = 100,
+  servo_on = 190, seed = 191
+};
+}
+
+// Real parameters: name, member, unit, description, min, max.
+struct RealParam {
+  const char* name;
+  double Params::*field;
+  const char* unit;
+  const char* description;
+  double min, max;
+};
+
+const RealParam kParams[] = {
+    {"g", &Params::g, "m/s2", "Gravitational acceleration", 0.0, 100.0},
+    {"m1", &Params::m1, "kg", "Mass of link 1 (both legs, knee straight)", 1e-6, 1e3},
+    {"l1", &Params::l1, "m", "Length of link 1, ankle axis -> hip axis", 1e-6, 10.0},
+    {"lg1", &Params::lg1, "m", "Ankle axis -> CoM of link 1", -10.0, 10.0},
+    {"I1", &Params::I1, "kg.m2", "Inertia of link 1 about its CoM (pitch)", 0.0, 1e3},
+    {"m2", &Params::m2, "kg", "Mass of link 2 (waist, trunk, arms, head)", 1e-6, 1e3},
+    {"lg2", &Params::lg2, "m", "Hip axis -> CoM of link 2", -10.0, 10.0},
+    {"I2", &Params::I2, "kg.m2", "Inertia of link 2 about its CoM (pitch)", 0.0, 1e3},
+    {"feet_mass", &Params::feet_mass, "kg", "Mass of both feet (incl. ankle links, sole plates)", 1e-6, 1e3},
+    {"feet_inertia", &Params::feet_inertia, "kg.m2", "Inertia of both feet about their CoM (pitch)", 0.0, 1e3},
+    {"feet_com_x", &Params::feet_com_x, "m", "Feet CoM, x forward of the ankle axis", -1.0, 1.0},
+    {"feet_com_z", &Params::feet_com_z, "m", "Feet CoM, height above the sole", -1.0, 1.0},
+    {"toe_x", &Params::toe_x, "m", "Toe edge of the sole, x from the ankle axis (> 0)", 1e-6, 1.0},
+    {"heel_x", &Params::heel_x, "m", "Heel edge of the sole, x from the ankle axis (< 0)", -1.0, -1e-6},
+    {"ankle_height", &Params::ankle_height, "m", "Ankle axis height above the sole", 1e-6, 1.0},
+    {"kp_ankle", &Params::kp_ankle, "N.m/rad", "Ankle servo position gain (both legs; PD when unsaturated)", 0.0, 1e6},
+    {"kd_ankle", &Params::kd_ankle, "N.m.s/rad", "Ankle servo velocity gain", 0.0, 1e5},
+    {"kp_hip", &Params::kp_hip, "N.m/rad", "Hip servo position gain (both legs)", 0.0, 1e6},
+    {"kd_hip", &Params::kd_hip, "N.m.s/rad", "Hip servo velocity gain", 0.0, 1e5},
+    {"tau_max_ankle", &Params::tau_max_ankle, "N.m", "Ankle servo torque limit (2 motors x 9 N.m)", 1e-6, 1e4},
+    {"tau_max_hip", &Params::tau_max_hip, "N.m", "Hip servo torque limit (2 motors x 9 N.m)", 1e-6, 1e4},
+    {"vel_max_ankle", &Params::vel_max_ankle, "rad/s", "Ankle servo velocity limit", 1e-6, 1e3},
+    {"vel_max_hip", &Params::vel_max_hip, "rad/s", "Hip servo velocity limit", 1e-6, 1e3},
+    {"damping_ankle", &Params::damping_ankle, "N.m.s/rad", "Passive viscous damping of the ankle joint", 0.0, 1e4},
+    {"damping_hip", &Params::damping_hip, "N.m.s/rad", "Passive viscous damping of the hip joint", 0.0, 1e4},
+    {"h_push", &Params::h_push, "m", "Height of the push point above the sole (erect posture), on link 2", 0.0, 10.0},
+    {"fall_foot_pitch", &Params::fall_foot_pitch, "rad", "Fallen when |foot pitch| exceeds this", 1e-3, 1.5},
+    {"fall_body_pitch", &Params::fall_body_pitch, "rad", "Fallen when the ankle->CoM line leans more than this", 1e-3, 1.5},
+    {"baumgarte", &Params::baumgarte, "1/s", "Pivot-constraint stabilization rate in the rocking modes", 0.0, 1e4},
+    {"sensor_noise", &Params::sensor_noise, "N", "Std deviation of the white noise of each sole load cell (0 = off)", 0.0, 1e4},
+    {"sensor_bias_toe", &Params::sensor_bias_toe, "N", "Bias of the toe load cell", -1e4, 1e4},
+    {"sensor_bias_heel", &Params::sensor_bias_heel, "N", "Bias of the heel load cell", -1e4, 1e4},
+    {"sensor_fmin", &Params::sensor_fmin, "N", "Below this total load the sensor ZMP reads 0", 0.0, 1e4},
+    {"theta_ankle_init", &Params::theta_ankle_init, "rad", "Initial ankle set-point (starts at rest in static equilibrium under it)", -1.06, 1.06},
+    {"theta_hip_init", &Params::theta_hip_init, "rad", "Initial hip set-point (starts at rest in static equilibrium under it)", -1.43, 1.24},
+    {"rtol", &Params::rtol, "", "CVODE relative tolerance", 1e-14, 1e-2},
+    {"atol", &Params::atol, "", "CVODE absolute tolerance (all states)", 1e-16, 1e-2},
+};
+constexpr int kNumParams = sizeof(kParams) / sizeof(kParams[0]);
+
+ModelInfo makeInfo() {
+  const Params def = hoap2plant::default_params();
+  ModelInfo m;
+  m.model_name = "Hoap2Plant";
+  m.description =
+      "HOAP-2 humanoid in the sagittal plane: foot (flat / toe / heel / airborne contact, CVODE root "
+      "functions), legs and upper body, PD joint servos, sole load cells, push on the back, fall detection";
+  m.author = "anklehip project";
+  m.version = "0.1.0";
+  m.license = "see the project repository";
+  m.default_experiment = {0.0, 5.0, 1e-6, 1e-3};
+  m.outputs_depend_on_inputs = false;
+  m.extra_log_categories = {{"logSolver", "CVODE messages"}};
+  auto add = [&](const char* n, fmi2ValueReference r, Type t, Causality c, Variability v, const char* unit,
+                 const char* d, double start = 0.0, double mn = kNoBound, double mx = kNoBound) {
+    Variable x;
+    x.name = n; x.vr = r; x.type = t; x.causality = c; x.variability = v; x.unit = unit; x.description = d;
+    x.start = start; x.min = mn; x.max = mx;
+    m.variables.push_back(x);
+  };
+  const auto In = Causality::Input, Out = Causality::Output, Par = Causality::Parameter;
+  const auto Cont = Variability::Continuous, Disc = Variability::Discrete, Fix = Variability::Fixed;
+  add("theta_ankle_ref", vr::theta_ankle_ref, Type::Real, In, Cont, "rad", "Ankle servo set point", 0.0);
+  add("theta_hip_ref", vr::theta_hip_ref, Type::Real, In, Cont, "rad", "Hip servo set point", 0.0);
+  add("push_force", vr::push_force, Type::Real, In, Cont, "N", "Horizontal force on the back of link 2 (+ forward)", 0.0);
+
+  add("theta_ankle", vr::theta_ankle, Type::Real, Out, Cont, "rad", "Ankle angle theta1 (leg relative to foot)");
+  add("theta_hip", vr::theta_hip, Type::Real, Out, Cont, "rad", "Hip angle theta2 (upper body relative to leg)");
+  add("dtheta_ankle", vr::dtheta_ankle, Type::Real, Out, Cont, "rad/s", "Ankle angular velocity");
+  add("dtheta_hip", vr::dtheta_hip, Type::Real, Out, Cont, "rad/s", "Hip angular velocity");
+  add("zmp_x", vr::zmp_x, Type::Real, Out, Cont, "m", "ZMP from the sole load cells, x from the ankle (foot frame); 0 when unloaded");
+  add("fz", vr::fz, Type::Real, Out, Cont, "N", "Total normal force: sum of the sole load cells");
+  add("fx", vr::fx, Type::Real, Out, Cont, "N", "Horizontal ground reaction force (+ forward)");
+  add("com_x", vr::com_x, Type::Real, Out, Cont, "m", "Whole-robot CoM (feet included), x from the ankle");
+  add("com_z", vr::com_z, Type::Real, Out, Cont, "m", "Whole-robot CoM (feet included), height above the ankle axis");
+  add("foot_pitch", vr::foot_pitch, Type::Real, Out, Cont, "rad", "Foot pitch (+ = toes down)");
+  add("contact_mode", vr::contact_mode, Type::Integer, Out, Disc, "", "Contact: 0 flat, 1 on toe, 2 on heel, 3 airborne");
+  add("fallen", vr::fallen, Type::Boolean, Out, Disc, "", "The robot has fallen (foot or body pitch past threshold)");
+  add("f_toe", vr::f_toe, Type::Real, Out, Cont, "N", "Toe load cell (foot-normal force, with noise/bias if enabled)");
+  add("f_heel", vr::f_heel, Type::Real, Out, Cont, "N", "Heel load cell (foot-normal force, with noise/bias if enabled)");
+  add("required_mu", vr::required_mu, Type::Real, Out, Cont, "", "Friction coefficient required to prevent slip |fx|/fz");
+  add("zmp_true", vr::zmp_true, Type::Real, Out, Cont, "m", "Centre of pressure of the constrained dynamics (no sensor model)");
+  add("fz_true", vr::fz_true, Type::Real, Out, Cont, "N", "Vertical ground reaction of the constrained dynamics");
+  add("moment_ankle", vr::moment_ankle, Type::Real, Out, Cont, "N.m", "Ground reaction moment about the ankle axis (foot-pitch sense)");
+  add("energy", vr::energy, Type::Real, Out, Cont, "J", "Mechanical energy (kinetic + potential)");
+  add("tau_ankle", vr::tau_ankle, Type::Real, Out, Cont, "N.m", "Ankle joint torque (servo + passive damping)");
+  add("tau_hip", vr::tau_hip, Type::Real, Out, Cont, "N.m", "Hip joint torque (servo + passive damping)");
+  add("cvode_steps", vr::cvode_steps, Type::Integer, Out, Disc, "", "CVODE internal steps so far");
+  add("rhs_evals", vr::rhs_evals, Type::Integer, Out, Disc, "", "Right-hand-side evaluations so far (incl. Jacobian)");
+  add("root_evals", vr::root_evals, Type::Integer, Out, Disc, "", "Root-function evaluations so far");
+  add("mode_switches", vr::mode_switches, Type::Integer, Out, Disc, "", "Contact mode switches so far");
+  add("impacts", vr::impacts, Type::Integer, Out, Disc, "", "Plastic impacts (landings) so far");
+
+  for (int i = 0; i < kNumParams; ++i) {
+    const RealParam& p = kParams[i];
+    add(p.name, vr::first_real_param + i, Type::Real, Par, Fix, p.unit, p.description, def.*(p.field), p.min, p.max);
+  }
+  add("servo_on", vr::servo_on, Type::Boolean, Par, Fix, "", "Joint servos active (false: joints passive)", def.servo_on ? 1 : 0);
+  add("seed", vr::seed, Type::Integer, Par, Fix, "", "Seed of the sensor-noise generator (splitmix64)", double(def.seed), 0, 2147483647);
+  return m;
+}
+
+int clampi(std::int64_t v) { return v > 2147483647 ? 2147483647 : static_cast<int>(v); }
+
+class PlantFmu : public Model {
+ public:
+  void reset(Context&) override { plant_.reset(); }
+
+  fmi2Status exit_initialization(Context& ctx) override {
+    Params p = hoap2plant::default_params();
+    for (int i = 0; i < kNumParams; ++i) p.*(kParams[i].field) = ctx.real(vr::first_real_param + i);
+    p.servo_on = ctx.boolean(vr::servo_on);
+    p.seed = static_cast<std::uint64_t>(ctx.integer(vr::seed));
+    if (!(p.heel_x < p.feet_com_x + 1.0) || !(p.toe_x > p.heel_x)) {
+      ctx.log(kLogStatusError, fmi2Error, "toe_x (%g) must be > heel_x (%g)", p.toe_x, p.heel_x);
+      return fmi2Error;
+    }
+    if (p.h_push <= p.ankle_height + p.l1) {
+      ctx.log(kLogStatusError, fmi2Error, "h_push (%g m) must be above the hip (ankle_height + l1 = %g m)", p.h_push,
+              p.ankle_height + p.l1);
+      return fmi2Error;
+    }
+    plant_ = std::make_unique<Plant>(p);
+    attach(ctx);
+    const bool ok = plant_->initialize(ctx.start_time());
+    if (!ok) {
+      ctx.log(kLogStatusError, fmi2Error, "plant initialization failed: %s", plant_->message().c_str());
+      plant_.reset();
+      return fmi2Error;
+    }
+    last_in_[0] = p.theta_ankle_init;
+    last_in_[1] = p.theta_hip_init;
+    last_in_[2] = 0.0;
+    write_outputs(ctx);
+    detach();
+    return fmi2OK;
+  }
+
+  StepResult do_step(Context& ctx, double t, double h, bool) override {
+    StepResult res;
+    if (!plant_) {
+      ctx.log(kLogStatusError, fmi2Error, "doStep without an initialized plant");
+      res.status = fmi2Error;
+      return res;
+    }
+    if (std::fabs(t - plant_->time()) > 1e-9 * std::max(1.0, std::fabs(t))) {
+      ctx.log(kLogStatusError, fmi2Error, "doStep at t=%.12g but the plant is at t=%.12g", t, plant_->time());
+      res.status = fmi2Error;
+      return res;
+    }
+    if (plant_->fallen()) {
+      res.status = fmi2Discard;
+      res.last_successful_time = plant_->fall_time();
+      res.terminated = true;
+      ctx.log(kLogStatusDiscard, fmi2Discard, "the robot has fallen at t=%g s; no further steps", plant_->fall_time());
+      return res;
+    }
+    attach(ctx);
+    double in[3] = {ctx.real(vr::theta_ankle_ref), ctx.real(vr::theta_hip_ref), ctx.real(vr::push_force)};
+    fmi2Status st = fmi2OK;
+    for (int i = 0; i < 3; ++i) {
+      if (!std::isfinite(in[i])) {  // contained: hold the last finite value
+        ctx.log(kLogStatusWarning, fmi2Warning, "non-finite input %s ignored at t=%g; holding %g",
+                i == 0 ? "theta_ankle_ref" : i == 1 ? "theta_hip_ref" : "push_force", t, last_in_[i]);
+        in[i] = last_in_[i];
+        st = fmi2Warning;
+      }
+      last_in_[i] = in[i];
+    }
+    plant_->set_inputs(in[0], in[1], in[2]);
+    const auto r = plant_->do_step(h);
+    write_outputs(ctx);
+    detach();
+    switch (r) {
+      case Plant::Result::Ok:
+        res.status = st;
+        return res;
+      case Plant::Result::Fallen:
+        ctx.log(kLogStatusDiscard, fmi2Discard, "%s", plant_->message().c_str());
+        res.status = fmi2Discard;
+        res.last_successful_time = plant_->fall_time();
+        res.terminated = true;
+        return res;
+      case Plant::Result::Error:
+        break;
+    }
+    ctx.log(kLogStatusError, fmi2Error, "plant step failed: %s", plant_->message().c_str());
+    res.status = fmi2Error;
+    return res;
+  }
+
+  void save_state(StateWriter& w) const override {
+    w.u32(plant_ ? 1u : 0u);
+    if (!plant_) return;
+    // copies into zeroed storage so padding bytes are deterministic in the serialized state
+    Params p;
+    hoap2plant::Snapshot s;
+    std::memset(static_cast<void*>(&p), 0, sizeof p);
+    std::memset(static_cast<void*>(&s), 0, sizeof s);
+    p = plant_->model().P;
+    s = plant_->snapshot();
+    w.pod(p);
+    w.pod(s);
+    w.bytes(last_in_, sizeof last_in_);
+  }
+
+  bool load_state(StateReader& r, std::string& err) override {
+    std::uint32_t has = 0;
+    if (!r.u32(has) || has > 1) return err = "bad plant state header", false;
+    if (!has) {
+      plant_.reset();
+      return true;
+    }
+    Params p;
+    hoap2plant::Snapshot s;
+    double li[3];
+    if (!r.pod(p) || !r.pod(s) || !r.bytes(li, sizeof li)) return err = "truncated plant state", false;
+    auto fresh = std::make_unique<Plant>(p);
+    if (!fresh->restore(s)) return err = "invalid plant snapshot", false;
+    plant_ = std::move(fresh);  // CVODE is re-initialized from the snapshot at the next step
+    std::memcpy(last_in_, li, sizeof li);
+    return true;
+  }
+
+ private:
+  void attach(Context& ctx) {
+    ctx_ = &ctx;
+    plant_->logger = [this](const std::string& s) {
+      if (!ctx_) return;
+      if (s.rfind("CVODE", 0) == 0) ctx_->log(kFirstModelCategory, fmi2Warning, "%s", s.c_str());
+      else ctx_->log(kLogEvents, fmi2OK, "%s", s.c_str());
+    };
+  }
+  void detach() { ctx_ = nullptr; }
+
+  void write_outputs(Context& ctx) {
+    const auto& o = plant_->outputs();
+    ctx.set_real(vr::theta_ankle, o.theta_ankle);
+    ctx.set_real(vr::theta_hip, o.theta_hip);
+    ctx.set_real(vr::dtheta_ankle, o.dtheta_ankle);
+    ctx.set_real(vr::dtheta_hip, o.dtheta_hip);
+    ctx.set_real(vr::zmp_x, o.zmp_x);
+    ctx.set_real(vr::fz, o.fz);
+    ctx.set_real(vr::fx, o.fx);
+    ctx.set_real(vr::com_x, o.com_x);
+    ctx.set_real(vr::com_z, o.com_z);
+    ctx.set_real(vr::foot_pitch, o.foot_pitch);
+    ctx.set_integer(vr::contact_mode, o.contact_mode);
+    ctx.set_boolean(vr::fallen, o.fallen);
+    ctx.set_real(vr::f_toe, o.f_toe);
+    ctx.set_real(vr::f_heel, o.f_heel);
+    ctx.set_real(vr::required_mu, o.required_mu);
+    ctx.set_real(vr::zmp_true, o.zmp_true);
+    ctx.set_real(vr::fz_true, o.fz_true);
+    ctx.set_real(vr::moment_ankle, o.moment_ankle);
+    ctx.set_real(vr::energy, o.energy);
+    ctx.set_real(vr::tau_ankle, o.tau_ankle);
+    ctx.set_real(vr::tau_hip, o.tau_hip);
+    const auto& s = plant_->stats();
+    ctx.set_integer(vr::cvode_steps, clampi(s.steps));
+    ctx.set_integer(vr::rhs_evals, clampi(s.rhs_evals));
+    ctx.set_integer(vr::root_evals, clampi(s.root_evals));
+    ctx.set_integer(vr::mode_switches, clampi(s.mode_switches));
+    ctx.set_integer(vr::impacts, clampi(s.impacts));
+  }
+
+  std::unique_ptr<Plant> plant_;
+  Context* ctx_ = nullptr;
+  double last_in_[3] = {0, 0, 0};
+};
+
+}  // namespace
+
+const ModelInfo& fmuglue::modelInfo() {
+  static const ModelInfo info = makeInfo();
+  return info;
+}
+
+std::unique_ptr<Model> fmuglue::createModel() { return std::make_unique<PlantFmu>(); }

@@ -1,0 +1,496 @@
+"""The FMI 2.0 co-simulation glue (fmu/common), exercised through AnkleHipController.fmu:
+state machine, get/set rules, logging, FMU state snapshots and their serialization, binary
+hygiene, modelDescription.xml. Low-level calls go through ctypes (tests/conftest.py RawModel)."""
+from __future__ import annotations
+
+import ctypes
+import shutil
+import subprocess
+import sys
+import xml.etree.ElementTree as ET
+import zipfile
+
+import pytest
+
+from conftest import (fmi2Error, fmi2OK, fmi2Warning, CONTROLLER_OUTPUTS)
+
+fmi2LastSuccessfulTime, fmi2Terminated = 2, 3
+
+
+# ---------------------------------------------------------------------------------------------
+# State machine: every call in every reachable state.
+
+def _to_state(raw, state):
+    inst = raw.instance()
+    assert inst.c, "instantiate failed"
+    if state == "instantiated":
+        return inst
+    if state == "error":
+        assert inst.set_real({"zmp_limit_front": 0.07}) == fmi2OK  # inside bounds, beyond the toe
+        assert inst.fmi2SetupExperiment(0, 0.0, 0.0, 0, 0.0) == fmi2OK
+        assert inst.fmi2EnterInitializationMode() == fmi2OK
+        assert inst.fmi2ExitInitializationMode() == fmi2Error
+        inst.log.clear()
+        return inst
+    assert inst.fmi2SetupExperiment(0, 0.0, 0.0, 0, 0.0) == fmi2OK
+    assert inst.fmi2EnterInitializationMode() == fmi2OK
+    if state == "initializationMode":
+        return inst
+    assert inst.fmi2ExitInitializationMode() == fmi2OK
+    if state == "stepComplete":
+        return inst
+    assert inst.fmi2Terminate() == fmi2OK
+    assert state == "terminated"
+    return inst
+
+
+def _real_status(inst):
+    v = ctypes.c_double()
+    return inst.fmi2GetRealStatus(fmi2LastSuccessfulTime, ctypes.byref(v))
+
+
+def _bool_status(inst):
+    v = ctypes.c_int()
+    return inst.fmi2GetBooleanStatus(fmi2Terminated, ctypes.byref(v))
+
+
+def _get_state(inst):
+    s = ctypes.c_void_p()
+    st = inst.fmi2GetFMUstate(ctypes.byref(s))
+    if s.value:
+        inst.fmi2FreeFMUstate(ctypes.byref(s))
+    return st
+
+
+ALL = {"instantiated", "initializationMode", "stepComplete", "terminated", "error"}
+CALLS = {
+    # call name: (function, states in which it is allowed)
+    "fmi2SetupExperiment": (lambda i: i.fmi2SetupExperiment(0, 0.0, 0.0, 0, 0.0), {"instantiated"}),
+    "fmi2EnterInitializationMode": (lambda i: i.fmi2EnterInitializationMode(), {"instantiated"}),
+    "fmi2ExitInitializationMode": (lambda i: i.fmi2ExitInitializationMode(), {"initializationMode"}),
+    "fmi2DoStep": (lambda i: i.fmi2DoStep(0.0, 1e-3, 1), {"stepComplete"}),
+    "fmi2Terminate": (lambda i: i.fmi2Terminate(), {"stepComplete"}),
+    "fmi2GetReal": (lambda i: i.get_real(["theta_ankle_ref"])[0],
+                    {"initializationMode", "stepComplete", "terminated", "error"}),
+    "fmi2GetInteger": (lambda i: i.get_integer(["phase"])[0],
+                       {"initializationMode", "stepComplete", "terminated", "error"}),
+    "fmi2SetReal": (lambda i: i.set_real({"theta_ankle": 0.01}),
+                    {"instantiated", "initializationMode", "stepComplete"}),
+    "fmi2GetFMUstate": (_get_state, {"instantiated", "initializationMode", "stepComplete", "terminated"}),
+    "fmi2GetRealStatus": (_real_status, {"stepComplete", "terminated"}),
+    "fmi2GetBooleanStatus": (_bool_status, {"stepComplete", "terminated"}),
+    "fmi2CancelStep": (lambda i: i.fmi2CancelStep(), set()),
+    "fmi2Reset": (lambda i: i.fmi2Reset(), ALL),
+    "fmi2SetDebugLogging": (lambda i: i.fmi2SetDebugLogging(1, 0, None), ALL),
+}
+
+
+@pytest.mark.parametrize("state", sorted(ALL))
+@pytest.mark.parametrize("call", sorted(CALLS))
+def test_state_machine(raw_controller, state, call):
+    inst = _to_state(raw_controller, state)
+    fn, allowed = CALLS[call]
+    st = fn(inst)
+    if state in allowed:
+        assert st in (fmi2OK, fmi2Warning), (call, state, inst.log)
+    else:
+        assert st == fmi2Error, (call, state)
+        assert any(call in m and "state" in m for m in inst.errors()), inst.log
+    inst.free()
+
+
+def test_error_state_recovers_by_reset(raw_controller):
+    inst = _to_state(raw_controller, "error")
+    assert inst.fmi2DoStep(0.0, 1e-3, 1) == fmi2Error
+    assert inst.fmi2Reset() == fmi2OK
+    assert inst.fmi2SetupExperiment(0, 0.0, 0.0, 0, 0.0) == fmi2OK
+    assert inst.fmi2EnterInitializationMode() == fmi2OK
+    assert inst.fmi2ExitInitializationMode() == fmi2OK
+    assert inst.fmi2DoStep(0.0, 1e-3, 1) == fmi2OK
+    inst.free()
+
+
+def _running(raw, **kw):
+    inst = raw.instance(**kw)
+    assert inst.fmi2SetupExperiment(0, 0.0, 0.0, 0, 0.0) == fmi2OK
+    assert inst.fmi2EnterInitializationMode() == fmi2OK
+    assert inst.fmi2ExitInitializationMode() == fmi2OK
+    return inst
+
+
+# ---------------------------------------------------------------------------------------------
+# Get/set rules and argument checks.
+
+def test_unknown_value_reference_and_type_mismatch(raw_controller):
+    inst = _running(raw_controller)
+    vr = (ctypes.c_uint * 2)(inst.vr("theta_ankle_ref"), 999999)
+    out = (ctypes.c_double * 2)()
+    assert inst.fmi2GetReal(vr, 2, out) == fmi2Error
+    assert any("unknown value reference 999999" in m for m in inst.errors())
+    ivr = (ctypes.c_uint * 1)(inst.vr("theta_ankle_ref"))
+    iout = (ctypes.c_int * 1)()
+    assert inst.fmi2GetInteger(ivr, 1, iout) == fmi2Error
+    assert any("not Integer" in m for m in inst.errors())
+    assert inst.fmi2SetReal(vr, 2, out) == fmi2Error  # unknown vr in a set: nothing is set
+    assert inst.fmi2GetReal(vr, 10**9, out) == fmi2Error  # absurd array length: rejected up front
+    assert any("nvr" in m for m in inst.errors())
+    assert inst.fmi2GetReal(vr, 0, None) == fmi2OK  # nvr = 0 with NULL arrays is fine
+    assert inst.fmi2GetReal(vr, 1, None) == fmi2Error  # NULL value array
+    assert inst.fmi2GetReal(None, 1, out) == fmi2Error  # NULL vr array
+    assert inst.fmi2DoStep(0.0, 1e-3, 1) == fmi2OK  # the instance is still usable
+    inst.free()
+
+
+def test_causality_and_variability_rules(raw_controller):
+    inst = raw_controller.instance()
+    # instantiated: parameters and inputs can be set, outputs cannot
+    assert inst.set_real({"Ka": 41.0, "theta_ankle": 0.0}) == fmi2OK
+    assert inst.set_real({"theta_ankle_ref": 1.0}) == fmi2Error
+    assert any("theta_ankle_ref" in m and "cannot be set" in m for m in inst.errors())
+    assert inst.set_integer({"phase": 2}) == fmi2Error
+    inst.fmi2SetupExperiment(0, 0.0, 0.0, 0, 0.0)
+    inst.fmi2EnterInitializationMode()
+    assert inst.set_real({"m1": 1.8}) == fmi2OK  # fixed parameter in initialization mode
+    assert inst.fmi2ExitInitializationMode() == fmi2OK
+    inst.log.clear()
+    assert inst.set_real({"m1": 1.7}) == fmi2Error  # fixed parameter after initialization
+    assert any("m1" in m for m in inst.errors())
+    assert inst.set_real({"sample_period": 0.002}) == fmi2Error
+    assert inst.set_real({"Ka": 45.0}) == fmi2OK  # tunable parameter after initialization
+    assert inst.get_real(["Ka"]) == (fmi2OK, [45.0])
+    assert inst.set_real({"Ka": -1.0}) == fmi2Error  # out of bounds: rejected, value kept
+    assert any("Ka" in m and "-1" in m for m in inst.errors())
+    assert inst.get_real(["Ka"]) == (fmi2OK, [45.0])
+    assert inst.set_real({"Ka": float("nan")}) == fmi2Error
+    assert inst.get_real(["m1"]) == (fmi2OK, [1.8])
+    assert inst.fmi2DoStep(0.0, 1e-3, 1) == fmi2OK
+    inst.free()
+
+
+def test_parameter_bounds_checked_at_set(raw_controller):
+    inst = raw_controller.instance()
+    assert inst.set_real({"m1": -1.0}) == fmi2Error
+    assert any('"m1"' in m and "-1" in m for m in inst.errors())
+    assert inst.set_integer({"feet_offset_mode": 7}) == fmi2Error
+    inst.free()
+
+
+def test_instantiate_rejects_bad_arguments(raw_controller):
+    bad_guid = raw_controller.instance(guid="{not-the-guid}")
+    assert not bad_guid.c
+    assert any("GUID" in m for m in bad_guid.errors())
+    me = raw_controller.instance(fmu_type=0)  # fmi2ModelExchange
+    assert not me.c
+    assert any("CoSimulation" in m for m in me.errors())
+    noname = raw_controller.instance(name=None)
+    assert not noname.c
+    raw_controller.lib.fmi2FreeInstance(None)  # must not crash
+    assert raw_controller.lib.fmi2GetVersion() == b"2.0"
+    assert raw_controller.lib.fmi2GetTypesPlatform() == b"default"
+
+
+def test_do_step_argument_checks(raw_controller):
+    inst = _running(raw_controller)
+    assert inst.fmi2DoStep(0.0, 0.0, 1) == fmi2Error
+    assert inst.fmi2DoStep(0.0, -1e-3, 1) == fmi2Error
+    assert inst.fmi2DoStep(0.0, float("nan"), 1) == fmi2Error
+    assert inst.fmi2DoStep(0.5, 1e-3, 1) == fmi2Error  # does not match the FMU time
+    assert any("does not match" in m for m in inst.errors())
+    assert inst.fmi2DoStep(0.0, 1e-3, 1) == fmi2OK
+    v = ctypes.c_double()
+    assert inst.fmi2GetRealStatus(fmi2LastSuccessfulTime, ctypes.byref(v)) == fmi2OK
+    assert v.value == 1e-3
+    b = ctypes.c_int(7)
+    assert inst.fmi2GetBooleanStatus(fmi2Terminated, ctypes.byref(b)) == fmi2OK
+    assert b.value == 0
+    inst.free()
+
+
+def test_stop_time_is_enforced(raw_controller):
+    inst = raw_controller.instance()
+    inst.fmi2SetupExperiment(0, 0.0, 0.0, 1, 0.002)
+    inst.fmi2EnterInitializationMode()
+    inst.fmi2ExitInitializationMode()
+    assert inst.fmi2DoStep(0.0, 0.002, 1) == fmi2OK
+    assert inst.fmi2DoStep(0.002, 0.001, 1) == fmi2Error
+    inst.free()
+
+
+# ---------------------------------------------------------------------------------------------
+# Logging
+
+def test_logging_categories(raw_controller):
+    inst = raw_controller.instance(logging_on=True)
+    inst.fmi2SetupExperiment(0, 0.0, 0.0, 0, 0.0)
+    assert any(c == "logCalls" for _, c, _ in inst.log)
+    inst.log.clear()
+    cats = (ctypes.c_char_p * 1)(b"logCalls")
+    assert inst.fmi2SetDebugLogging(0, 1, cats) == fmi2OK
+    inst.fmi2EnterInitializationMode()
+    assert not any(c == "logCalls" for _, c, _ in inst.log)
+    bad = (ctypes.c_char_p * 1)(b"noSuchCategory")
+    assert inst.fmi2SetDebugLogging(1, 1, bad) == fmi2Error
+    assert any("noSuchCategory" in m for m in inst.errors())
+    inst.free()
+
+    quiet = raw_controller.instance(logging_on=False)
+    quiet.fmi2SetupExperiment(0, 0.0, 0.0, 0, 0.0)
+    assert quiet.log == []
+    assert quiet.fmi2DoStep(0.0, 1e-3, 1) == fmi2Error  # errors are still explained
+    assert quiet.errors()
+    assert quiet.fmi2SetDebugLogging(0, 0, None) == fmi2OK  # everything off, errors too
+    quiet.log.clear()
+    assert quiet.fmi2DoStep(0.0, 1e-3, 1) == fmi2Error
+    assert quiet.log == []
+    quiet.free()
+
+
+# ---------------------------------------------------------------------------------------------
+# FMU state and serialization
+
+def _step(inst, t, h=1e-3):
+    assert inst.fmi2DoStep(t, h, 0) in (fmi2OK, fmi2Warning)
+
+
+def _drive(inst, t0, n, push=True):
+    """n steps of 1 ms with a ramping ZMP; returns the outputs after each step."""
+    out = []
+    for k in range(n):
+        t = t0 + k * 1e-3
+        zmp = 0.05 * min(1.0, t / 0.5) if push else 0.0
+        inst.set_real({"zmp_x": zmp, "theta_ankle": zmp * 0.3})
+        _step(inst, t)
+        out.append(inst.get_real(CONTROLLER_OUTPUTS[:4] + CONTROLLER_OUTPUTS[5:10])[1] +
+                   inst.get_integer(["phase", "fault"])[1])
+    return out
+
+
+def _snapshot_bytes(inst):
+    s = ctypes.c_void_p()
+    assert inst.fmi2GetFMUstate(ctypes.byref(s)) == fmi2OK
+    n = ctypes.c_size_t()
+    assert inst.fmi2SerializedFMUstateSize(s, ctypes.byref(n)) == fmi2OK
+    buf = ctypes.create_string_buffer(n.value)
+    assert inst.fmi2SerializeFMUstate(s, buf, n.value) == fmi2OK
+    assert inst.fmi2FreeFMUstate(ctypes.byref(s)) == fmi2OK
+    assert s.value is None
+    return buf.raw
+
+
+def _restore_bytes(inst, data):
+    s = ctypes.c_void_p()
+    st = inst.fmi2DeSerializeFMUstate(data, len(data), ctypes.byref(s))
+    if st != fmi2OK:
+        return st
+    st = inst.fmi2SetFMUstate(s)
+    inst.fmi2FreeFMUstate(ctypes.byref(s))
+    return st
+
+
+def test_get_set_state_reproduces_trajectory(raw_controller):
+    inst = _running(raw_controller)
+    _drive(inst, 0.0, 300)
+    s = ctypes.c_void_p()
+    assert inst.fmi2GetFMUstate(ctypes.byref(s)) == fmi2OK
+    first = _drive(inst, 0.3, 700)
+    assert inst.fmi2SetFMUstate(s) == fmi2OK
+    again = _drive(inst, 0.3, 700)
+    assert first == again
+    assert inst.fmi2GetFMUstate(ctypes.byref(s)) == fmi2OK  # reuse of an existing state object
+    assert inst.fmi2FreeFMUstate(ctypes.byref(s)) == fmi2OK
+    inst.free()
+
+
+def test_serialized_state_into_fresh_instance(raw_controller):
+    a = _running(raw_controller)
+    _drive(a, 0.0, 400)
+    blob = _snapshot_bytes(a)
+    ref = _drive(a, 0.4, 600)
+    b = raw_controller.instance(name="fresh")  # only instantiated: the state carries the rest
+    assert _restore_bytes(b, blob) == fmi2OK, b.log
+    assert _drive(b, 0.4, 600) == ref
+    a.free()
+    b.free()
+
+
+def test_error_state_recovers_by_restoring_a_state(raw_controller):
+    good = _running(raw_controller)
+    _drive(good, 0.0, 200)
+    blob = _snapshot_bytes(good)
+    ref = _drive(good, 0.2, 100)
+    broken = _to_state(raw_controller, "error")
+    assert _restore_bytes(broken, blob) == fmi2OK, broken.log
+    assert _drive(broken, 0.2, 100) == ref
+    good.free()
+    broken.free()
+
+
+def test_corrupted_serialized_state_rejected(raw_controller):
+    a = _running(raw_controller)
+    _drive(a, 0.0, 100)
+    blob = _snapshot_bytes(a)
+    ref = _drive(a, 0.1, 50)
+    b = _running(raw_controller, name="victim")
+    _drive(b, 0.0, 100)
+    cases = {
+        "empty": b"",
+        "one byte": blob[:1],
+        "header only": blob[:24],
+        "truncated by one": blob[:-1],
+        "half": blob[: len(blob) // 2],
+        "trailing garbage": blob + b"\0",
+        "foreign": b"PK\x03\x04" + bytes(range(256)) * 4,
+    }
+    for pos in (0, 9, 20, len(blob) // 2, len(blob) - 12, len(blob) - 1):
+        flipped = bytearray(blob)
+        flipped[pos] ^= 0x5A
+        cases[f"flipped byte {pos}"] = bytes(flipped)
+    for name, data in cases.items():
+        b.log.clear()
+        assert _restore_bytes(b, data) == fmi2Error, name
+        assert b.errors(), name
+    # b was not disturbed by the rejected blobs; a valid blob still restores
+    assert _restore_bytes(b, blob) == fmi2OK
+    assert _drive(b, 0.1, 50) == ref
+    a.free()
+    b.free()
+
+
+def _fnv1a64(data: bytes) -> int:
+    h = 1469598103934665603
+    for b in data:
+        h = ((h ^ b) * 1099511628211) & 0xFFFFFFFFFFFFFFFF
+    return h
+
+
+def test_state_from_other_model_rejected(raw_controller):
+    """A blob with the right layout but another GUID (= another variable table) is rejected."""
+    a = _running(raw_controller)
+    blob = bytearray(_snapshot_bytes(a))
+    glen = int.from_bytes(blob[16:20], "little")
+    assert glen > 0
+    a_blob_guid_char = blob[21]
+    blob[21] = ord("0") if blob[21] != ord("0") else ord("1")  # GUID text changed ...
+    blob[-8:] = _fnv1a64(bytes(blob[:-8])).to_bytes(8, "little")  # ... with a valid checksum
+    b = raw_controller.instance()
+    assert _restore_bytes(b, bytes(blob)) == fmi2Error
+    assert any("another model" in m for m in b.errors()), b.log
+    # the same bytes with the original GUID are accepted (so the GUID check is what rejected it)
+    blob[21] = a_blob_guid_char
+    blob[-8:] = _fnv1a64(bytes(blob[:-8])).to_bytes(8, "little")
+    assert _restore_bytes(b, bytes(blob)) == fmi2OK
+    a.free()
+    b.free()
+
+
+def test_two_instances_independent(raw_controller):
+    solo_a = _running(raw_controller, name="soloA")
+    ref_a = _drive(solo_a, 0.0, 500, push=True)
+    solo_b = _running(raw_controller, name="soloB")
+    ref_b = _drive(solo_b, 0.0, 500, push=False)
+    a = _running(raw_controller, name="A")
+    b = _running(raw_controller, name="B")
+    got_a, got_b = [], []
+    for k in range(500):  # interleaved
+        got_a += _drive_one(a, k, True)
+        got_b += _drive_one(b, k, False)
+    assert got_a == ref_a and got_b == ref_b
+    assert ref_a != ref_b
+    for i in (solo_a, solo_b, a, b):
+        i.free()
+
+
+def _drive_one(inst, k, push):
+    t = k * 1e-3
+    zmp = 0.05 * min(1.0, t / 0.5) if push else 0.0
+    inst.set_real({"zmp_x": zmp, "theta_ankle": zmp * 0.3})
+    _step(inst, t)
+    return [inst.get_real(CONTROLLER_OUTPUTS[:4] + CONTROLLER_OUTPUTS[5:10])[1] +
+            inst.get_integer(["phase", "fault"])[1]]
+
+
+def test_reset_gives_fresh_behaviour(raw_controller):
+    inst = _running(raw_controller)
+    first = _drive(inst, 0.0, 200)
+    assert inst.fmi2Reset() == fmi2OK
+    assert inst.get_real(["Ka"])[0] == fmi2Error  # instantiated: no get
+    inst.fmi2SetupExperiment(0, 0.0, 0.0, 0, 0.0)
+    inst.fmi2EnterInitializationMode()
+    inst.fmi2ExitInitializationMode()
+    assert _drive(inst, 0.0, 200) == first
+    inst.free()
+
+
+# ---------------------------------------------------------------------------------------------
+# modelDescription.xml and the packed FMU
+
+def test_validate_fmu(controller_fmu):
+    from fmpy.validation import validate_fmu
+
+    assert validate_fmu(str(controller_fmu)) == []
+
+
+def test_model_description_contents(controller_fmu):
+    with zipfile.ZipFile(controller_fmu) as z:
+        names = set(z.namelist())
+        root = ET.fromstring(z.read("modelDescription.xml"))
+    assert {"modelDescription.xml", "binaries/linux64/AnkleHipController.so",
+            "documentation/index.html"} <= names
+    cs = root.find("CoSimulation").attrib
+    for flag in ("canHandleVariableCommunicationStepSize", "canGetAndSetFMUstate", "canSerializeFMUstate"):
+        assert cs[flag] == "true"
+    assert cs["needsExecutionTool"] == "false"
+    assert root.find("DefaultExperiment").attrib["stepSize"] == "0.001"
+    units = {u.attrib["name"] for u in root.find("UnitDefinitions")}
+    cats = [c.attrib["name"] for c in root.find("LogCategories")]
+    assert {"logEvents", "logCalls", "logStatusError", "logStatusWarning"} <= set(cats)
+    svs = root.find("ModelVariables").findall("ScalarVariable")
+    outputs = []
+    for i, sv in enumerate(svs, start=1):
+        assert sv.attrib.get("description"), sv.attrib["name"]
+        real = sv.find("Real")
+        if real is not None:
+            assert real.attrib.get("unit") in units, sv.attrib["name"]
+        if sv.attrib["causality"] == "output":
+            outputs.append(i)
+    ms = root.find("ModelStructure")
+    assert [int(u.attrib["index"]) for u in ms.find("Outputs")] == outputs
+    assert [int(u.attrib["index"]) for u in ms.find("InitialUnknowns")] == outputs
+    assert len({sv.attrib["valueReference"] for sv in svs}) == len(svs)
+
+
+def test_guid_is_deterministic(controller_fmu, native_tool, tmp_path):
+    gen = native_tool("AnkleHipController_gen")
+    (tmp_path / "documentation").mkdir()
+    subprocess.run([str(gen), str(tmp_path)], check=True)
+    with zipfile.ZipFile(controller_fmu) as z:
+        assert z.read("modelDescription.xml") == (tmp_path / "modelDescription.xml").read_bytes()
+
+
+def test_binary_exports_only_fmi2_and_needs_only_libc(controller_unzipped):
+    so = controller_unzipped / "binaries" / "linux64" / "AnkleHipController.so"
+    nm = shutil.which("nm")
+    readelf = shutil.which("readelf")
+    if not nm or not readelf:
+        pytest.fail("nm/readelf (binutils) are needed for this test: apt-get install binutils")
+    syms = subprocess.run([nm, "-D", "--defined-only", str(so)], check=True, capture_output=True,
+                          text=True).stdout.split("\n")
+    names = [line.split()[-1] for line in syms if line.strip()]
+    assert names and all(n.startswith("fmi2") for n in names), [n for n in names if not n.startswith("fmi2")]
+    dyn = subprocess.run([readelf, "-d", str(so)], check=True, capture_output=True, text=True).stdout
+    needed = {line.split("[")[1].split("]")[0] for line in dyn.splitlines() if "(NEEDED)" in line}
+    allowed = {"libc.so.6", "libm.so.6", "ld-linux-x86-64.so.2", "libdl.so.2", "libpthread.so.0"}
+    assert needed <= allowed, needed - allowed
+
+
+def test_packed_fmu_alone_in_empty_dir(controller_fmu, tmp_path):
+    """Copy only the .fmu into an empty folder and simulate it from a clean process."""
+    lone = tmp_path / "lone"
+    lone.mkdir()
+    fmu = lone / controller_fmu.name
+    shutil.copy(controller_fmu, fmu)
+    code = ("import fmpy, sys; r = fmpy.simulate_fmu(sys.argv[1], stop_time=0.05); "
+            "assert len(r) == 51 and r['com_z'][-1] > 0.2; print('ok')")
+    env = {"PATH": "/usr/bin:/bin", "HOME": str(tmp_path)}
+    p = subprocess.run([sys.executable, "-c", code, str(fmu)], cwd=lone, env=env, capture_output=True, text=True)
+    assert p.returncode == 0 and "ok" in p.stdout, p.stderr
