@@ -1,7 +1,540 @@
-"""Command-line interface (filled in by the orchestration work)."""
+"""Command-line interface: ``anklehip <command> ...`` (see docs/scenarios.md, docs/step-tests.md).
+
+Exit status: 0 success, 1 a check failed (expected outcome, comparison, step test),
+2 the input is wrong (bad scenario, missing file or column, unknown parameter).
+"""
+from __future__ import annotations
+
+import argparse
+import json
 import sys
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+EXIT_OK, EXIT_FAIL, EXIT_ERROR = 0, 1, 2
+
+DEFAULT_REF_COLUMNS = ["theta_ankle", "theta_hip", "theta_ankle_ref", "theta_hip_ref", "zmp_x", "com_x",
+                       "fz", "push_force", "phase"]
+
+
+def _err(msg: str) -> int:
+    print(f"anklehip: error: {msg}", file=sys.stderr)
+    return EXIT_ERROR
+
+
+# ----------------------------------------------------------------------------------------------
+# helpers shared by run / record / regen-references
+
+def decimate(data: np.ndarray, step: float, interval: float) -> np.ndarray:
+    k = max(1, int(round(interval / step)))
+    idx = np.arange(0, len(data), k)
+    if idx[-1] != len(data) - 1:
+        idx = np.append(idx, len(data) - 1)
+    return data[idx]
+
+
+def reference_columns(sc, data: np.ndarray) -> list[str]:
+    cols = sc.reference.columns if sc.reference and sc.reference.columns else DEFAULT_REF_COLUMNS
+    return [c for c in cols if c in data.dtype.names]
+
+
+def compare_with_reference(sc, res):
+    """Compare a run with the scenario's reference; None when it has none or the file is missing."""
+    from .compare import compare
+    r = sc.reference
+    if r is None or not r.file.is_file():
+        return None
+    # the reference holds every interval-th row of a run: compare the same rows of this run (a
+    # 1-2 ms transient between two reference samples is not a deviation from the reference)
+    return compare(decimate(res.data, res.step, r.interval), r.file, columns=r.columns, num=r.num, dx=r.dx, dy=r.dy, abs_tol=r.abs_tol,
+                   rel_tol=r.rel_tol, band_floor=r.band_floor, tolerances=r.signals,
+                   result_label=f"{sc.name} (this run)",
+                   reference_label=_rel(r.file))
+
+
+def _rel(p: Path) -> str:
+    try:
+        return str(Path(p).resolve().relative_to(Path.cwd()))
+    except ValueError:
+        return str(p)
+
+
+def geometry_for(res=None, params: dict | None = None):
+    from .plots import Geometry
+    return Geometry.from_parameters(params if params is not None else (res.plant_parameters if res else None))
+
+
+def zmp_limits(params: dict[str, Any]) -> tuple[float, ...] | None:
+    lims = []
+    for k in ("zmp_limit_front", "p_lim", "zmp_limit_toe", "p_lim_toe", "zmp_lim"):
+        if isinstance(params.get(k), (int, float)):
+            lims.append(float(params[k]))
+            break
+    for k in ("zmp_limit_back", "p_lim_heel", "zmp_limit_heel"):
+        if isinstance(params.get(k), (int, float)):
+            v = float(params[k])
+            lims.append(-abs(v))
+            break
+    return tuple(lims) or None
+
+
+def make_figures(sc_name: str, data: np.ndarray, out: Path, res=None, animate: bool = False,
+                 anim_args: dict | None = None, figures: bool = True) -> list[Path]:
+    from . import plots
+    files = [] if not figures else [plots.overview(data, out / f"{sc_name}_overview.png", title=sc_name),
+             plots.fig4(data, out / f"{sc_name}_fig4_joint_angles.png", title=f"{sc_name}: joint angles (cf. paper Fig. 4)"),
+             plots.fig5(data, out / f"{sc_name}_fig5_first_cycle.png",
+                        zmp_limits=zmp_limits(res.controller_parameters) if res else None,
+                        title=f"{sc_name}: first push cycle (cf. paper Fig. 5)")]
+    if animate:
+        files.append(plots.animate(data, out / f"{sc_name}.gif", geometry_for(res), title=sc_name,
+                                   **(anim_args or {})))
+    return files
+
+
+# ----------------------------------------------------------------------------------------------
+# commands
+
+def cmd_list(a) -> int:
+    from .paths import scenarios_dir
+    from .scenario import ScenarioError, load_scenario
+    rc = EXIT_OK
+    files = sorted(scenarios_dir().glob("*.toml"))
+    if not files:
+        print(f"no scenarios in {scenarios_dir()}")
+    for f in files:
+        try:
+            sc = load_scenario(f)
+        except ScenarioError as e:
+            print(f"{f.stem:<28} INVALID: {e}")
+            rc = EXIT_ERROR
+            continue
+        e = sc.expect
+        exp = "must fall" if e.must_fall else ("must stand" if e.must_fall is False else "")
+        if e.phases_reached:
+            exp += f", phases {''.join(map(str, e.phases_reached))}"
+        ref = "ref" if sc.reference and sc.reference.file.is_file() else ("ref missing" if sc.reference else "")
+        print(f"{sc.name:<28} {sc.stop_time:6.1f} s  peak push {sc.push.peak():+6.1f} N  {exp:<24} {ref:<11} "
+              f"{sc.description.splitlines()[0] if sc.description else ''}")
+    return rc
+
+
+def cmd_run(a) -> int:
+    from .fmu import FMUError
+    from .master import Models, simulate, check_overrides
+    from .paths import MissingFileError, find_scenario
+    from .results import (atomic_write_csv, check_expect, clear_previous, format_summary, result_paths,
+                          summarize_pushes, summary_dict, write_summary_json)
+    from .scenario import ScenarioError, load_scenario, parse_set
+    try:
+        sc = load_scenario(find_scenario(a.scenario))
+        c_set, p_set = parse_set(a.set or [])
+        sc.controller.update(c_set)
+        sc.plant.update(p_set)
+        models = Models.load(a.fmu_dir)
+        check_overrides(models, sc.controller, sc.plant, f"{_rel(sc.path)} / --set")
+    except (ScenarioError, MissingFileError, FMUError) as e:
+        return _err(str(e))
+    out = Path(a.out) if a.out else Path("results") / sc.name
+    paths = result_paths(out, sc.name)
+    clear_previous(out, sc.name)
+    res = simulate(sc, models, stop_time=a.stop_time, progress=None if not a.no_progress else False)
+    csv = paths["csv"] if res.complete else paths["incomplete_csv"]
+    atomic_write_csv(csv, res.data)
+    files = {"csv": str(csv), "summary": str(paths["summary"])}
+    pushes = summarize_pushes(res, sc.push, sc.expect.erect_tol)
+    checks = check_expect(res, sc.expect) if a.stop_time is None else []
+    cmp = None
+    if not a.no_compare and a.stop_time is None and not (set(c_set) | set(p_set)):
+        try:
+            rep = compare_with_reference(sc, res)
+        except Exception as e:   # a broken reference must not lose the run
+            rep = None
+            print(f"anklehip: warning: reference comparison failed: {e}", file=sys.stderr)
+        if rep is not None:
+            cmp = rep.as_dict()
+            if not rep.passed:
+                from .compare import plot_failed
+                p = plot_failed(rep, out / f"{sc.name}_reference_failed.png")
+                if p:
+                    files["reference_failures_plot"] = str(p)
+    if a.plots or a.animate:
+        anim = {"fps": a.fps, "speed": a.speed, "t_start": a.anim_start, "t_stop": a.anim_stop}
+        for p in make_figures(sc.name, res.data, out, res, animate=a.animate, anim_args=anim, figures=a.plots):
+            files[p.stem] = str(p)
+    if a.record_steptest:
+        from .steptest import record_case
+        record_case(res, Path(a.record_steptest), sc.controller, source=sc.name)
+        files["steptest_case"] = a.record_steptest
+    s = summary_dict(sc, res, pushes, checks, files, cmp)
+    write_summary_json(paths["summary"], s)
+    print(format_summary(s, pushes))
+    if res.outcome in ("error", "interrupted"):
+        return EXIT_FAIL
+    return EXIT_OK if all(c.ok for c in checks) else EXIT_FAIL
+
+
+def cmd_plot(a) -> int:
+    from .compare import CompareError, read_result_csv
+    try:
+        data = read_result_csv(a.csv, "result")
+    except CompareError as e:
+        return _err(str(e))
+    csv = Path(a.csv)
+    name = csv.name.removesuffix(".csv").removesuffix(".incomplete")
+    out = Path(a.out) if a.out else csv.parent
+    params = None
+    if a.animate:
+        try:
+            from .fmu import FMUInfo
+            from .paths import PLANT_FMU, find_fmu
+            params = FMUInfo.load(find_fmu(PLANT_FMU, a.fmu_dir)).start_values()
+        except Exception:
+            params = None
+    std = all(c in data.dtype.names for c in ("theta_ankle", "theta_hip", "zmp_x", "com_x"))
+    if std:
+        from . import plots
+        files = [plots.overview(data, out / f"{name}_overview.png", title=name),
+                 plots.fig4(data, out / f"{name}_fig4_joint_angles.png", title=f"{name}: joint angles"),
+                 plots.fig5(data, out / f"{name}_fig5_first_cycle.png", title=f"{name}: first push cycle")]
+        if a.animate:
+            files.append(plots.animate(data, out / f"{name}.gif", geometry_for(params=params), fps=a.fps,
+                                       speed=a.speed, t_start=a.anim_start, t_stop=a.anim_stop, title=name))
+    else:
+        from . import plots
+        files = [plots.overview(data, out / f"{name}_overview.png", title=name)]
+    for f in files:
+        print(f)
+    return EXIT_OK
+
+
+def cmd_compare(a) -> int:
+    from .compare import CompareError, compare, plot_failed
+    cols = [c.strip() for c in a.columns.split(",")] if a.columns else None
+    try:
+        rep = compare(a.result, a.reference, columns=cols, num=a.num, dx=a.dx, dy=a.dy, abs_tol=a.abs_tol,
+                      rel_tol=a.rel_tol, band_floor=a.band_floor, t_start=a.t_start, t_stop=a.t_stop,
+                      require_coverage=not a.allow_partial)
+    except CompareError as e:
+        return _err(str(e))
+    print(rep.text(verbose=not a.failed_only))
+    if a.plot and not rep.passed:
+        p = plot_failed(rep, a.plot)
+        print(f"plot of the failed signals: {p}")
+    if a.json:
+        Path(a.json).write_text(json.dumps(rep.as_dict(), indent=2, default=float) + "\n")
+    return EXIT_OK if rep.passed else EXIT_FAIL
+
+
+def cmd_steptest(a) -> int:
+    from .compare import CompareError
+    from .fmu import FMUError
+    from .paths import CONTROLLER_FMU, MissingFileError, find_fmu, find_rt_runner
+    from .steptest import StepTestError, run_case, run_native
+    try:
+        fmu = Path(a.fmu) if a.fmu else find_fmu(CONTROLLER_FMU, a.fmu_dir)
+    except MissingFileError as e:
+        return _err(str(e))
+    rc = EXIT_OK
+    for case in a.cases:
+        case = Path(case)
+        out = Path(a.out) / case.name if a.out else None
+        if a.native:
+            exe = find_rt_runner()
+            if exe is None:
+                return _err("the native real-time runner anklehip_rt_step is not built (fmu/rt_runner; "
+                            "run `bash scripts/setup.sh`), or set ANKLEHIP_RT_STEP")
+            try:
+                r, rep, _ = run_native(exe, fmu, case, out, a.native_args, fast=not a.realtime,
+                                       histogram=Path(a.histogram) if a.histogram else None,
+                                       compare_ref=not a.no_compare, abs_tol=a.abs_tol, rel_tol=a.rel_tol,
+                                       dx=a.dx, dy=a.dy)
+            except (StepTestError, CompareError, FMUError) as e:
+                print(f"anklehip: error: {case}: {e}", file=sys.stderr)
+                rc = EXIT_ERROR
+                continue
+            if r != 0:
+                print(f"anklehip: error: {case}: anklehip_rt_step exited with {r}", file=sys.stderr)
+                rc = max(rc, EXIT_FAIL)
+            if rep is not None:
+                print(rep.text(verbose=not a.failed_only))
+                if not rep.passed:
+                    rc = max(rc, EXIT_FAIL)
+            continue
+        try:
+            r = run_case(case, fmu, out, realtime=a.realtime, spin_us=a.spin_us, abs_tol=a.abs_tol,
+                         rel_tol=a.rel_tol, dx=a.dx, dy=a.dy, compare_ref=not a.no_compare)
+        except (StepTestError, CompareError, FMUError) as e:
+            print(f"anklehip: error: {case}: {e}", file=sys.stderr)
+            rc = EXIT_ERROR
+            continue
+        print(f"step test {case}: {len(r.data) - 1} steps" + (f", outputs {r.out_csv}" if r.out_csv else ""))
+        if r.report is not None:
+            print(r.report.text(verbose=not a.failed_only))
+            if a.plot and not r.report.passed:
+                from .compare import plot_failed
+                dest = (out or case) / "failed_signals.png"
+                print(f"plot of the failed signals: {plot_failed(r.report, dest)}")
+            if not r.report.passed:
+                rc = max(rc, EXIT_FAIL)
+        if r.rt is not None:
+            print(r.rt.text())
+            if a.histogram:
+                from .plots import rt_histogram
+                dest = Path(a.histogram) if len(a.cases) == 1 else Path(a.histogram).with_name(
+                    f"{case.name}_{Path(a.histogram).name}")
+                print(f"histogram: {rt_histogram(r.rt.exec_us, r.rt.late_us, r.rt.period_us, dest, str(case))}")
+            if out:
+                out.mkdir(parents=True, exist_ok=True)
+                (out / "realtime.json").write_text(json.dumps(r.rt.as_dict(), indent=2) + "\n")
+            if a.fail_on_miss and r.rt.misses:
+                rc = max(rc, EXIT_FAIL)
+    return rc
+
+
+def cmd_record(a) -> int:
+    from .fmu import FMUError
+    from .master import Models, simulate, check_overrides
+    from .paths import MissingFileError, find_scenario
+    from .scenario import ScenarioError, load_scenario, parse_set
+    from .steptest import record_case
+    try:
+        sc = load_scenario(find_scenario(a.scenario))
+        c_set, p_set = parse_set(a.set or [])
+        sc.controller.update(c_set)
+        sc.plant.update(p_set)
+        models = Models.load(a.fmu_dir)
+        check_overrides(models, sc.controller, sc.plant, f"{_rel(sc.path)} / --set")
+    except (ScenarioError, MissingFileError, FMUError) as e:
+        return _err(str(e))
+    res = simulate(sc, models, stop_time=a.stop_time, progress=None)
+    if res.outcome in ("error", "interrupted"):
+        return _err(f"the run failed: {res.message}")
+    files = record_case(res, Path(a.out), sc.controller, source=sc.name)
+    print(f"recorded {len(res.data) - 1} controller steps of {sc.name} ({res.message or res.outcome}):")
+    for f in files.values():
+        print(f"  {f}")
+    return EXIT_OK
+
+
+def cmd_sweep(a) -> int:
+    from .paths import MissingFileError, find_scenario
+    from .scenario import ScenarioError, load_scenario
+    from .sweep import parse_variant, plot_sweep, run_sweep, write_table
+    try:
+        path = find_scenario(a.scenario)
+        sc = load_scenario(path)
+        forces = _parse_grid(a.forces)
+        variants = [parse_variant(v) for v in (a.variant or ["default"])]
+    except (ScenarioError, MissingFileError, ValueError) as e:
+        return _err(str(e))
+    if sc.push.peak() == 0:
+        return _err(f"{path}: the scenario has no push to scale")
+    rows = run_sweep(str(path), forces, variants, a.fmu_dir, workers=a.workers)
+    out = Path(a.out) if a.out else Path("results") / f"sweep_{sc.name}"
+    t = write_table(rows, out / "sweep.csv")
+    p = plot_sweep(rows, out / "sweep.png", title=f"{sc.name}: outcome vs peak push force")
+    for v in dict.fromkeys(r["variant"] for r in rows):
+        rr = [r for r in rows if r["variant"] == v]
+        ok = [r["peak_force"] for r in rr if r["outcome"] != "fell"]
+        print(f"{v:<16} " + "  ".join(f"{r['peak_force']:g}N:{'FELL' if r['outcome'] == 'fell' else 'ok/' + str(r['max_phase'])}"
+                                       for r in rr) + (f"   largest survived {max(ok, key=abs):g} N" if ok else ""))
+    print(f"table {t}\nplot  {p}")
+    return EXIT_OK
+
+
+def _parse_grid(spec: str) -> list[float]:
+    """'2:12:1' (start:stop:step, inclusive) or '3,5,8'."""
+    if ":" in spec:
+        a, b, s = (float(x) for x in spec.split(":"))
+        if s <= 0 or b < a:
+            raise ValueError(f"--forces {spec}: need start <= stop and step > 0")
+        return [round(x, 9) for x in np.arange(a, b + s / 2, s)]
+    return [float(x) for x in spec.split(",") if x.strip()]
+
+
+def cmd_regen(a) -> int:
+    from .fmu import FMUError
+    from .master import Models, simulate
+    from .paths import MissingFileError, scenarios_dir
+    from .results import atomic_write_csv, check_expect
+    from .scenario import ScenarioError, load_scenario
+    try:
+        files = sorted(scenarios_dir().glob("*.toml"))
+        scs = [load_scenario(f) for f in files]
+        models = Models.load(a.fmu_dir)
+    except (ScenarioError, MissingFileError, FMUError) as e:
+        return _err(str(e))
+    if a.names:
+        unknown = set(a.names) - {s.name for s in scs}
+        if unknown:
+            return _err(f"unknown scenario(s): {', '.join(sorted(unknown))}")
+        scs = [s for s in scs if s.name in a.names]
+    rc = EXIT_OK
+    for sc in scs:
+        if sc.reference is None:
+            print(f"{sc.name}: no [reference] table, skipped")
+            continue
+        res = simulate(sc, models, progress=None)
+        checks = check_expect(res, sc.expect)
+        bad = [c for c in checks if not c.ok]
+        if bad and not a.force:
+            print(f"{sc.name}: NOT written, expected outcome not met: "
+                  + "; ".join(f"{c.name}: {c.detail}" for c in bad))
+            rc = EXIT_FAIL
+            continue
+        ref = decimate(res.data, res.step, sc.reference.interval)
+        cols = reference_columns(sc, res.data)
+        atomic_write_csv(sc.reference.file, ref, columns=cols)
+        size = sc.reference.file.stat().st_size
+        print(f"{sc.name}: wrote {_rel(sc.reference.file)} ({len(ref)} rows, {len(cols)} columns, "
+              f"{size / 1024:.0f} kB; {res.message or res.outcome})")
+    if not a.no_steptests and not a.names:
+        rc = max(rc, regen_steptests(models))
+    return rc
+
+
+def steptests_dir() -> Path:
+    from .paths import repo_root
+    return repo_root() / "tests" / "steptests"
+
+
+def regen_steptests(models) -> int:
+    """Re-record every committed step-test case from the scenario named in its steptest.toml."""
+    from .master import simulate
+    from .paths import find_scenario
+    from .scenario import load_scenario
+    from .steptest import read_meta, record_case
+    rc = EXIT_OK
+    for case in sorted(p for p in steptests_dir().glob("*") if p.is_dir()):
+        src = read_meta(case / "steptest.toml").get("source", {})
+        if "scenario" not in src or "stop_time" not in src:
+            print(f"{_rel(case)}: no [source] scenario/stop_time in steptest.toml, skipped")
+            continue
+        sc = load_scenario(find_scenario(src["scenario"]))
+        res = simulate(sc, models, stop_time=float(src["stop_time"]), progress=False)
+        if res.outcome in ("error", "interrupted"):
+            print(f"{_rel(case)}: run failed: {res.message}")
+            rc = EXIT_FAIL
+            continue
+        record_case(res, case, sc.controller, source=sc.name)
+        print(f"{_rel(case)}: re-recorded from {sc.name} (0..{src['stop_time']} s, {res.message or res.outcome})")
+    return rc
+
+
+# ----------------------------------------------------------------------------------------------
+
+def build_parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(prog="anklehip", description="Ankle/hip balance control FMUs: closed-loop "
+                                "scenarios, step tests, comparison, plots, sweeps.")
+    p.add_argument("--fmu-dir", help="folder with the .fmu files (default: $ANKLEHIP_FMU_DIR or <repo>/build/fmus)")
+    sub = p.add_subparsers(dest="cmd", required=True, metavar="COMMAND")
+
+    s = sub.add_parser("list", help="list the scenarios")
+    s.set_defaults(fn=cmd_list)
+
+    def anim_opts(s):
+        s.add_argument("--fps", type=float, default=20.0, help="animation frames per second (default 20)")
+        s.add_argument("--speed", type=float, default=1.0, help="simulated seconds per real second (default 1)")
+        s.add_argument("--anim-start", type=float, help="animation start time [s]")
+        s.add_argument("--anim-stop", type=float, help="animation stop time [s]")
+
+    s = sub.add_parser("run", help="run a scenario (CSV, summary, optional plots and animation)")
+    s.add_argument("scenario", help="scenario name (scenarios/<name>.toml) or path")
+    s.add_argument("--out", help="output folder (default results/<scenario>)")
+    s.add_argument("--plots", action="store_true", help="write the overview, Fig. 4 and Fig. 5 PNGs")
+    s.add_argument("--animate", action="store_true", help="write a stick-figure GIF")
+    s.add_argument("--set", action="append", metavar="FMU.NAME=VALUE",
+                   help="parameter override, e.g. controller.Ka=30 (repeatable)")
+    s.add_argument("--stop-time", type=float, help="stop earlier than the scenario (no outcome checks)")
+    s.add_argument("--no-progress", action="store_true")
+    s.add_argument("--no-compare", action="store_true", help="skip the comparison with the reference CSV")
+    s.add_argument("--record-steptest", metavar="DIR", help="also write the controller's step-test case")
+    anim_opts(s)
+    s.set_defaults(fn=cmd_run)
+
+    s = sub.add_parser("plot", help="plot a results CSV")
+    s.add_argument("csv")
+    s.add_argument("--out", help="output folder (default: next to the CSV)")
+    s.add_argument("--animate", action="store_true")
+    anim_opts(s)
+    s.set_defaults(fn=cmd_plot)
+
+    s = sub.add_parser("compare", help="compare a result CSV with a reference CSV (FMI cross-check band)")
+    s.add_argument("result")
+    s.add_argument("reference")
+    s.add_argument("--columns", help="comma-separated signals (default: all reference columns)")
+    s.add_argument("--num", type=int, help="band samples (validate_signal num; default max(1000, reference rows))")
+    s.add_argument("--dx", type=int, default=20, help="band horizontal width in samples (default 20)")
+    s.add_argument("--dy", type=float, default=0.1, help="band vertical width relative to the range (default 0.1)")
+    s.add_argument("--abs-tol", type=float, help="stricter tube: absolute tolerance")
+    s.add_argument("--rel-tol", type=float, help="stricter tube: relative tolerance")
+    s.add_argument("--band-floor", type=float, help="minimum band half-height (absolute) for nearly constant signals")
+    s.add_argument("--t-start", type=float)
+    s.add_argument("--t-stop", type=float)
+    s.add_argument("--allow-partial", action="store_true", help="do not fail when the result covers less time")
+    s.add_argument("--plot", metavar="PNG", help="plot reference, band and result of the failed signals")
+    s.add_argument("--json", metavar="FILE", help="write the report as JSON")
+    s.add_argument("--failed-only", action="store_true")
+    s.set_defaults(fn=cmd_compare)
+
+    s = sub.add_parser("steptest", help="step the controller FMU on recorded inputs and compare (HIL style)")
+    s.add_argument("cases", nargs="+", help="case folder(s) with <Model>_in.csv, _ref.csv, _ref.opt")
+    s.add_argument("--fmu", help="controller FMU (default: AnkleHipController.fmu in the FMU folder)")
+    s.add_argument("--out", help="write <out>/<case>/AnkleHipController_out.csv")
+    s.add_argument("--realtime", action="store_true", help="pace the steps in wall-clock time (absolute deadlines)")
+    s.add_argument("--native", action="store_true",
+                   help="use the native anklehip_rt_step (fmu/rt_runner): paced with --realtime, else as fast as possible")
+    s.add_argument("--native-args", nargs=argparse.REMAINDER, help="extra arguments for anklehip_rt_step")
+    s.add_argument("--spin-us", type=float, default=0.0, help="busy-wait the last N µs before a deadline")
+    s.add_argument("--histogram", metavar="PNG", help="plot execution time and lateness histograms")
+    s.add_argument("--fail-on-miss", action="store_true", help="exit 1 on any deadline miss")
+    s.add_argument("--abs-tol", type=float)
+    s.add_argument("--rel-tol", type=float)
+    s.add_argument("--dx", type=int)
+    s.add_argument("--dy", type=float)
+    s.add_argument("--no-compare", action="store_true")
+    s.add_argument("--plot", action="store_true", help="plot the failed signals")
+    s.add_argument("--failed-only", action="store_true")
+    s.set_defaults(fn=cmd_steptest)
+
+    s = sub.add_parser("record", help="run a scenario and write the controller's step-test case")
+    s.add_argument("scenario")
+    s.add_argument("out", help="case folder to write")
+    s.add_argument("--stop-time", type=float)
+    s.add_argument("--set", action="append", metavar="FMU.NAME=VALUE")
+    s.set_defaults(fn=cmd_record)
+
+    s = sub.add_parser("sweep", help="peak push force x controller variant -> outcome (Dask)")
+    s.add_argument("scenario")
+    s.add_argument("--forces", required=True, help="start:stop:step (inclusive) or a,b,c [N]")
+    s.add_argument("--variant", action="append", help="repeatable: " + "NAME or NAME:controller.P=V,plant.Q=W")
+    s.add_argument("--workers", type=int, default=2)
+    s.add_argument("--out", help="output folder (default results/sweep_<scenario>)")
+    s.set_defaults(fn=cmd_sweep)
+
+    s = sub.add_parser("regen-references", help="re-run the scenarios and rewrite scenarios/reference/*.csv")
+    s.add_argument("names", nargs="*", help="only these scenarios")
+    s.add_argument("--force", action="store_true", help="write even if the expected outcome is not met")
+    s.add_argument("--no-steptests", action="store_true",
+                   help="do not re-record the step-test cases under tests/steptests/")
+    s.set_defaults(fn=cmd_regen)
+    return p
 
 
 def main(argv=None) -> int:
-    print("anklehip: not built yet", file=sys.stderr)
-    return 1
+    p = build_parser()
+    a = p.parse_args(argv)
+    try:
+        return a.fn(a)
+    except KeyboardInterrupt:
+        print("interrupted", file=sys.stderr)
+        return 130
+    except BrokenPipeError:
+        return EXIT_OK
+
+
+if __name__ == "__main__":
+    sys.exit(main())

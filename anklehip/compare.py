@@ -1,0 +1,339 @@
+"""Comparison of a result CSV with a reference CSV, signal by signal.
+
+Per signal two criteria (docs/step-tests.md):
+
+* the FMI cross-check band, computed by FMPy's ``fmpy.util.validate_signal``: the reference is
+  resampled on ``num`` uniform points (default: max(1000, number of reference samples); FMPy's
+  cross-check default is 1000), widened by a running min/max over ``dx`` samples
+  (horizontal tolerance) and by ``dy`` times the signal's range (vertical tolerance; half a unit
+  for a constant zero signal, ``dy`` times the value for another constant);
+* optionally a minimum band half-height ``band_floor`` (absolute), for nearly constant signals
+  whose range-relative band would be ~0;
+* optionally a stricter tube: |y(t) - y_ref(t)| <= abs_tol + rel_tol |y_ref(t)| at every result
+  sample inside the reference's time span (y_ref interpolated linearly, or held for discrete
+  signals).
+
+A signal whose values are all integers in both files is treated as discrete (zero-order hold),
+as validate_signal does for non-float signals.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+
+class CompareError(ValueError):
+    """The files cannot be compared (missing file or column, empty file, bad time column)."""
+
+
+@dataclass
+class SignalResult:
+    name: str
+    passed: bool
+    discrete: bool = False
+    band_ok: bool = True
+    tube_ok: bool | None = None
+    n_samples: int = 0
+    n_outside: int = 0
+    first_outside: float | None = None       # first time outside the band or the tube
+    max_dev: float = 0.0                      # largest |y - y_ref| (interpolated reference)
+    max_dev_time: float | None = None
+    max_excess: float = 0.0                   # largest distance outside the band
+    message: str = ""
+    band: tuple[np.ndarray, np.ndarray, np.ndarray] | None = field(default=None, repr=False)
+
+    def line(self) -> str:
+        v = "PASS" if self.passed else "FAIL"
+        s = f"[{v}] {self.name:<24} max |dev| {self.max_dev:.4g}"
+        if self.max_dev_time is not None:
+            s += f" at t={self.max_dev_time:.4f}"
+        if not self.passed:
+            s += f"; {self.n_outside}/{self.n_samples} samples outside"
+            if self.first_outside is not None:
+                s += f", first at t={self.first_outside:.4f}"
+        if self.message:
+            s += f"; {self.message}"
+        return s
+
+
+@dataclass
+class CompareReport:
+    result: str
+    reference: str
+    signals: list[SignalResult]
+    extra_columns: list[str] = field(default_factory=list)
+    notes: list[str] = field(default_factory=list)
+    t_res: np.ndarray | None = field(default=None, repr=False)
+    t_ref: np.ndarray | None = field(default=None, repr=False)
+    res: np.ndarray | None = field(default=None, repr=False)
+    ref: np.ndarray | None = field(default=None, repr=False)
+
+    @property
+    def passed(self) -> bool:
+        return all(s.passed for s in self.signals)
+
+    @property
+    def failed(self) -> list[SignalResult]:
+        return [s for s in self.signals if not s.passed]
+
+    def text(self, verbose: bool = True) -> str:
+        lines = [f"compare {self.result} with reference {self.reference}"]
+        lines += [f"  note: {n}" for n in self.notes]
+        for s in self.signals:
+            if verbose or not s.passed:
+                lines.append("  " + s.line())
+        lines.append(f"  {'PASS' if self.passed else 'FAIL'}: {len(self.failed)} of {len(self.signals)} "
+                     f"signals failed")
+        return "\n".join(lines)
+
+    def as_dict(self) -> dict[str, Any]:
+        return {"result": self.result, "reference": self.reference, "passed": self.passed,
+                "n_signals": len(self.signals), "n_failed": len(self.failed),
+                "failed": [s.name for s in self.failed], "notes": self.notes,
+                "signals": {s.name: {"passed": s.passed, "max_dev": s.max_dev, "max_dev_time": s.max_dev_time,
+                                     "first_outside": s.first_outside, "n_outside": s.n_outside,
+                                     "message": s.message} for s in self.signals}}
+
+
+def read_result_csv(path: str | Path, what: str = "file") -> np.ndarray:
+    """FMPy read_csv with clear errors for missing, empty and malformed files."""
+    from fmpy.util import read_csv
+    path = Path(path)
+    if not path.is_file():
+        raise CompareError(f"{what} {path}: no such file")
+    with open(path) as f:
+        head = [f.readline() for _ in range(2)]
+    if not head[0].strip():
+        raise CompareError(f"{what} {path}: empty file")
+    if not head[1].strip():
+        raise CompareError(f"{what} {path}: no data rows (header only)")
+    try:
+        data = read_csv(str(path))
+    except Exception as e:
+        raise CompareError(f"{what} {path}: not a valid result CSV ({type(e).__name__}: {e})") from None
+    if data.dtype.names is None or len(data.dtype.names) < 1:
+        raise CompareError(f"{what} {path}: no columns")
+    return np.atleast_1d(data)
+
+
+def _time(data: np.ndarray, label: str) -> np.ndarray:
+    t = np.asarray(data[data.dtype.names[0]], dtype=float).copy()
+    if len(t) and not np.all(np.isfinite(t)):
+        raise CompareError(f"{label}: the time column {data.dtype.names[0]!r} has NaN/Inf values")
+    if len(t) > 1 and np.any(np.diff(t) < 0):
+        k = int(np.argmax(np.diff(t) < 0))
+        raise CompareError(f"{label}: time goes backwards at row {k + 2} (t={t[k]:g} -> {t[k + 1]:g})")
+    return t
+
+
+def _is_discrete(*arrays: np.ndarray) -> bool:
+    for a in arrays:
+        a = a[np.isfinite(a)]
+        if a.size == 0 or not np.all(a == np.round(a)):
+            return False
+    return True
+
+
+def _interp(t: np.ndarray, tr: np.ndarray, yr: np.ndarray, discrete: bool) -> np.ndarray:
+    if discrete:
+        i = np.clip(np.searchsorted(tr, t, side="right") - 1, 0, len(tr) - 1)
+        return yr[i]
+    return np.interp(t, tr, yr)
+
+
+def compare_signal(name: str, t: np.ndarray, y: np.ndarray, t_ref: np.ndarray, y_ref: np.ndarray, *,
+                   num: int | None = None, dx: int = 20, dy: float = 0.1, abs_tol: float | None = None,
+                   rel_tol: float | None = None, band_floor: float | None = None,
+                   require_coverage: bool = True) -> SignalResult:
+    from fmpy.util import validate_signal
+    try:
+        import scipy.ndimage  # noqa: F401  (validate_signal needs scipy)
+    except ImportError:
+        raise CompareError("fmpy.util.validate_signal needs SciPy: `.venv/bin/python -m pip install scipy`") from None
+
+    y = np.asarray(y, float)
+    y_ref = np.asarray(y_ref, float)
+    r = SignalResult(name=name, passed=True)
+    if len(t_ref) < 2:
+        r.passed, r.message = False, "reference has fewer than 2 samples"
+        return r
+    nan_ref = ~np.isfinite(y_ref)
+    if nan_ref.any():
+        r.passed, r.band_ok = False, False
+        r.message = f"reference has NaN/Inf at t={t_ref[np.argmax(nan_ref)]:.6g}"
+        return r
+    inside = (t >= t_ref[0]) & (t <= t_ref[-1])
+    r.n_samples = int(inside.sum())
+    msgs = []
+    nan = ~np.isfinite(y) & inside
+    discrete = _is_discrete(y, y_ref)
+    r.discrete = discrete
+    if num is None:
+        # FMPy's cross-check default is 1000 band samples; a finer reference gets one band sample
+        # per reference sample, else features shorter than the band spacing (a brief phase
+        # switch) fall between band samples and an identical result is reported outside the band
+        num = max(1000, len(t_ref))
+
+    # the FMI cross-check band (FMPy's implementation)
+    yv = np.where(np.isfinite(y), y, 0.0)
+    yy = yv.astype(np.int64) if discrete else yv
+    yr = y_ref.astype(np.int64) if discrete else y_ref
+    t_band, y_min, y_max, i_out = validate_signal(t=np.asarray(t, float), y=yy, t_ref=t_ref.copy(),
+                                                  y_ref=yr, num=num, dx=dx, dy=dy)
+    i_out = np.asarray(i_out, bool)
+    if band_floor:
+        # widen the band to at least +-band_floor around the reference (validate_signal's vertical
+        # width is dy x the signal's range, which is ~0 for a nearly constant signal such as fz)
+        y_band = (np.interp(t_band, t_ref, y_ref) if not discrete else _interp(t_band, t_ref, y_ref, True))
+        y_min = np.minimum(y_min, y_band - band_floor)
+        y_max = np.maximum(y_max, y_band + band_floor)
+        lo_i, hi_i = np.interp(t, t_band, y_min), np.interp(t, t_band, y_max)
+        i_out = ((yv < lo_i) | (yv > hi_i)) & (t > t_band[0]) & (t < t_band[-1])
+    i_out = i_out | nan
+    r.band = (t_band, y_min, y_max)
+    r.band_ok = not i_out.any()
+    lo = np.interp(t, t_band, y_min)
+    hi = np.interp(t, t_band, y_max)
+    exc = np.where(inside & np.isfinite(y), np.maximum(lo - y, y - hi), 0.0)
+    r.max_excess = float(max(0.0, exc.max())) if len(exc) else 0.0
+
+    # deviation from the (interpolated) reference
+    yr_at = _interp(t, t_ref, y_ref, discrete)
+    dev = np.abs(y - yr_at)
+    dev_in = np.where(inside, dev, 0.0)
+    if inside.any():
+        if nan.any():
+            k = int(np.argmax(nan))
+            r.max_dev, r.max_dev_time = math.inf, float(t[k])
+            msgs.append(f"NaN/Inf in the result at t={t[k]:.6g}")
+        else:
+            k = int(np.argmax(dev_in))
+            r.max_dev, r.max_dev_time = float(dev_in[k]), float(t[k])
+    out = i_out.copy()
+    if abs_tol is not None or rel_tol is not None:
+        lim = (abs_tol or 0.0) + (rel_tol or 0.0) * np.abs(yr_at)
+        tube_out = inside & ~(dev <= lim)
+        r.tube_ok = not tube_out.any()
+        if not r.tube_ok:
+            k = int(np.argmax(tube_out))
+            msgs.append(f"outside the tube (abs {abs_tol or 0:g}, rel {rel_tol or 0:g}) from t={t[k]:.6g}")
+        out |= tube_out
+    r.n_outside = int(out.sum())
+    if out.any():
+        r.first_outside = float(t[int(np.argmax(out))])
+    if not r.band_ok:
+        msgs.insert(0, f"outside the band by up to {r.max_excess:.4g}")
+    if require_coverage:
+        tol = 1e-9 * max(1.0, abs(t_ref[-1]))
+        if len(t) == 0 or t[0] > t_ref[0] + tol or t[-1] < t_ref[-1] - tol:
+            span = f"{t[0]:.6g}..{t[-1]:.6g}" if len(t) else "nothing"
+            msgs.append(f"result covers {span}, reference {t_ref[0]:.6g}..{t_ref[-1]:.6g}")
+            r.passed = False
+            if r.first_outside is None and len(t):
+                r.first_outside = float(min(t[-1], t_ref[-1]))
+    r.passed = r.passed and r.band_ok and (r.tube_ok is not False)
+    r.message = "; ".join(msgs)
+    return r
+
+
+def compare(result: np.ndarray | str | Path, reference: np.ndarray | str | Path, *,
+            columns: list[str] | None = None, num: int | None = None, dx: int = 20, dy: float = 0.1,
+            abs_tol: float | None = None, rel_tol: float | None = None, band_floor: float | None = None,
+            tolerances: dict[str, dict[str, float]] | None = None,
+            t_start: float | None = None, t_stop: float | None = None,
+            require_coverage: bool = True, result_label: str | None = None,
+            reference_label: str | None = None) -> CompareReport:
+    """Compare every reference column (or ``columns``) of ``result`` with ``reference``.
+
+    Raises CompareError when a compared column is missing in either file, or when a file is
+    empty or has a bad time column. ``tolerances`` may override abs_tol/rel_tol/dy/band_floor per
+    signal. ``band_floor`` widens the band to at least +-band_floor around the reference.
+    """
+    res_label = result_label or (str(result) if not isinstance(result, np.ndarray) else "result")
+    ref_label = reference_label or (str(reference) if not isinstance(reference, np.ndarray) else "reference")
+    res = read_result_csv(result, "result") if not isinstance(result, np.ndarray) else result
+    ref = read_result_csv(reference, "reference") if not isinstance(reference, np.ndarray) else reference
+    if len(res) == 0:
+        raise CompareError(f"result {res_label}: no data rows")
+    if len(ref) == 0:
+        raise CompareError(f"reference {ref_label}: no data rows")
+    t_res = _time(res, f"result {res_label}")
+    t_ref = _time(ref, f"reference {ref_label}")
+    res_cols = list(res.dtype.names[1:])
+    ref_cols = list(ref.dtype.names[1:])
+    notes = []
+    if columns is None:
+        columns = ref_cols
+    else:
+        miss_ref = [c for c in columns if c not in ref_cols]
+        if miss_ref:
+            raise CompareError(f"reference {ref_label}: missing column(s) {', '.join(miss_ref)} "
+                               f"(it has: {', '.join(ref_cols)})")
+    missing = [c for c in columns if c not in res_cols]
+    if missing:
+        raise CompareError(f"result {res_label}: missing column(s) {', '.join(missing)} that the reference "
+                           f"{ref_label} has")
+    extra = [c for c in res_cols if c not in columns]
+    if extra and columns is ref_cols:
+        notes.append(f"{len(extra)} result column(s) not in the reference, not compared: {', '.join(extra[:8])}"
+                     + (" ..." if len(extra) > 8 else ""))
+    if t_start is not None or t_stop is not None:
+        a = -math.inf if t_start is None else t_start
+        b = math.inf if t_stop is None else t_stop
+        mr, mf = (t_res >= a) & (t_res <= b), (t_ref >= a) & (t_ref <= b)
+        res, t_res, ref, t_ref = res[mr], t_res[mr], ref[mf], t_ref[mf]
+        if len(t_ref) < 2:
+            raise CompareError(f"reference {ref_label}: fewer than 2 samples in the window {a:g}..{b:g}")
+    signals = []
+    for c in columns:
+        tol = (tolerances or {}).get(c, {})
+        if res[c].ndim > 1 or ref[c].ndim > 1:
+            raise CompareError(f"column {c}: array-valued columns are not supported")
+        signals.append(compare_signal(c, t_res, res[c], t_ref, ref[c], num=num, dx=dx,
+                                      dy=tol.get("dy", dy), abs_tol=tol.get("abs_tol", abs_tol),
+                                      rel_tol=tol.get("rel_tol", rel_tol),
+                                      band_floor=tol.get("band_floor", band_floor),
+                                      require_coverage=require_coverage))
+    return CompareReport(result=res_label, reference=ref_label, signals=signals, extra_columns=extra,
+                         notes=notes, t_res=t_res, t_ref=t_ref, res=res, ref=ref)
+
+
+def plot_failed(report: CompareReport, out: str | Path, signals: list[str] | None = None) -> Path | None:
+    """One PNG with reference, band and result (outliers red) for the failed signals."""
+    names = signals or [s.name for s in report.failed]
+    if not names:
+        return None
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    sig = {s.name: s for s in report.signals}
+    n = len(names)
+    fig, axes = plt.subplots(n, 1, figsize=(9, 2.4 * n + 0.6), sharex=True, squeeze=False)
+    for ax, name in zip(axes[:, 0], names):
+        s = sig[name]
+        if s.band is not None:
+            tb, lo, hi = s.band
+            ax.fill_between(tb, lo, hi, color="tab:blue", alpha=0.18, lw=0, label="band")
+        ax.plot(report.t_ref, report.ref[name], color="tab:blue", lw=1, label="reference")
+        y = np.asarray(report.res[name], float)
+        ax.plot(report.t_res, y, color="k", lw=0.8, label="result")
+        if s.band is not None:
+            lo_i = np.interp(report.t_res, s.band[0], s.band[1])
+            hi_i = np.interp(report.t_res, s.band[0], s.band[2])
+            bad = (y < lo_i) | (y > hi_i)
+            ax.plot(report.t_res[bad], y[bad], ".", color="tab:red", ms=3, label="outside")
+        ax.set_ylabel(name)
+        ax.set_title(s.line(), fontsize=8, loc="left")
+        ax.grid(alpha=0.3)
+    axes[0, 0].legend(fontsize=7, loc="best")
+    axes[-1, 0].set_xlabel("time [s]")
+    fig.tight_layout()
+    out = Path(out)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(out, dpi=110)
+    plt.close(fig)
+    return out

@@ -1,0 +1,223 @@
+"""Loading FMUs with FMPy: extract once, read the model description, instantiate co-simulation
+slaves, apply parameter overrides, and fast (allocation-free) ctypes access for inner loops."""
+from __future__ import annotations
+
+import atexit
+import ctypes
+import os
+import shutil
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from fmpy import extract, read_model_description
+from fmpy.fmi2 import FMU2Slave
+
+# FMI 2.0 status codes and status kinds
+OK, WARNING, DISCARD, ERROR, FATAL, PENDING = range(6)
+STATUS_NAMES = ["OK", "Warning", "Discard", "Error", "Fatal", "Pending"]
+FMI2_LAST_SUCCESSFUL_TIME = 2
+FMI2_TERMINATED = 3
+
+
+class FMUError(RuntimeError):
+    pass
+
+
+@dataclass(frozen=True)
+class Var:
+    name: str
+    vr: int
+    type: str            # Real | Integer | Boolean | String | Enumeration
+    causality: str
+    variability: str
+    start: Any
+    unit: str | None
+    description: str | None
+
+
+class FMUInfo:
+    """A packed FMU, extracted once per process; variables by name."""
+
+    _cache: dict[tuple[str, float], "FMUInfo"] = {}
+
+    def __init__(self, path: Path):
+        self.path = Path(path)
+        self.md = read_model_description(str(self.path))
+        if self.md.coSimulation is None:
+            raise FMUError(f"{self.path.name}: not a co-simulation FMU")
+        self.model_identifier = self.md.coSimulation.modelIdentifier
+        self.unzipdir = extract(str(self.path))
+        atexit.register(shutil.rmtree, self.unzipdir, True)
+        self.vars: dict[str, Var] = {}
+        for v in self.md.modelVariables:
+            start = v.start
+            if start is not None:
+                if v.type == "Real":
+                    start = float(start)
+                elif v.type in ("Integer", "Enumeration"):
+                    start = int(start)
+                elif v.type == "Boolean":
+                    start = str(start).lower() in ("true", "1")
+            unit = v.unit if v.type == "Real" else None
+            if unit is None and v.type == "Real" and v.declaredType is not None:
+                unit = getattr(v.declaredType, "unit", None)
+            self.vars[v.name] = Var(v.name, v.valueReference, v.type, v.causality, v.variability,
+                                    start, unit, v.description)
+
+    @classmethod
+    def load(cls, path: str | os.PathLike) -> "FMUInfo":
+        path = Path(path).resolve()
+        key = (str(path), path.stat().st_mtime)
+        if key not in cls._cache:
+            cls._cache[key] = cls(path)
+        return cls._cache[key]
+
+    @property
+    def name(self) -> str:
+        return self.path.name
+
+    def by_causality(self, causality: str) -> list[Var]:
+        return [v for v in self.vars.values() if v.causality == causality]
+
+    def parameters(self) -> dict[str, Var]:
+        return {v.name: v for v in self.vars.values() if v.causality == "parameter"}
+
+    def start_values(self) -> dict[str, Any]:
+        return {v.name: v.start for v in self.vars.values() if v.start is not None}
+
+    def var(self, name: str) -> Var:
+        try:
+            return self.vars[name]
+        except KeyError:
+            raise FMUError(f"{self.name} has no variable {name!r}") from None
+
+    def default_step(self) -> float | None:
+        de = self.md.defaultExperiment
+        return float(de.stepSize) if de is not None and de.stepSize else None
+
+    def check_overrides(self, overrides: dict[str, Any], origin: str = "") -> None:
+        params = self.parameters()
+        for k, val in overrides.items():
+            src = f" ({origin})" if origin else ""
+            if k not in params:
+                near = [p for p in params if p.lower() == k.lower() or k.lower() in p.lower()]
+                hint = f"; did you mean {', '.join(near[:4])}?" if near else ""
+                raise FMUError(f"{self.name} has no parameter {k!r}{src}{hint}")
+            v = params[k]
+            if v.variability == "constant":
+                raise FMUError(f"{self.name}: parameter {k!r} is a constant{src}")
+            if v.type == "Real" and isinstance(val, bool):
+                raise FMUError(f"{self.name}: parameter {k!r} is Real, got boolean {val}{src}")
+            if v.type in ("Integer", "Enumeration") and not isinstance(val, (bool, int)) \
+                    and not float(val).is_integer():          # booleans are taken as 0/1
+                raise FMUError(f"{self.name}: parameter {k!r} is Integer, got {val!r}{src}")
+            if v.type == "Boolean" and not isinstance(val, bool) and val not in (0, 1):
+                raise FMUError(f"{self.name}: parameter {k!r} is Boolean, got {val!r}{src}")
+
+
+_vr_t = ctypes.c_uint
+_proto = ctypes.CFUNCTYPE(ctypes.c_int, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_size_t, ctypes.c_void_p)
+_proto_dostep = ctypes.CFUNCTYPE(ctypes.c_int, ctypes.c_void_p, ctypes.c_double, ctypes.c_double, ctypes.c_int)
+
+
+class Slave:
+    """An instantiated, initialized co-simulation slave with raw ctypes entry points.
+
+    ``get_real(vr_ptr, n, dst_addr)`` etc. take plain integer addresses (of ctypes arrays or numpy
+    buffers), so that an inner loop can read outputs straight into preallocated result arrays.
+    """
+
+    def __init__(self, info: FMUInfo, instance_name: str | None = None, logging: bool = False,
+                 logger=None):
+        self.info = info
+        self.fmu = FMU2Slave(guid=info.md.guid, unzipDirectory=info.unzipdir,
+                             modelIdentifier=info.model_identifier,
+                             instanceName=instance_name or info.model_identifier)
+        callbacks = None
+        if logger is not None:
+            from fmpy.fmi2 import fmi2CallbackFunctions, fmi2CallbackLoggerTYPE, \
+                fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE
+            from fmpy import calloc, free
+            callbacks = fmi2CallbackFunctions()
+            callbacks.logger = fmi2CallbackLoggerTYPE(logger)
+            callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
+            callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
+        self.fmu.instantiate(loggingOn=logging, callbacks=callbacks)
+        self.c = self.fmu.component
+        dll = self.fmu.dll
+        self.get_real = _proto(("fmi2GetReal", dll))
+        self.set_real = _proto(("fmi2SetReal", dll))
+        self.get_integer = _proto(("fmi2GetInteger", dll))
+        self.set_integer = _proto(("fmi2SetInteger", dll))
+        self.get_boolean = _proto(("fmi2GetBoolean", dll))
+        self.do_step = _proto_dostep(("fmi2DoStep", dll))
+        self._freed = False
+
+    def set_values(self, values: dict[str, Any]) -> None:
+        for name, val in values.items():
+            v = self.info.var(name)
+            if v.type == "Real":
+                self.fmu.setReal([v.vr], [float(val)])
+            elif v.type in ("Integer", "Enumeration"):
+                self.fmu.setInteger([v.vr], [int(val)])
+            elif v.type == "Boolean":
+                self.fmu.setBoolean([v.vr], [bool(val)])
+            else:
+                self.fmu.setString([v.vr], [str(val)])
+
+    def get_values(self, names: list[str]) -> dict[str, Any]:
+        out = {}
+        for name in names:
+            v = self.info.var(name)
+            if v.type == "Real":
+                out[name] = self.fmu.getReal([v.vr])[0]
+            elif v.type in ("Integer", "Enumeration"):
+                out[name] = self.fmu.getInteger([v.vr])[0]
+            elif v.type == "Boolean":
+                out[name] = bool(self.fmu.getBoolean([v.vr])[0])
+        return out
+
+    def initialize(self, start_time: float, stop_time: float, parameters: dict[str, Any],
+                   tolerance: float | None = None) -> None:
+        """setupExperiment, parameters (before initialization, as FMI 2.0 allows for
+        variables with initial exact/approx), enter/exit initialization mode."""
+        self.fmu.setupExperiment(tolerance=tolerance, startTime=start_time, stopTime=stop_time)
+        self.set_values(parameters)
+        self.fmu.enterInitializationMode()
+        self.fmu.exitInitializationMode()
+
+    def terminated_status(self) -> tuple[bool, float | None]:
+        """After a Discard: (terminated?, last successful time)."""
+        term, last = False, None
+        try:
+            term = self.fmu.getBooleanStatus(FMI2_TERMINATED)
+        except Exception:
+            pass
+        try:
+            last = self.fmu.getRealStatus(FMI2_LAST_SUCCESSFUL_TIME)
+        except Exception:
+            pass
+        return term, last
+
+    def free(self, terminate: bool = True) -> None:
+        if self._freed:
+            return
+        self._freed = True
+        if terminate:
+            try:
+                self.fmu.terminate()
+            except Exception:
+                pass
+        try:
+            self.fmu.freeInstance()
+        except Exception:
+            pass
+
+
+def vr_array(vrs: list[int]) -> ctypes.Array:
+    return (_vr_t * max(1, len(vrs)))(*vrs)
+
+
+def addr(obj) -> int:
+    return ctypes.addressof(obj)

@@ -1,0 +1,328 @@
+"""Closed-loop co-simulation master: Hoap2Plant.fmu + AnkleHipController.fmu on FMPy.
+
+Fixed communication step h, Gauss–Seidel order per step k (t_k = k h):
+
+    plant outputs(t_k) -> controller inputs -> controller doStep(t_k, h) -> controller outputs
+    -> plant inputs (+ push force) -> plant doStep(t_k, h)
+
+Result row k holds the plant outputs at t_k, the controller outputs read after the controller's
+step from t_k (i.e. the command the plant receives during [t_k, t_k + h)) and the push force
+applied during [t_k, t_k + h) (the step average of the profile). The last row holds the plant
+outputs at the end (stop time or the last successful time before a fall) with the controller and
+push columns repeated from the row before.
+
+The inner loop makes only raw ctypes calls with prebuilt value-reference arrays and reads the
+outputs straight into preallocated numpy arrays (no per-step allocation or dictionary look-up).
+"""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Callable
+
+import numpy as np
+
+from .fmu import DISCARD, STATUS_NAMES, FMUError, FMUInfo, Slave, vr_array
+from .paths import CONTROLLER_FMU, PLANT_FMU, find_fmu
+from .scenario import PushProfile, Scenario
+
+CONTROLLER_INPUTS = ("theta_ankle", "theta_hip", "zmp_x", "fz")
+CONTROLLER_REFS = ("theta_ankle_ref", "theta_hip_ref")
+PUSH = "push_force"
+CLASH_PREFIX = "controller."
+
+
+@dataclass
+class RunResult:
+    name: str
+    data: np.ndarray                       # structured array, 'time' first
+    outcome: str                           # completed | fell | error | interrupted
+    end_time: float
+    stop_time: float
+    step: float
+    wall_time: float
+    message: str = ""
+    fell_at: float | None = None
+    controller_initial: dict[str, float] = field(default_factory=dict)
+    controller_parameters: dict[str, Any] = field(default_factory=dict)
+    plant_parameters: dict[str, Any] = field(default_factory=dict)
+    controller_columns: dict[str, str] = field(default_factory=dict)   # column -> FMU variable
+    controller_inputs: tuple[str, ...] = CONTROLLER_INPUTS
+    column_units: dict[str, str] = field(default_factory=dict)
+
+    @property
+    def complete(self) -> bool:
+        return self.outcome == "completed"
+
+    @property
+    def fell(self) -> bool:
+        return self.outcome == "fell"
+
+    @property
+    def steps(self) -> int:
+        return max(0, len(self.data) - 1)
+
+    def column(self, name: str) -> np.ndarray:
+        return self.data[name]
+
+
+@dataclass
+class Models:
+    controller: FMUInfo
+    plant: FMUInfo
+
+    @classmethod
+    def load(cls, fmu_dir=None, controller: str | Path | None = None,
+             plant: str | Path | None = None) -> "Models":
+        c = Path(controller) if controller else find_fmu(CONTROLLER_FMU, fmu_dir)
+        p = Path(plant) if plant else find_fmu(PLANT_FMU, fmu_dir)
+        return cls(FMUInfo.load(c), FMUInfo.load(p))
+
+
+def check_overrides(models: Models, controller: dict, plant: dict, origin: str = "") -> None:
+    models.controller.check_overrides(controller, origin and f"{origin} [controller]")
+    models.plant.check_overrides(plant, origin and f"{origin} [plant]")
+
+
+class _Layout:
+    """Column layout of the result arrays and the value-reference arrays of the loop."""
+
+    def __init__(self, models: Models):
+        ci, pi = models.controller, models.plant
+        p_out = [v for v in pi.by_causality("output")]
+        c_out = [v for v in ci.by_causality("output")]
+        c_in = [v for v in ci.by_causality("input")]
+        p_in = [v for v in pi.by_causality("input")]
+        pnames = {v.name for v in p_out}
+        # connections by name (DESIGN section 3)
+        for v in c_in:
+            if v.name not in pnames:
+                raise FMUError(f"{ci.name} input {v.name!r} has no matching {pi.name} output")
+            if v.type != "Real":
+                raise FMUError(f"{ci.name} input {v.name!r}: only Real inputs are supported")
+        cnames = {v.name for v in c_out}
+        for v in p_in:
+            if v.name != PUSH and v.name not in cnames:
+                raise FMUError(f"{pi.name} input {v.name!r} has no matching {ci.name} output")
+            if v.type != "Real":
+                raise FMUError(f"{pi.name} input {v.name!r}: only Real inputs are supported")
+        if PUSH not in {v.name for v in p_in}:
+            raise FMUError(f"{pi.name} has no input {PUSH!r}")
+        # plant reals: controller inputs first (same order), so that the controller's setReal
+        # reads them straight from the plant's output row
+        cin_names = [v.name for v in c_in]
+        p_real = [pi.vars[n] for n in cin_names] + [v for v in p_out if v.type == "Real" and v.name not in cin_names]
+        # plant inputs fed by the controller, then the push: contiguous in the row
+        p_in_ctrl = [v for v in p_in if v.name != PUSH]
+        c_feed = [ci.vars[v.name] for v in p_in_ctrl]
+        c_other = [v for v in c_out if v.type == "Real" and v.name not in {x.name for x in c_feed}]
+        self.p_real, self.c_feed, self.c_other = p_real, c_feed, c_other
+        self.p_in = p_in_ctrl + [pi.vars[PUSH]]
+        self.c_in = c_in
+        self.p_int = [v for v in p_out if v.type in ("Integer", "Enumeration")]
+        self.p_bool = [v for v in p_out if v.type == "Boolean"]
+        self.c_int = [v for v in c_out if v.type in ("Integer", "Enumeration")]
+        self.c_bool = [v for v in c_out if v.type == "Boolean"]
+
+        def cname(v):
+            return CLASH_PREFIX + v.name if v.name in pnames else v.name
+        self.real_cols = ([v.name for v in p_real] + [cname(v) for v in c_feed] + [PUSH]
+                          + [cname(v) for v in c_other])
+        self.int_cols = ([v.name for v in self.p_int] + [v.name for v in self.p_bool]
+                         + [cname(v) for v in self.c_int] + [cname(v) for v in self.c_bool])
+        self.controller_columns = {cname(v): v.name for v in c_feed + c_other + self.c_int + self.c_bool}
+        self.units = {}
+        for v in p_real:
+            self.units[v.name] = v.unit or ""
+        for v in c_feed + c_other:
+            self.units[cname(v)] = v.unit or ""
+        self.units[PUSH] = pi.vars[PUSH].unit or "N"
+        self.off_feed = len(p_real)                   # controller refs + push start here
+        self.off_push = self.off_feed + len(c_feed)
+        self.off_cother = self.off_push + 1
+        self.n_real = len(self.real_cols)
+        self.off_pbool = len(self.p_int)
+        self.off_cint = self.off_pbool + len(self.p_bool)
+        self.off_cbool = self.off_cint + len(self.c_int)
+        self.n_int = len(self.int_cols)
+        self.all_cols = ["time"] + self.real_cols + self.int_cols
+
+
+def simulate(scenario: Scenario, models: Models | None = None, *, fmu_dir=None,
+             controller_overrides: dict | None = None, plant_overrides: dict | None = None,
+             push: PushProfile | None = None, stop_time: float | None = None,
+             progress: bool | None = None, logger: Callable | None = None) -> RunResult:
+    """Run one closed-loop scenario; never raises for a fall (outcome 'fell')."""
+    models = models or Models.load(fmu_dir)
+    c_over = dict(scenario.controller, **(controller_overrides or {}))
+    p_over = dict(scenario.plant, **(plant_overrides or {}))
+    origin = str(scenario.path) if scenario.path else scenario.name
+    check_overrides(models, c_over, p_over, origin)
+    L = _Layout(models)
+    h = scenario.step
+    T = stop_time if stop_time is not None else scenario.stop_time
+    N = int(round(T / h))
+    t0 = 0.0
+    push = push if push is not None else scenario.push
+
+    R = np.zeros((N + 1, max(1, L.n_real)), dtype=np.float64)
+    I = np.zeros((N + 1, max(1, L.n_int)), dtype=np.int32)
+    R[:N, L.off_push] = push.step_averages(t0, h, N)
+    R[N, L.off_push] = R[N - 1, L.off_push] if N else 0.0
+
+    ctrl = plant = None
+    outcome, message, fell_at = "completed", "", None
+    last = N
+    wall0 = time.perf_counter()
+    c_init: dict[str, float] = {}
+    failed_at = -1
+    j = 0
+    try:
+        ctrl = Slave(models.controller, "controller", logger=logger)
+        plant = Slave(models.plant, "plant", logger=logger)
+        ctrl.initialize(t0, T, c_over)
+        plant.initialize(t0, T, p_over)
+        c_init = ctrl.get_values([v.name for v in L.c_feed + L.c_other + L.c_int + L.c_bool])
+
+        pc, cc = plant.c, ctrl.c
+        p_getR, p_getI, p_getB, p_setR, p_step = (plant.get_real, plant.get_integer, plant.get_boolean,
+                                                   plant.set_real, plant.do_step)
+        c_getR, c_getI, c_getB, c_setR, c_step = (ctrl.get_real, ctrl.get_integer, ctrl.get_boolean,
+                                                   ctrl.set_real, ctrl.do_step)
+        vr_pR = vr_array([v.vr for v in L.p_real]); n_pR = len(L.p_real)
+        vr_pI = vr_array([v.vr for v in L.p_int]); n_pI = len(L.p_int)
+        vr_pB = vr_array([v.vr for v in L.p_bool]); n_pB = len(L.p_bool)
+        vr_cin = vr_array([v.vr for v in L.c_in]); n_cin = len(L.c_in)
+        vr_cF = vr_array([v.vr for v in L.c_feed]); n_cF = len(L.c_feed)
+        vr_cO = vr_array([v.vr for v in L.c_other]); n_cO = len(L.c_other)
+        vr_cI = vr_array([v.vr for v in L.c_int]); n_cI = len(L.c_int)
+        vr_cB = vr_array([v.vr for v in L.c_bool]); n_cB = len(L.c_bool)
+        vr_pin = vr_array([v.vr for v in L.p_in]); n_pin = len(L.p_in)
+        baseR, sR = R.ctypes.data, R.strides[0]
+        baseI, sI = I.ctypes.data, I.strides[0]
+        oF, oO = 8 * L.off_feed, 8 * L.off_cother
+        oPB, oCI, oCB = 4 * L.off_pbool, 4 * L.off_cint, 4 * L.off_cbool
+
+        bar = None
+        if progress is None:
+            progress = T >= 5.0
+        if progress:
+            from tqdm import tqdm
+            bar = tqdm(total=round(T, 6), unit="s sim", disable=None, leave=False,
+                       bar_format="{l_bar}{bar}| {n:.1f}/{total:.1f} s sim [{elapsed}<{remaining}]")
+        chunk = 1000
+        k = 0
+        while k < N:
+            kend = min(N, k + chunk)
+            for j in range(k, kend):
+                t = t0 + j * h
+                rR = baseR + j * sR
+                rI = baseI + j * sI
+                st = p_getR(pc, vr_pR, n_pR, rR)
+                if n_pI:
+                    st |= p_getI(pc, vr_pI, n_pI, rI)
+                if n_pB:
+                    st |= p_getB(pc, vr_pB, n_pB, rI + oPB)
+                st |= c_setR(cc, vr_cin, n_cin, rR)
+                sc = c_step(cc, t, h, 1)
+                st |= c_getR(cc, vr_cF, n_cF, rR + oF)
+                if n_cO:
+                    st |= c_getR(cc, vr_cO, n_cO, rR + oO)
+                if n_cI:
+                    st |= c_getI(cc, vr_cI, n_cI, rI + oCI)
+                if n_cB:
+                    st |= c_getB(cc, vr_cB, n_cB, rI + oCB)
+                st |= p_setR(pc, vr_pin, n_pin, rR + oF)
+                sp = p_step(pc, t, h, 1)
+                if sp > 1 or sc > 1 or st > 1:
+                    failed_at = j
+                    break
+            if failed_at >= 0:
+                break
+            if bar is not None:
+                bar.update(round((kend - k) * h, 9))
+            k = kend
+        if bar is not None:
+            bar.close()
+
+        if failed_at >= 0:
+            k = failed_at
+            t = t0 + k * h
+            if sc > 1:
+                raise FMUError(f"{models.controller.name}: fmi2DoStep at t={t:.4f} s returned {STATUS_NAMES[sc]}")
+            if st > 1 and sp <= 1:
+                raise FMUError(f"get/set of values failed at t={t:.4f} s (status {st})")
+            term, t_last = plant.terminated_status()
+            if sp == DISCARD:
+                outcome = "fell"
+                fell_at = t_last if t_last is not None else t
+                message = f"fell at t={fell_at:.3f} s" + ("" if term else " (plant discarded the step)")
+            else:
+                raise FMUError(f"{models.plant.name}: fmi2DoStep at t={t:.4f} s returned {STATUS_NAMES[sp]}")
+            # the plant's outputs at the last successful time close the record
+            last = k + 1
+            R[last, :] = R[k, :]
+            I[last, :] = I[k, :]
+            p_getR(pc, vr_pR, n_pR, baseR + last * sR)
+            if n_pI:
+                p_getI(pc, vr_pI, n_pI, baseI + last * sI)
+            if n_pB:
+                p_getB(pc, vr_pB, n_pB, baseI + last * sI + oPB)
+            t_end = fell_at
+            if "fallen" in [v.name for v in L.p_bool] and not I[last, L.off_pbool + [v.name for v in L.p_bool].index("fallen")]:
+                # a discard without a fall (e.g. the integrator gave up) is an error, not a fall
+                outcome, fell_at = "error", None
+                message = (f"{models.plant.name} discarded the step at t={t:.4f} s without falling "
+                           f"(terminated={term}, last successful time {t_last})")
+        else:
+            rR, rI = baseR + N * sR, baseI + N * sI
+            R[N, :] = R[N - 1, :]
+            I[N, :] = I[N - 1, :]
+            p_getR(pc, vr_pR, n_pR, rR)
+            if n_pI:
+                p_getI(pc, vr_pI, n_pI, rI)
+            if n_pB:
+                p_getB(pc, vr_pB, n_pB, rI + oPB)
+            t_end = t0 + N * h
+    except KeyboardInterrupt:
+        outcome, message = "interrupted", "interrupted by the user"
+        last = max(j - 1, 0)
+        t_end = t0 + last * h
+    except Exception as e:   # keep what was computed, mark it as an error
+        outcome, message = "error", f"{type(e).__name__}: {e}"
+        last = failed_at if failed_at >= 0 else max(j - 1, 0)
+        t_end = t0 + last * h
+    finally:
+        for s in (plant, ctrl):
+            if s is not None:
+                s.free(terminate=outcome == "completed")
+    wall = time.perf_counter() - wall0
+
+    times = t0 + h * np.arange(last + 1)
+    if failed_at >= 0 and last == failed_at + 1:      # closed by the plant's outputs after a discard
+        times[-1] = max(t_end, times[-2])
+    data = _structured(L, times, R[:last + 1], I[:last + 1])
+    res = RunResult(name=scenario.name, data=data, outcome=outcome, end_time=float(times[-1]),
+                    stop_time=T, step=h, wall_time=wall, message=message, fell_at=fell_at,
+                    controller_initial=c_init,
+                    controller_parameters={**models.controller.start_values(), **c_over},
+                    plant_parameters={**models.plant.start_values(), **p_over},
+                    controller_columns=L.controller_columns, column_units=L.units)
+    # a plant that signals a fall only through its 'fallen' output
+    if outcome == "completed" and "fallen" in data.dtype.names and data["fallen"].any():
+        i = int(np.argmax(data["fallen"] != 0))
+        res.outcome, res.fell_at = "fell", float(data["time"][i])
+        res.message = f"fell at t={res.fell_at:.3f} s (fallen output; the plant did not discard)"
+    return res
+
+
+def _structured(L: _Layout, times, R, I) -> np.ndarray:
+    dt = [("time", np.float64)] + [(c, np.float64) for c in L.real_cols] + [(c, np.int32) for c in L.int_cols]
+    out = np.empty(len(times), dtype=dt)
+    out["time"] = times
+    for j, c in enumerate(L.real_cols):
+        out[c] = R[:, j]
+    for j, c in enumerate(L.int_cols):
+        out[c] = I[:, j]
+    return out

@@ -1,0 +1,90 @@
+"""Where things live: the repository root, the scenarios, the packed FMUs, native tools.
+
+FMUs are looked up in the folder(s) named by the environment variable ``ANKLEHIP_FMU_DIR``
+(several folders may be given, separated by ``os.pathsep``), else in ``<repo>/build/fmus``
+(``<build>/fmus`` with ``ANKLEHIP_BUILD_DIR`` when that is set), the folder that
+``bash scripts/setup.sh`` fills.
+"""
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+CONTROLLER_FMU = "AnkleHipController.fmu"
+PLANT_FMU = "Hoap2Plant.fmu"
+RT_RUNNER = "anklehip_rt_step"
+
+
+class MissingFileError(FileNotFoundError):
+    """A file the package needs (FMU, executable, scenario) is not there."""
+
+
+def repo_root() -> Path:
+    """The repository root: the folder above the package when it holds pyproject.toml
+    (editable install / source checkout), else ANKLEHIP_ROOT, else the working directory."""
+    env = os.environ.get("ANKLEHIP_ROOT")
+    if env:
+        return Path(env).resolve()
+    here = Path(__file__).resolve().parent.parent
+    if (here / "pyproject.toml").is_file() and (here / "scenarios").is_dir():
+        return here
+    return Path.cwd()
+
+
+def build_dir() -> Path:
+    env = os.environ.get("ANKLEHIP_BUILD_DIR")
+    if env:
+        p = Path(env)
+        return p if p.is_absolute() else repo_root() / p
+    return repo_root() / "build"
+
+
+def fmu_dirs() -> list[Path]:
+    env = os.environ.get("ANKLEHIP_FMU_DIR")
+    if env:
+        return [Path(p) for p in env.split(os.pathsep) if p]
+    return [build_dir() / "fmus"]
+
+
+def find_fmu(filename: str, fmu_dir: str | os.PathLike | None = None) -> Path:
+    """Path of a packed FMU; a clear error naming the file and the fix when it is missing."""
+    dirs = [Path(fmu_dir)] if fmu_dir else fmu_dirs()
+    for d in dirs:
+        p = d / filename
+        if p.is_file():
+            return p
+    where = ", ".join(str(d) for d in dirs)
+    raise MissingFileError(
+        f"{filename} not found in {where}. Build the FMUs with `bash scripts/setup.sh` "
+        f"(or point ANKLEHIP_FMU_DIR at the folder that holds {filename}).")
+
+
+def scenarios_dir() -> Path:
+    return repo_root() / "scenarios"
+
+
+def find_scenario(name_or_path: str) -> Path:
+    """A scenario given by name (scenarios/<name>.toml) or by path."""
+    p = Path(name_or_path)
+    if p.suffix == ".toml" or p.parent != Path("."):
+        if p.is_file():
+            return p
+        raise MissingFileError(f"scenario file {p} not found")
+    cand = scenarios_dir() / f"{name_or_path}.toml"
+    if cand.is_file():
+        return cand
+    known = ", ".join(sorted(q.stem for q in scenarios_dir().glob("*.toml"))) or "none"
+    raise MissingFileError(f"no scenario named {name_or_path!r} in {scenarios_dir()} (known: {known})")
+
+
+def find_rt_runner() -> Path | None:
+    """The native real-time step-test executable (fmu/rt_runner) in the build folder
+    ($ANKLEHIP_BUILD_DIR, default <repo>/build), or $ANKLEHIP_RT_STEP; None if not built."""
+    env = os.environ.get("ANKLEHIP_RT_STEP")
+    if env and Path(env).is_file():
+        return Path(env)
+    for root in [build_dir()]:
+        for cand in (root / "fmu" / "rt_runner" / RT_RUNNER, root / "bin" / RT_RUNNER, root / RT_RUNNER):
+            if cand.is_file() and os.access(cand, os.X_OK):
+                return cand
+    return None

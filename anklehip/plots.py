@@ -1,0 +1,321 @@
+"""Figures (matplotlib, Agg): the paper's Fig. 4 and Fig. 5, an overview of any result, a
+stick-figure animation (GIF) and the real-time histogram."""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+PHASE_COLORS = {1: "#f6d55c", 2: "#ed553b", 3: "#3caea3"}
+PHASE_LABELS = {0: "0 ankle", 1: "1 ankle→hip", 2: "2 hip", 3: "3 hip→ankle"}
+
+
+def _has(d: np.ndarray, *names: str) -> bool:
+    return all(n in d.dtype.names for n in names)
+
+
+def shade_phases(ax, t: np.ndarray, phase: np.ndarray, legend: bool = False) -> None:
+    if len(t) == 0:
+        return
+    ch = np.flatnonzero(np.diff(phase) != 0) + 1
+    starts = np.concatenate([[0], ch])
+    ends = np.concatenate([ch, [len(t) - 1]])
+    used = set()
+    for a, b in zip(starts, ends):
+        p = int(phase[a])
+        if p in PHASE_COLORS:
+            ax.axvspan(t[a], t[b], color=PHASE_COLORS[p], alpha=0.35, lw=0,
+                       label=PHASE_LABELS[p] if legend and p not in used else None)
+            used.add(p)
+
+
+def _save(fig, out: Path) -> Path:
+    out = Path(out)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(out, dpi=120)
+    plt.close(fig)
+    return out
+
+
+def fig4(d: np.ndarray, out: Path, title: str = "") -> Path:
+    """Paper Fig. 4: ankle and hip joint angles over the whole run (+ push force, phases)."""
+    t = d["time"]
+    fig, (a1, a2) = plt.subplots(2, 1, figsize=(10, 5.5), sharex=True, gridspec_kw={"height_ratios": [3, 1]})
+    if _has(d, "phase"):
+        shade_phases(a1, t, d["phase"], legend=True)
+        shade_phases(a2, t, d["phase"])
+    a1.plot(t, np.degrees(d["theta_ankle"]), color="tab:blue", lw=1, label="ankle θ1")
+    a1.plot(t, np.degrees(d["theta_hip"]), color="tab:red", lw=1, label="hip θ2")
+    a1.set_ylabel("joint angle [deg]")
+    a1.legend(loc="center right", fontsize=8, ncol=1)
+    a1.grid(alpha=0.3)
+    a1.set_title(title or "Joint angles (cf. paper Fig. 4)")
+    if _has(d, "push_force"):
+        a2.plot(t, d["push_force"], color="k", lw=1)
+    a2.set_ylabel("push [N]")
+    a2.set_xlabel("time [s]")
+    a2.grid(alpha=0.3)
+    fig.tight_layout()
+    return _save(fig, out)
+
+
+def first_cycle_window(d: np.ndarray, pad_before: float = 0.5, pad_after: float = 1.5) -> tuple[float, float]:
+    """From just before the first push until the controller is back in phase 0 (plus a margin)."""
+    t = d["time"]
+    f = d["push_force"] if _has(d, "push_force") else np.zeros(len(t))
+    nz = np.flatnonzero(f != 0)
+    if not len(nz):
+        return float(t[0]), float(t[-1])
+    a = float(t[nz[0]])
+    end = None
+    if _has(d, "phase"):
+        ph = d["phase"]
+        left = np.flatnonzero((ph != 0) & (t >= a))
+        if len(left):
+            back = np.flatnonzero((ph == 0) & (t > t[left[0]]))
+            if len(back):
+                end = float(t[back[0]])
+    if end is None:
+        gaps = np.flatnonzero((f == 0) & (t > a))
+        end = float(t[gaps[0]]) + 2.0 if len(gaps) else float(t[-1])
+    return max(float(t[0]), a - pad_before), min(float(t[-1]), end + pad_after)
+
+
+def fig5(d: np.ndarray, out: Path, window: tuple[float, float] | None = None,
+         zmp_limits: tuple[float, float] | None = None, title: str = "") -> Path:
+    """Paper Fig. 5: the first cycle in detail — joint angles, ZMP p and CoM projection r_x,
+    p - r_x, push force; the four phases shaded."""
+    a, b = window or first_cycle_window(d)
+    m = (d["time"] >= a) & (d["time"] <= b)
+    d = d[m]
+    t = d["time"]
+    fig, ax = plt.subplots(4, 1, figsize=(9, 9), sharex=True, gridspec_kw={"height_ratios": [3, 3, 2, 1.3]})
+    for i, x in enumerate(ax):
+        if _has(d, "phase"):
+            shade_phases(x, t, d["phase"], legend=i == 0)
+        x.grid(alpha=0.3)
+    ax[0].plot(t, np.degrees(d["theta_ankle"]), color="tab:blue", label="ankle θ1")
+    ax[0].plot(t, np.degrees(d["theta_hip"]), color="tab:red", label="hip θ2")
+    if _has(d, "theta_ankle_ref"):
+        ax[0].plot(t, np.degrees(d["theta_ankle_ref"]), color="tab:blue", ls="--", lw=0.8, label="θ1 ref")
+        ax[0].plot(t, np.degrees(d["theta_hip_ref"]), color="tab:red", ls="--", lw=0.8, label="θ2 ref")
+    ax[0].set_ylabel("angle [deg]")
+    ax[0].legend(fontsize=7, ncol=4, loc="upper right")
+    ax[0].set_title(title or "First push cycle (cf. paper Fig. 5)")
+    ax[1].plot(t, 1000 * d["zmp_x"], color="tab:purple", label="ZMP p")
+    ax[1].plot(t, 1000 * d["com_x"], color="tab:green", label="CoM projection r_x")
+    if _has(d, "com_x_desired"):
+        ax[1].plot(t, 1000 * d["com_x_desired"], color="tab:green", ls="--", lw=0.8, label="r_x desired")
+    if zmp_limits:
+        for z in zmp_limits:
+            ax[1].axhline(1000 * z, color="k", ls=":", lw=0.8)
+    ax[1].set_ylabel("x [mm]")
+    ax[1].legend(fontsize=7, ncol=3, loc="upper right")
+    ax[2].plot(t, 1000 * (d["zmp_x"] - d["com_x"]), color="k", lw=1, label="p − r_x (measured)")
+    ax[2].set_ylabel("p − r_x [mm]")
+    ax[2].legend(fontsize=7, loc="upper right")
+    if _has(d, "push_force"):
+        ax[3].plot(t, d["push_force"], color="k", lw=1)
+    ax[3].set_ylabel("push [N]")
+    ax[3].set_xlabel("time [s]")
+    fig.tight_layout()
+    return _save(fig, out)
+
+
+def overview(d: np.ndarray, out: Path, title: str = "") -> Path:
+    """Any result CSV: the standard panels when the columns exist, else every column."""
+    t = d["time"]
+    std = _has(d, "theta_ankle", "theta_hip", "zmp_x", "com_x")
+    if not std:
+        cols = [c for c in d.dtype.names[1:] if d[c].ndim == 1]
+        n = max(1, len(cols))
+        fig, ax = plt.subplots(n, 1, figsize=(9, 1.6 * n + 0.8), sharex=True, squeeze=False)
+        for x, c in zip(ax[:, 0], cols):
+            x.plot(t, d[c], lw=0.9)
+            x.set_ylabel(c, fontsize=7)
+            x.grid(alpha=0.3)
+        ax[-1, 0].set_xlabel("time [s]")
+        ax[0, 0].set_title(title)
+        fig.tight_layout()
+        return _save(fig, out)
+    fig, ax = plt.subplots(4, 1, figsize=(10, 9), sharex=True, gridspec_kw={"height_ratios": [3, 3, 1.5, 1.2]})
+    for i, x in enumerate(ax):
+        if _has(d, "phase"):
+            shade_phases(x, t, d["phase"], legend=i == 0)
+        x.grid(alpha=0.3)
+    ax[0].plot(t, np.degrees(d["theta_ankle"]), color="tab:blue", label="ankle θ1")
+    ax[0].plot(t, np.degrees(d["theta_hip"]), color="tab:red", label="hip θ2")
+    ax[0].set_ylabel("angle [deg]")
+    ax[0].legend(fontsize=7, ncol=4, loc="upper right")
+    ax[0].set_title(title)
+    ax[1].plot(t, 1000 * d["zmp_x"], color="tab:purple", label="ZMP p")
+    ax[1].plot(t, 1000 * d["com_x"], color="tab:green", label="CoM r_x")
+    ax[1].set_ylabel("x [mm]")
+    ax[1].legend(fontsize=7, loc="upper right")
+    if _has(d, "fz"):
+        ax[2].plot(t, d["fz"], color="k", lw=0.8)
+        ax[2].set_ylabel("fz [N]")
+    if _has(d, "push_force"):
+        ax[3].plot(t, d["push_force"], color="k", lw=0.9)
+        ax[3].set_ylabel("push [N]")
+    ax[3].set_xlabel("time [s]")
+    fig.tight_layout()
+    return _save(fig, out)
+
+
+# ----------------------------------------------------------------------------------------------
+# stick-figure animation
+
+@dataclass
+class Geometry:
+    """Sagittal geometry for drawing [m]; defaults are DESIGN section 5."""
+    l1: float = 0.200
+    lg2: float = 0.10
+    trunk: float = 0.22          # hip -> top of the trunk (drawn)
+    toe: float = 0.0575
+    heel: float = -0.0375
+    ankle_height: float = 0.035
+    push_height: float = 0.335   # above the sole
+
+    _names = {
+        "l1": ("l1",),
+        "lg2": ("lg2",),
+        "toe": ("foot_toe", "toe_x", "x_toe", "l_toe", "toe"),
+        "heel": ("foot_heel", "heel_x", "x_heel", "l_heel", "heel"),
+        "ankle_height": ("ankle_height", "h_ankle", "foot_height", "ankle_z"),
+        "push_height": ("push_height", "h_push", "push_z"),
+    }
+
+    @classmethod
+    def from_parameters(cls, params: dict[str, Any] | None) -> "Geometry":
+        g = cls()
+        if not params:
+            return g
+        for attr, cands in cls._names.items():
+            for c in cands:
+                if c in params and isinstance(params[c], (int, float)) and not isinstance(params[c], bool):
+                    val = float(params[c])
+                    if attr == "heel" and val > 0:
+                        val = -val
+                    setattr(g, attr, val)
+                    break
+        g.trunk = max(g.trunk, 2.2 * g.lg2)
+        return g
+
+
+def _rot(phi: float, x: float, z: float) -> tuple[float, float]:
+    """Pitch forward by phi: an upward vector tilts toward +x."""
+    c, s = math.cos(phi), math.sin(phi)
+    return x * c + z * s, -x * s + z * c
+
+
+def animate(d: np.ndarray, out: Path, geom: Geometry | None = None, fps: float = 20.0,
+            speed: float = 1.0, t_start: float | None = None, t_stop: float | None = None,
+            title: str = "") -> Path:
+    """Stick-figure GIF: foot (rocking on toe/heel), legs, trunk, push arrow, ZMP and CoM
+    projection on the sole, phase and time in the corner."""
+    from matplotlib.animation import PillowWriter
+
+    g = geom or Geometry()
+    t = d["time"]
+    a = t[0] if t_start is None else t_start
+    b = t[-1] if t_stop is None else t_stop
+    frames = np.arange(a, b + 1e-9, speed / fps)
+    idx = np.clip(np.searchsorted(t, frames), 0, len(t) - 1)
+    names = d.dtype.names
+    fmax = max(1.0, float(np.max(np.abs(d["push_force"])))) if "push_force" in names else 1.0
+
+    fig, ax = plt.subplots(figsize=(4.2, 5.0))
+    ax.set_aspect("equal")
+    ax.set_xlim(-0.25, 0.25)
+    ax.set_ylim(-0.02, 0.62)
+    ax.axhline(0, color="k", lw=1)
+    ax.set_xticks([])
+    ax.set_yticks([])
+    ax.set_title(title, fontsize=9)
+    foot, = ax.plot([], [], color="0.3", lw=3, solid_capstyle="butt")
+    legs, = ax.plot([], [], color="tab:blue", lw=4, solid_capstyle="round")
+    trunk, = ax.plot([], [], color="tab:red", lw=6, solid_capstyle="round")
+    head, = ax.plot([], [], "o", color="tab:red", ms=11)
+    com, = ax.plot([], [], "o", color="k", ms=5, mfc="w")
+    zmp_m, = ax.plot([], [], "^", color="tab:purple", ms=8, label="ZMP")
+    comp_m, = ax.plot([], [], "v", color="tab:green", ms=8, label="CoM proj.")
+    arrow = ax.annotate("", xy=(0, 0), xytext=(0, 0), arrowprops=dict(arrowstyle="-|>", color="tab:orange", lw=2))
+    txt = ax.text(0.02, 0.97, "", transform=ax.transAxes, va="top", fontsize=8, family="monospace")
+    ax.legend(loc="upper right", fontsize=7)
+
+    def pose(k):
+        phi = float(d["foot_pitch"][k]) if "foot_pitch" in names else 0.0
+        mode = int(d["contact_mode"][k]) if "contact_mode" in names else 0
+        pivot = g.toe if (mode == 1 or phi > 1e-6 and mode != 2) else (g.heel if (mode == 2 or phi < -1e-6) else 0.0)
+        # ankle above the sole at the foot's pivot point
+        px, pz = pivot, 0.0
+        ax_, az_ = _rot(phi, -pivot, g.ankle_height)
+        ank = (px + ax_, pz + az_)
+        toe = (px + _rot(phi, g.toe - pivot, 0)[0], pz + _rot(phi, g.toe - pivot, 0)[1])
+        heel = (px + _rot(phi, g.heel - pivot, 0)[0], pz + _rot(phi, g.heel - pivot, 0)[1])
+        a1 = phi + float(d["theta_ankle"][k])
+        a12 = a1 + float(d["theta_hip"][k])
+        hip = (ank[0] + g.l1 * math.sin(a1), ank[1] + g.l1 * math.cos(a1))
+        top = (hip[0] + g.trunk * math.sin(a12), hip[1] + g.trunk * math.cos(a12))
+        return ank, toe, heel, hip, top, a12
+
+    def update(i):
+        k = idx[i]
+        ank, toe, heel, hip, top, a12 = pose(k)
+        foot.set_data([heel[0], toe[0], ank[0], heel[0]], [heel[1], toe[1], ank[1], heel[1]])
+        legs.set_data([ank[0], hip[0]], [ank[1], hip[1]])
+        trunk.set_data([hip[0], top[0]], [hip[1], top[1]])
+        head.set_data([top[0] + 0.03 * math.sin(a12)], [top[1] + 0.03 * math.cos(a12)])
+        cx = float(d["com_x"][k]) if "com_x" in names else 0.0
+        cz = float(d["com_z"][k]) if "com_z" in names else 0.0
+        com.set_data([cx], [g.ankle_height + cz])
+        zmp_m.set_data([float(d["zmp_x"][k])], [0.0])
+        comp_m.set_data([cx], [0.0])
+        f = float(d["push_force"][k]) if "push_force" in names else 0.0
+        # point on the trunk at the push height, on the back (push +x) or the chest (push -x)
+        s = (g.push_height - hip[1]) / max(1e-6, math.cos(a12))
+        px = hip[0] + s * math.sin(a12) + (-0.012 if f >= 0 else 0.012)
+        L = 0.12 * f / fmax
+        arrow.xy = (px, g.push_height)
+        arrow.set_position((px - L, g.push_height))
+        arrow.set_visible(abs(f) > 1e-9)
+        ph = int(d["phase"][k]) if "phase" in names else -1
+        txt.set_text(f"t = {t[k]:6.2f} s\nphase {PHASE_LABELS.get(ph, '?')}\npush {f:+6.1f} N")
+        return foot, legs, trunk, head, com, zmp_m, comp_m, arrow, txt
+
+    out = Path(out)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    writer = PillowWriter(fps=fps)
+    with writer.saving(fig, str(out), dpi=80):
+        for i in range(len(frames)):
+            update(i)
+            writer.grab_frame()
+    plt.close(fig)
+    return out
+
+
+# ----------------------------------------------------------------------------------------------
+
+def rt_histogram(exec_us: np.ndarray, late_us: np.ndarray, period_us: float, out: Path, title: str = "") -> Path:
+    fig, ax = plt.subplots(1, 2, figsize=(10, 3.6))
+    for x, v, lab in ((ax[0], exec_us, "step execution time [µs]"), (ax[1], late_us, "wake-up lateness [µs]")):
+        if len(v):
+            x.hist(v, bins=100, color="tab:blue", log=True)
+            for q, ls in ((50, "-"), (99, "--"), (99.9, ":")):
+                x.axvline(np.percentile(v, q), color="k", ls=ls, lw=0.8, label=f"p{q:g}")
+        x.set_xlabel(lab)
+        x.grid(alpha=0.3)
+        x.legend(fontsize=7)
+    ax[0].axvline(period_us, color="tab:red", lw=1)
+    ax[0].set_ylabel("count")
+    fig.suptitle(title, fontsize=9)
+    fig.tight_layout()
+    return _save(fig, out)

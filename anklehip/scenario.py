@@ -1,0 +1,499 @@
+"""Scenario files (TOML): schema, strict validation and the push profile.
+
+The format is documented in docs/scenarios.md. Every error names the file, the key and the
+problem, e.g. ``scenarios/x.toml: push[2].duration: must be > 0, got -1``.
+"""
+from __future__ import annotations
+
+import math
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+
+class ScenarioError(ValueError):
+    """A scenario file is malformed; the message names file, key and problem."""
+
+
+# ----------------------------------------------------------------------------------------------
+# push profile
+
+PUSH_KINDS = ("step", "ramp", "hold", "impulse", "pulse")
+
+
+@dataclass(frozen=True)
+class PushSegment:
+    """One element of the push program (see docs/scenarios.md for the exact semantics).
+
+    kind     step | ramp | hold | impulse | pulse
+    t        absolute start time [s] (None: right after the previous segment)
+    to       level after a step / at the end of a ramp [N]
+    duration length [s] (ramp, hold, impulse, pulse)
+    force    rectangular force on top of the level [N] (impulse/pulse)
+    impulse  force x duration [N s] (impulse, alternative to force)
+    rise     rise/fall time of a pulse [s] (trapezoid; 0 = rectangular)
+    """
+    kind: str
+    t: float | None = None
+    to: float | None = None
+    duration: float = 0.0
+    force: float | None = None
+    impulse: float | None = None
+    rise: float = 0.0
+
+
+@dataclass
+class PushProfile:
+    """Piecewise-linear force f(t) [N] on the robot's back (+ = forward), built from segments.
+
+    Stored as break points (times non-decreasing; a repeated time is a jump). Before the first
+    break point and after the last one the force is constant (0 before, last level after).
+    """
+    times: np.ndarray
+    values: np.ndarray
+    segments: list[PushSegment] = field(default_factory=list)
+
+    @classmethod
+    def from_segments(cls, segments: list[PushSegment]) -> "PushProfile":
+        ts: list[float] = [0.0]
+        vs: list[float] = [0.0]
+        level = 0.0
+        now = 0.0
+        for s in segments:
+            start = now if s.t is None else s.t
+            if start > now:        # the level holds between segments
+                ts.append(start); vs.append(level)
+            now = start
+            if s.kind == "step":
+                ts += [now, now]; vs += [level, s.to]
+                level = s.to
+            elif s.kind == "ramp":
+                ts += [now, now + s.duration]; vs += [level, s.to]
+                level = s.to
+                now += s.duration
+            elif s.kind == "hold":
+                now += s.duration
+                ts.append(now); vs.append(level)
+            elif s.kind == "impulse":
+                f = s.force if s.force is not None else s.impulse / s.duration
+                ts += [now, now, now + s.duration, now + s.duration]
+                vs += [level, level + f, level + f, level]
+                now += s.duration
+            elif s.kind == "pulse":
+                f = s.force
+                r = s.rise
+                ts += [now, now + r, now + s.duration - r, now + s.duration]
+                vs += [level, level + f, level + f, level]
+                now += s.duration
+            else:  # pragma: no cover - validated before
+                raise ValueError(s.kind)
+        return cls(np.asarray(ts, float), np.asarray(vs, float), list(segments))
+
+    @classmethod
+    def zero(cls) -> "PushProfile":
+        return cls(np.array([0.0]), np.array([0.0]), [])
+
+    def value(self, t) -> np.ndarray:
+        """f(t); at a jump the value after the jump."""
+        t = np.asarray(t, float)
+        ts, vs = self.times, self.values
+        i = np.searchsorted(ts, t, side="right") - 1
+        i = np.clip(i, 0, len(ts) - 1)
+        j = np.minimum(i + 1, len(ts) - 1)
+        dt = ts[j] - ts[i]
+        with np.errstate(invalid="ignore", divide="ignore"):
+            a = np.where(dt > 0, (t - ts[i]) / np.where(dt > 0, dt, 1.0), 0.0)
+        a = np.clip(a, 0.0, 1.0)
+        out = vs[i] + a * (vs[j] - vs[i])
+        return np.where(t < ts[0], vs[0], out)
+
+    def integral(self, t) -> np.ndarray:
+        """F(t) = integral of f from 0 to t [N s] (exact for the piecewise-linear profile)."""
+        t = np.asarray(t, float)
+        ts, vs = self.times, self.values
+        seg = np.diff(ts) * 0.5 * (vs[:-1] + vs[1:])
+        cum = np.concatenate([[0.0], np.cumsum(seg)])
+        i = np.clip(np.searchsorted(ts, t, side="right") - 1, 0, len(ts) - 1)
+        j = np.minimum(i + 1, len(ts) - 1)
+        dt = ts[j] - ts[i]
+        tau = np.clip(t - ts[i], 0.0, None)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            slope = np.where(dt > 0, (vs[j] - vs[i]) / np.where(dt > 0, dt, 1.0), 0.0)
+        # beyond the last break point the level is constant (slope 0)
+        slope = np.where(i == len(ts) - 1, 0.0, slope)
+        tau = np.where((i < len(ts) - 1), np.minimum(tau, np.where(dt > 0, dt, 0.0)), tau)
+        return cum[i] + vs[i] * tau + 0.5 * slope * tau * tau
+
+    def step_averages(self, t0: float, h: float, n: int) -> np.ndarray:
+        """Force applied during each communication step [t_k, t_k + h): the mean of f over the
+        step, so that every impulse is transferred exactly whatever its timing or duration."""
+        edges = t0 + h * np.arange(n + 1)
+        F = self.integral(edges)
+        return np.diff(F) / h
+
+    def events(self) -> list[tuple[float, float]]:
+        """Intervals (start, end) during which the force differs from zero ("pushes")."""
+        ts, vs = self.times, self.values
+        out: list[tuple[float, float]] = []
+        start = None
+        for k in range(len(ts)):
+            nz = vs[k] != 0.0
+            if nz and start is None:
+                start = ts[k - 1] if k > 0 else ts[k]
+            elif not nz and start is not None:
+                out.append((start, ts[k]))
+                start = None
+        if start is not None:
+            out.append((start, math.inf))
+        return out
+
+    def peak(self) -> float:
+        """Largest |f| (signed)."""
+        i = int(np.argmax(np.abs(self.values)))
+        return float(self.values[i])
+
+    def scaled(self, factor: float) -> "PushProfile":
+        return PushProfile(self.times.copy(), self.values * factor, self.segments)
+
+
+# ----------------------------------------------------------------------------------------------
+# expectations, reference
+
+@dataclass
+class Expect:
+    must_fall: bool | None = None
+    fall_after: float | None = None          # with must_fall: not before this time
+    fall_before: float | None = None         # with must_fall: at the latest at this time
+    phases_reached: list[int] = field(default_factory=list)
+    phases_not_reached: list[int] = field(default_factory=list)
+    min_cycles: int | None = None            # complete 0->1->2->3->0 cycles
+    erect_by: float | None = None            # back in phase 0 and near erect from this time on
+    erect_tol: float = 0.02                  # [rad] on |theta_ankle| and |theta_hip|
+    max_abs_zmp: float | None = None         # [m]
+    no_fault: bool = True
+
+
+@dataclass
+class Reference:
+    file: Path
+    columns: list[str] | None = None
+    num: int | None = None   # validate_signal: samples of the band (None: max(1000, rows))
+    dx: int = 20             # validate_signal: horizontal half width in samples
+    dy: float = 0.1          # validate_signal: vertical width relative to the signal's range
+    abs_tol: float | None = None
+    rel_tol: float | None = None
+    interval: float = 0.01   # sample interval of the stored reference [s]
+    band_floor: float | None = None
+    signals: dict[str, dict[str, float]] = field(default_factory=dict)   # per-signal overrides
+
+
+@dataclass
+class Scenario:
+    name: str
+    path: Path | None
+    description: str = ""
+    stop_time: float = 10.0
+    step: float = 1e-3
+    push: PushProfile = field(default_factory=PushProfile.zero)
+    controller: dict[str, Any] = field(default_factory=dict)
+    plant: dict[str, Any] = field(default_factory=dict)
+    expect: Expect = field(default_factory=Expect)
+    reference: Reference | None = None
+    tags: list[str] = field(default_factory=list)
+
+    @property
+    def n_steps(self) -> int:
+        return int(round(self.stop_time / self.step))
+
+
+# ----------------------------------------------------------------------------------------------
+# validation helpers
+
+class _V:
+    def __init__(self, where: str):
+        self.where = where
+
+    def fail(self, key: str, msg: str):
+        raise ScenarioError(f"{self.where}: {key}: {msg}")
+
+    def table(self, d: Any, key: str) -> dict:
+        if not isinstance(d, dict):
+            self.fail(key, f"must be a table, got {_tname(d)}")
+        return d
+
+    def keys(self, d: dict, allowed: set[str], prefix: str, required: set[str] = frozenset()):
+        for k in d:
+            if k not in allowed:
+                self.fail(f"{prefix}{k}", f"unknown key (allowed: {', '.join(sorted(allowed))})")
+        for k in required:
+            if k not in d:
+                self.fail(f"{prefix}{k}", "required key missing")
+
+    def num(self, v: Any, key: str, *, gt=None, ge=None, le=None) -> float:
+        if isinstance(v, bool) or not isinstance(v, (int, float)):
+            self.fail(key, f"must be a number, got {_tname(v)} {v!r}")
+        v = float(v)
+        if not math.isfinite(v):
+            self.fail(key, f"must be finite, got {v}")
+        if gt is not None and not v > gt:
+            self.fail(key, f"must be > {gt:g}, got {v:g}")
+        if ge is not None and not v >= ge:
+            self.fail(key, f"must be >= {ge:g}, got {v:g}")
+        if le is not None and not v <= le:
+            self.fail(key, f"must be <= {le:g}, got {v:g}")
+        return v
+
+    def int_(self, v: Any, key: str, *, ge=None) -> int:
+        if isinstance(v, bool) or not isinstance(v, int):
+            self.fail(key, f"must be an integer, got {_tname(v)} {v!r}")
+        if ge is not None and v < ge:
+            self.fail(key, f"must be >= {ge}, got {v}")
+        return v
+
+    def bool_(self, v: Any, key: str) -> bool:
+        if not isinstance(v, bool):
+            self.fail(key, f"must be true or false, got {_tname(v)} {v!r}")
+        return v
+
+    def str_(self, v: Any, key: str) -> str:
+        if not isinstance(v, str):
+            self.fail(key, f"must be a string, got {_tname(v)} {v!r}")
+        return v
+
+    def list_(self, v: Any, key: str) -> list:
+        if not isinstance(v, list):
+            self.fail(key, f"must be an array, got {_tname(v)} {v!r}")
+        return v
+
+
+def _tname(v: Any) -> str:
+    return {bool: "boolean", int: "integer", float: "float", str: "string", list: "array",
+            dict: "table"}.get(type(v), type(v).__name__)
+
+
+TOP_KEYS = {"name", "description", "stop_time", "step", "push", "controller", "plant", "expect",
+            "reference", "tags"}
+PUSH_KEYS = {
+    "step": ({"kind", "t", "to"}, {"to"}),
+    "ramp": ({"kind", "t", "to", "duration"}, {"to", "duration"}),
+    "hold": ({"kind", "t", "duration"}, {"duration"}),
+    "impulse": ({"kind", "t", "duration", "force", "impulse"}, {"duration"}),
+    "pulse": ({"kind", "t", "duration", "force", "rise"}, {"duration", "force"}),
+}
+EXPECT_KEYS = {"must_fall", "fall_after", "fall_before", "phases_reached", "phases_not_reached",
+               "min_cycles", "erect_by", "erect_tol", "max_abs_zmp", "no_fault"}
+REF_KEYS = {"file", "columns", "num", "dx", "dy", "abs_tol", "rel_tol", "interval", "band_floor", "signals"}
+REF_SIGNAL_KEYS = {"dy", "abs_tol", "rel_tol", "band_floor"}
+
+
+def _parse_push(v: _V, items: Any, stop_time: float) -> PushProfile:
+    items = v.list_(items, "push")
+    segs: list[PushSegment] = []
+    now = 0.0
+    for i, it in enumerate(items):
+        p = f"push[{i}]"
+        it = v.table(it, p)
+        if "kind" not in it:
+            v.fail(f"{p}.kind", f"required key missing (one of {', '.join(PUSH_KINDS)})")
+        kind = v.str_(it["kind"], f"{p}.kind")
+        if kind not in PUSH_KEYS:
+            v.fail(f"{p}.kind", f"must be one of {', '.join(PUSH_KINDS)}, got {kind!r}")
+        allowed, required = PUSH_KEYS[kind]
+        v.keys(it, allowed, f"{p}.", required)
+        t = None
+        if "t" in it:
+            t = v.num(it["t"], f"{p}.t", ge=0.0)
+            if t < now - 1e-12:
+                v.fail(f"{p}.t", f"starts at {t:g} s, before the previous segment ends at {now:g} s")
+            if t > stop_time:
+                v.fail(f"{p}.t", f"starts at {t:g} s, after stop_time {stop_time:g} s")
+        start = now if t is None else t
+        kw: dict[str, Any] = {"kind": kind, "t": t}
+        if "to" in it:
+            kw["to"] = v.num(it["to"], f"{p}.to")
+        if "duration" in it:
+            kw["duration"] = v.num(it["duration"], f"{p}.duration", gt=0.0) if kind != "hold" else \
+                v.num(it["duration"], f"{p}.duration", ge=0.0)
+        if kind == "impulse":
+            if ("force" in it) == ("impulse" in it):
+                v.fail(f"{p}", "an impulse needs exactly one of 'force' [N] or 'impulse' [N s]")
+            if "force" in it:
+                kw["force"] = v.num(it["force"], f"{p}.force")
+            else:
+                kw["impulse"] = v.num(it["impulse"], f"{p}.impulse")
+        if kind == "pulse":
+            kw["force"] = v.num(it["force"], f"{p}.force")
+            kw["rise"] = v.num(it.get("rise", 0.0), f"{p}.rise", ge=0.0)
+            if 2 * kw["rise"] > kw["duration"]:
+                v.fail(f"{p}.rise", f"2 x rise ({2 * kw['rise']:g} s) exceeds duration {kw['duration']:g} s")
+        seg = PushSegment(**kw)
+        now = start + seg.duration
+        segs.append(seg)
+    return PushProfile.from_segments(segs)
+
+
+def _parse_overrides(v: _V, d: Any, key: str) -> dict[str, Any]:
+    d = v.table(d, key)
+    out = {}
+    for k, val in d.items():
+        if isinstance(val, bool):
+            out[k] = val
+        elif isinstance(val, (int, float)):
+            out[k] = v.num(val, f"{key}.{k}") if isinstance(val, float) else val
+        else:
+            v.fail(f"{key}.{k}", f"parameter value must be a number or boolean, got {_tname(val)} {val!r}")
+    return out
+
+
+def _parse_expect(v: _V, d: Any, stop_time: float) -> Expect:
+    d = v.table(d, "expect")
+    v.keys(d, EXPECT_KEYS, "expect.")
+    e = Expect()
+    if "must_fall" in d:
+        e.must_fall = v.bool_(d["must_fall"], "expect.must_fall")
+    for k in ("fall_after", "fall_before"):
+        if k in d:
+            if not e.must_fall:
+                v.fail(f"expect.{k}", "only meaningful with must_fall = true")
+            setattr(e, k, v.num(d[k], f"expect.{k}", ge=0.0, le=stop_time))
+    for k in ("phases_reached", "phases_not_reached"):
+        if k in d:
+            lst = v.list_(d[k], f"expect.{k}")
+            vals = []
+            for i, x in enumerate(lst):
+                x = v.int_(x, f"expect.{k}[{i}]", ge=0)
+                if x > 3:
+                    v.fail(f"expect.{k}[{i}]", f"phases are 0..3, got {x}")
+                vals.append(x)
+            setattr(e, k, vals)
+    both = set(e.phases_reached) & set(e.phases_not_reached)
+    if both:
+        v.fail("expect.phases_not_reached", f"phase(s) {sorted(both)} also listed in phases_reached")
+    if "min_cycles" in d:
+        e.min_cycles = v.int_(d["min_cycles"], "expect.min_cycles", ge=0)
+    if "erect_by" in d:
+        e.erect_by = v.num(d["erect_by"], "expect.erect_by", ge=0.0, le=stop_time)
+        if e.must_fall:
+            v.fail("expect.erect_by", "contradicts must_fall = true")
+    if "erect_tol" in d:
+        e.erect_tol = v.num(d["erect_tol"], "expect.erect_tol", gt=0.0)
+    if "max_abs_zmp" in d:
+        e.max_abs_zmp = v.num(d["max_abs_zmp"], "expect.max_abs_zmp", gt=0.0)
+    if "no_fault" in d:
+        e.no_fault = v.bool_(d["no_fault"], "expect.no_fault")
+    return e
+
+
+def _parse_reference(v: _V, d: Any, base: Path) -> Reference:
+    d = v.table(d, "reference")
+    v.keys(d, REF_KEYS, "reference.", {"file"})
+    f = Path(v.str_(d["file"], "reference.file"))
+    r = Reference(file=f if f.is_absolute() else base / f)
+    if "columns" in d:
+        cols = v.list_(d["columns"], "reference.columns")
+        r.columns = [v.str_(c, f"reference.columns[{i}]") for i, c in enumerate(cols)]
+        if not r.columns:
+            v.fail("reference.columns", "must not be empty")
+    if "num" in d:
+        r.num = v.int_(d["num"], "reference.num", ge=2)
+    if "dx" in d:
+        r.dx = v.int_(d["dx"], "reference.dx", ge=1)
+    if "dy" in d:
+        r.dy = v.num(d["dy"], "reference.dy", ge=0.0)
+    for k in ("abs_tol", "rel_tol"):
+        if k in d:
+            setattr(r, k, v.num(d[k], f"reference.{k}", ge=0.0))
+    if "interval" in d:
+        r.interval = v.num(d["interval"], "reference.interval", gt=0.0)
+    if "band_floor" in d:
+        r.band_floor = v.num(d["band_floor"], "reference.band_floor", ge=0.0)
+    if "signals" in d:
+        sig = v.table(d["signals"], "reference.signals")
+        for name, tab in sig.items():
+            key = f"reference.signals.{name}"
+            tab = v.table(tab, key)
+            v.keys(tab, REF_SIGNAL_KEYS, key + ".")
+            r.signals[name] = {k: v.num(x, f"{key}.{k}", ge=0.0) for k, x in tab.items()}
+    return r
+
+
+def parse_scenario(data: dict, where: str = "<scenario>", path: Path | None = None) -> Scenario:
+    v = _V(where)
+    v.keys(data, TOP_KEYS, "")
+    name = v.str_(data["name"], "name") if "name" in data else (path.stem if path else "scenario")
+    if not name or any(c in name for c in "/\\ "):
+        v.fail("name", f"must be a non-empty file-name-safe string, got {name!r}")
+    if path is not None and "name" in data and name != path.stem:
+        v.fail("name", f"{name!r} differs from the file name {path.stem!r}")
+    sc = Scenario(name=name, path=path)
+    if "description" in data:
+        sc.description = v.str_(data["description"], "description")
+    if "stop_time" not in data:
+        v.fail("stop_time", "required key missing")
+    sc.stop_time = v.num(data["stop_time"], "stop_time", gt=0.0)
+    if "step" in data:
+        sc.step = v.num(data["step"], "step", gt=0.0, le=sc.stop_time)
+    n = sc.stop_time / sc.step
+    if abs(n - round(n)) > 1e-6 * max(1.0, n):
+        v.fail("step", f"stop_time {sc.stop_time:g} is not a whole number of steps of {sc.step:g}")
+    if "push" in data:
+        sc.push = _parse_push(v, data["push"], sc.stop_time)
+    for k in ("controller", "plant"):
+        if k in data:
+            setattr(sc, k, _parse_overrides(v, data[k], k))
+    if "expect" in data:
+        sc.expect = _parse_expect(v, data["expect"], sc.stop_time)
+    if "reference" in data:
+        sc.reference = _parse_reference(v, data["reference"], path.parent if path else Path("."))
+    if "tags" in data:
+        sc.tags = [v.str_(x, f"tags[{i}]") for i, x in enumerate(v.list_(data["tags"], "tags"))]
+    return sc
+
+
+def load_scenario(path: str | Path) -> Scenario:
+    path = Path(path)
+    where = _display(path)
+    try:
+        with open(path, "rb") as f:
+            data = tomllib.load(f)
+    except tomllib.TOMLDecodeError as e:
+        raise ScenarioError(f"{where}: invalid TOML: {e}") from None
+    except OSError as e:
+        raise ScenarioError(f"{where}: cannot read: {e.strerror}") from None
+    return parse_scenario(data, where, path)
+
+
+def _display(path: Path) -> str:
+    try:
+        return str(path.resolve().relative_to(Path.cwd()))
+    except ValueError:
+        return str(path)
+
+
+def parse_set(items: list[str]) -> tuple[dict[str, Any], dict[str, Any]]:
+    """``--set controller.Ka=30 plant.push_height=0.3`` -> (controller, plant) overrides."""
+    ctrl: dict[str, Any] = {}
+    plant: dict[str, Any] = {}
+    for it in items:
+        if "=" not in it or "." not in it.split("=", 1)[0]:
+            raise ScenarioError(f"--set {it}: expected controller.NAME=VALUE or plant.NAME=VALUE")
+        key, val = it.split("=", 1)
+        fmu, name = key.split(".", 1)
+        if fmu not in ("controller", "plant"):
+            raise ScenarioError(f"--set {it}: the prefix must be 'controller' or 'plant', got {fmu!r}")
+        low = val.strip().lower()
+        if low in ("true", "false"):
+            value: Any = low == "true"
+        else:
+            try:
+                value = int(val)
+            except ValueError:
+                try:
+                    value = float(val)
+                except ValueError:
+                    raise ScenarioError(f"--set {it}: value {val!r} is not a number or true/false") from None
+        (ctrl if fmu == "controller" else plant)[name] = value
+    return ctrl, plant

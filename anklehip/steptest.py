@@ -1,0 +1,382 @@
+"""HIL-style step tests of the controller FMU alone (FMI cross-check file layout).
+
+A case is a folder with
+
+    <Model>_in.csv    time + the controller inputs (theta_ankle, theta_hip, zmp_x, fz)
+    <Model>_ref.csv   time + the reference outputs
+    <Model>_ref.opt   StartTime, StopTime, StepSize, RelTol (one "Name, value" per line)
+    steptest.toml     optional (ours): [controller] parameter overrides, [compare] tolerances,
+                      [source] where the case came from
+
+Timing convention (the one FMPy's simulate_fmu and the cross-check tools use): the inputs are
+set at the communication point t_k, then doStep(t_k, h); the outputs read after the step are
+recorded at t_k + h; the first output row (t = StartTime) holds the outputs after initialization.
+"""
+from __future__ import annotations
+
+import math
+import os
+import subprocess
+import time
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .compare import CompareReport, compare, read_result_csv
+from .fmu import FMUError, FMUInfo, Slave, vr_array
+from .master import RunResult
+from .results import atomic_write_csv, atomic_write_text
+
+MODEL = "AnkleHipController"
+DEFAULT_TOL = {"abs_tol": 1e-9, "rel_tol": 1e-6}     # our FMU against its own recording: tight
+
+
+class StepTestError(ValueError):
+    pass
+
+
+def case_files(case_dir: Path, model: str = MODEL) -> dict[str, Path]:
+    case_dir = Path(case_dir)
+    return {"in": case_dir / f"{model}_in.csv", "ref": case_dir / f"{model}_ref.csv",
+            "opt": case_dir / f"{model}_ref.opt", "meta": case_dir / "steptest.toml"}
+
+
+def read_opt(path: Path) -> dict[str, float]:
+    if not path.is_file():
+        raise StepTestError(f"{path}: no such file (the case needs StartTime/StopTime/StepSize/RelTol)")
+    opts: dict[str, float] = {}
+    for i, line in enumerate(path.read_text().splitlines(), 1):
+        if not line.strip():
+            continue
+        parts = [p.strip() for p in line.split(",")]
+        if len(parts) != 2:
+            raise StepTestError(f"{path}:{i}: expected 'Name, value', got {line!r}")
+        try:
+            opts[parts[0]] = float(parts[1])
+        except ValueError:
+            raise StepTestError(f"{path}:{i}: {parts[0]}: not a number: {parts[1]!r}") from None
+    for k in ("StartTime", "StopTime", "StepSize"):
+        if k not in opts:
+            raise StepTestError(f"{path}: {k} missing")
+    if not opts["StepSize"] > 0 or not opts["StopTime"] > opts["StartTime"]:
+        raise StepTestError(f"{path}: need StepSize > 0 and StopTime > StartTime")
+    opts.setdefault("RelTol", 1e-6)
+    return opts
+
+
+def write_opt(path: Path, start: float, stop: float, step: float, reltol: float = 1e-6) -> None:
+    atomic_write_text(path, f"StartTime, {float(start)!r}\nStopTime, {float(stop)!r}\nStepSize, {float(step)!r}\n"
+                            f"RelTol, {float(reltol)!r}\n")
+
+
+# ----------------------------------------------------------------------------------------------
+# recording from a closed-loop run
+
+def record_case(res: RunResult, out_dir: Path, controller_overrides: dict[str, Any] | None = None,
+                source: str = "", model: str = MODEL, stop_time: float | None = None) -> dict[str, Path]:
+    """Write the controller's inputs and outputs of a closed-loop run as a step-test case."""
+    d = res.data
+    n_steps = len(d) - 1            # the controller stepped at rows 0 .. n-1
+    if stop_time is not None:
+        n_steps = min(n_steps, int(round(stop_time / res.step)))
+    if n_steps < 1:
+        raise StepTestError("the run has no controller steps to record")
+    h = res.step
+    t_in = h * np.arange(n_steps)
+    inp = np.zeros(n_steps, dtype=[("time", float)] + [(c, float) for c in res.controller_inputs])
+    inp["time"] = t_in
+    for c in res.controller_inputs:
+        inp[c] = d[c][:n_steps]
+    cols = list(res.controller_columns.items())       # result column -> FMU variable
+    dt = [("time", float)] + [(var, d[col].dtype) for col, var in cols]
+    ref = np.zeros(n_steps + 1, dtype=dt)
+    ref["time"] = h * np.arange(n_steps + 1)
+    for col, var in cols:
+        ref[var][0] = res.controller_initial.get(var, d[col][0])
+        ref[var][1:] = d[col][:n_steps]
+    f = case_files(out_dir, model)
+    Path(out_dir).mkdir(parents=True, exist_ok=True)
+    atomic_write_csv(f["in"], inp)
+    atomic_write_csv(f["ref"], ref)
+    write_opt(f["opt"], 0.0, float(ref["time"][-1]), h)
+    meta = ["# step-test case recorded by `anklehip record` (see docs/step-tests.md)",
+            "[source]", f"scenario = {_toml_str(source or res.name)}", f"stop_time = {float(ref['time'][-1])!r}",
+            f"outcome = {_toml_str(res.outcome)}", "",
+            "[controller]"]
+    for k, v in (controller_overrides or {}).items():
+        meta.append(f"{k} = {_toml_value(v)}")
+    meta += ["", "[compare]", f"abs_tol = {DEFAULT_TOL['abs_tol']:g}", f"rel_tol = {DEFAULT_TOL['rel_tol']:g}", ""]
+    atomic_write_text(f["meta"], "\n".join(meta))
+    return f
+
+
+def _toml_str(s: str) -> str:
+    return '"' + s.replace("\\", "\\\\").replace('"', '\\"') + '"'
+
+
+def _toml_value(v: Any) -> str:
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, float):
+        return repr(v) if math.isfinite(v) else ("inf" if v > 0 else "-inf") if not math.isnan(v) else "nan"
+    return repr(v)
+
+
+def read_meta(path: Path) -> dict[str, Any]:
+    if not path.is_file():
+        return {}
+    with open(path, "rb") as f:
+        try:
+            meta = tomllib.load(f)
+        except tomllib.TOMLDecodeError as e:
+            raise StepTestError(f"{path}: invalid TOML: {e}") from None
+    unknown = set(meta) - {"source", "controller", "compare"}
+    if unknown:
+        raise StepTestError(f"{path}: unknown table(s) {', '.join(sorted(unknown))} (allowed: source, controller, compare)")
+    allowed_cmp = {"abs_tol", "rel_tol", "dx", "dy", "num", "signals"}
+    bad = set(meta.get("compare", {})) - allowed_cmp
+    if bad:
+        raise StepTestError(f"{path}: compare.{sorted(bad)[0]}: unknown key (allowed: {', '.join(sorted(allowed_cmp))})")
+    return meta
+
+
+# ----------------------------------------------------------------------------------------------
+# running
+
+@dataclass
+class RTStats:
+    period_us: float
+    exec_us: np.ndarray
+    late_us: np.ndarray
+    misses: int
+    spin_us: float = 0.0
+
+    def pct(self, v: np.ndarray) -> dict[str, float]:
+        if not len(v):
+            return {}
+        return {"p50": float(np.percentile(v, 50)), "p99": float(np.percentile(v, 99)),
+                "p99.9": float(np.percentile(v, 99.9)), "max": float(np.max(v))}
+
+    def as_dict(self) -> dict[str, Any]:
+        return {"period_us": self.period_us, "steps": int(len(self.exec_us)), "deadline_misses": self.misses,
+                "exec_us": self.pct(self.exec_us), "lateness_us": self.pct(self.late_us), "spin_us": self.spin_us}
+
+    def text(self) -> str:
+        e, l = self.pct(self.exec_us), self.pct(self.late_us)
+        f = lambda d: "  ".join(f"{k} {v:8.1f}" for k, v in d.items())  # noqa: E731
+        return (f"real-time: period {self.period_us:.0f} µs, {len(self.exec_us)} steps, "
+                f"{self.misses} deadline misses\n"
+                f"  doStep execution [µs]  {f(e)}\n"
+                f"  wake-up lateness [µs]  {f(l)}")
+
+
+@dataclass
+class StepTestResult:
+    case: Path
+    out_csv: Path | None
+    data: np.ndarray
+    report: CompareReport | None
+    rt: RTStats | None = None
+    notes: list[str] = field(default_factory=list)
+
+    @property
+    def passed(self) -> bool:
+        return self.report is None or self.report.passed
+
+
+def run_controller(fmu: Path | FMUInfo, inputs: np.ndarray, start: float, stop: float, step: float,
+                   parameters: dict[str, Any] | None = None, outputs: list[str] | None = None,
+                   realtime: bool = False, spin_us: float = 0.0) -> tuple[np.ndarray, RTStats | None]:
+    """Step the controller FMU alone on recorded inputs; outputs in the cross-check convention."""
+    info = fmu if isinstance(fmu, FMUInfo) else FMUInfo.load(fmu)
+    parameters = parameters or {}
+    info.check_overrides(parameters, "step-test case")
+    in_vars = info.by_causality("input")
+    names = inputs.dtype.names
+    missing = [v.name for v in in_vars if v.name not in names[1:]]
+    if missing:
+        raise StepTestError(f"input CSV lacks column(s) {', '.join(missing)} for the inputs of {info.name} "
+                            f"(it has: {', '.join(names[1:])})")
+    out_vars = [v for v in info.by_causality("output")]
+    if outputs is not None:
+        unknown = [o for o in outputs if o not in {v.name for v in out_vars}]
+        if unknown:
+            raise StepTestError(f"{info.name} has no output(s) {', '.join(unknown)}")
+        out_vars = [v for v in out_vars if v.name in outputs]
+    n = int(round((stop - start) / step))
+    if n < 1:
+        raise StepTestError("nothing to step: StopTime - StartTime < StepSize")
+    t_in = np.asarray(inputs[names[0]], float)
+    tk = start + step * np.arange(n)
+    U = np.empty((n, len(in_vars)), float)
+    for j, v in enumerate(in_vars):
+        col = np.asarray(inputs[v.name], float)
+        if not np.all(np.isfinite(col)):
+            pass     # NaN/Inf inputs are passed on: the FMU must contain them (DESIGN 7)
+        U[:, j] = np.interp(tk, t_in, col)       # exact on a matching grid
+    reals = [v for v in out_vars if v.type == "Real"]
+    ints = [v for v in out_vars if v.type in ("Integer", "Enumeration")]
+    bools = [v for v in out_vars if v.type == "Boolean"]
+    R = np.zeros((n + 1, max(1, len(reals))))
+    I = np.zeros((n + 1, max(1, len(ints) + len(bools))), np.int32)
+    s = Slave(info, "steptest")
+    rt = None
+    try:
+        s.initialize(start, stop, parameters)
+        vin = vr_array([v.vr for v in in_vars]); nin = len(in_vars)
+        vR = vr_array([v.vr for v in reals]); nR = len(reals)
+        vI = vr_array([v.vr for v in ints]); nI = len(ints)
+        vB = vr_array([v.vr for v in bools]); nB = len(bools)
+        bR, sR, bI, sI, bU, sU = R.ctypes.data, R.strides[0], I.ctypes.data, I.strides[0], U.ctypes.data, U.strides[0]
+        oB = 4 * nI
+        gR, gI, gB, setR, step_fn, c = s.get_real, s.get_integer, s.get_boolean, s.set_real, s.do_step, s.c
+        st = gR(c, vR, nR, bR) if nR else 0
+        if nI:
+            st |= gI(c, vI, nI, bI)
+        if nB:
+            st |= gB(c, vB, nB, bI + oB)
+        if not realtime:
+            for k in range(n):
+                st |= setR(c, vin, nin, bU + k * sU)
+                sd = step_fn(c, start + k * step, step, 1)
+                r1 = bR + (k + 1) * sR
+                i1 = bI + (k + 1) * sI
+                if nR:
+                    st |= gR(c, vR, nR, r1)
+                if nI:
+                    st |= gI(c, vI, nI, i1)
+                if nB:
+                    st |= gB(c, vB, nB, i1 + oB)
+                if sd > 1 or st > 1:
+                    raise FMUError(f"{info.name}: step at t={start + k * step:.6f} s failed (doStep status {sd}, "
+                                   f"get/set status {st})")
+        else:
+            ex = np.zeros(n)
+            late = np.zeros(n)
+            misses = 0
+            pns = int(round(step * 1e9))
+            clock = time.perf_counter_ns
+            sleep = time.sleep
+            spin_ns = int(spin_us * 1000)
+            t0 = clock() + 2 * pns
+            for k in range(n):
+                deadline = t0 + k * pns
+                now = clock()
+                if now < deadline - spin_ns:
+                    sleep((deadline - spin_ns - now) * 1e-9)
+                while spin_ns and clock() < deadline:
+                    pass
+                wake = clock()
+                st |= setR(c, vin, nin, bU + k * sU)
+                a = clock()
+                sd = step_fn(c, start + k * step, step, 1)
+                b = clock()
+                r1 = bR + (k + 1) * sR
+                i1 = bI + (k + 1) * sI
+                if nR:
+                    st |= gR(c, vR, nR, r1)
+                if nI:
+                    st |= gI(c, vI, nI, i1)
+                if nB:
+                    st |= gB(c, vB, nB, i1 + oB)
+                done = clock()
+                ex[k] = b - a
+                late[k] = wake - deadline
+                if done > deadline + pns:
+                    misses += 1
+                if sd > 1 or st > 1:
+                    raise FMUError(f"{info.name}: step at t={start + k * step:.6f} s failed (status {sd}/{st})")
+            rt = RTStats(period_us=step * 1e6, exec_us=ex / 1000.0, late_us=late / 1000.0, misses=misses,
+                         spin_us=spin_us)
+    finally:
+        s.free()
+    dt = [("time", float)] + [(v.name, float) for v in reals] + [(v.name, np.int32) for v in ints + bools]
+    out = np.zeros(n + 1, dtype=dt)
+    out["time"] = start + step * np.arange(n + 1)
+    for j, v in enumerate(reals):
+        out[v.name] = R[:, j]
+    for j, v in enumerate(ints + bools):
+        out[v.name] = I[:, j]
+    # keep the model's output order
+    order = ["time"] + [v.name for v in out_vars]
+    return out[order], rt
+
+
+def run_case(case_dir: Path, fmu: Path, out_dir: Path | None = None, *, realtime: bool = False,
+             spin_us: float = 0.0, abs_tol: float | None = None, rel_tol: float | None = None,
+             dx: int | None = None, dy: float | None = None, num: int | None = None,
+             model: str = MODEL, compare_ref: bool = True) -> StepTestResult:
+    case_dir = Path(case_dir)
+    f = case_files(case_dir, model)
+    if not case_dir.is_dir():
+        raise StepTestError(f"{case_dir}: no such case folder")
+    opts = read_opt(f["opt"])
+    meta = read_meta(f["meta"])
+    inputs = read_result_csv(f["in"], "input")
+    params = dict(meta.get("controller", {}))
+    cm = dict(meta.get("compare", {}))
+    ref = read_result_csv(f["ref"], "reference") if compare_ref and f["ref"].is_file() else None
+    outputs = list(ref.dtype.names[1:]) if ref is not None else None
+    data, rt = run_controller(fmu, inputs, opts["StartTime"], opts["StopTime"], opts["StepSize"],
+                              params, outputs=None, realtime=realtime, spin_us=spin_us)
+    out_csv = None
+    if out_dir is not None:
+        out_csv = Path(out_dir) / f"{model}_out.csv"
+        atomic_write_csv(out_csv, data)
+    report = None
+    if ref is not None:
+        report = compare(data, ref, columns=outputs, num=num or cm.get("num"), dx=dx or cm.get("dx", 20),
+                         dy=dy if dy is not None else cm.get("dy", 0.1),
+                         abs_tol=abs_tol if abs_tol is not None else cm.get("abs_tol"),
+                         rel_tol=rel_tol if rel_tol is not None else cm.get("rel_tol"),
+                         result_label=str(out_csv or "output"), reference_label=str(f["ref"]))
+    elif compare_ref:
+        raise StepTestError(f"{f['ref']}: no such file (use --no-compare to only produce outputs)")
+    return StepTestResult(case=case_dir, out_csv=out_csv, data=data, report=report, rt=rt)
+
+
+def run_native(exe: Path, fmu: Path, case_dir: Path, out_dir: Path | None, extra: list[str] | None = None,
+               model: str = MODEL, fast: bool = False, histogram: Path | None = None,
+               compare_ref: bool = True, **tol) -> tuple[int, CompareReport | None, Path]:
+    """Delegate the paced run to the native executable ``anklehip_rt_step`` (fmu/rt_runner), then
+    compare its outputs with the reference like the Python runner does."""
+    import tempfile
+    f = case_files(case_dir, model)
+    opts = read_opt(f["opt"])
+    if opts["StartTime"] != 0.0:
+        raise StepTestError(f"{f['opt']}: the native runner starts at t = 0 (StartTime {opts['StartTime']:g})")
+    meta = read_meta(f["meta"])
+    info = FMUInfo.load(fmu)
+    params = dict(meta.get("controller", {}))
+    info.check_overrides(params, "step-test case")
+    work = Path(out_dir) if out_dir is not None else Path(tempfile.mkdtemp(prefix="rt_step_"))
+    work.mkdir(parents=True, exist_ok=True)
+    out_csv = work / f"{model}_out.csv"
+    timings = work / "timings.csv"
+    cmd = [str(exe), "--fmu-dir", str(info.unzipdir), "--input", str(f["in"]), "--output", str(out_csv),
+           "--step", repr(opts["StepSize"]), "--stop-time", repr(opts["StopTime"]), "--timings", str(timings)]
+    for k, v in params.items():
+        cmd += ["--param", f"{k}={int(v) if isinstance(v, bool) else v}"]
+    if fast:
+        cmd.append("--fast")
+    cmd += extra or []
+    print("+ " + " ".join(cmd), flush=True)
+    rc = subprocess.call(cmd, env=os.environ.copy())
+    report = None
+    if rc == 0 and histogram is not None and timings.is_file():
+        from .plots import rt_histogram
+        tm = np.genfromtxt(timings, delimiter=",", names=True)
+        print(f"histogram: {rt_histogram(tm['exec_ns'] / 1e3, tm['lateness_ns'] / 1e3, opts['StepSize'] * 1e6, histogram, f'native: {case_dir}')}")
+    if rc == 0 and compare_ref and f["ref"].is_file():
+        ref = read_result_csv(f["ref"], "reference")
+        cm = dict(meta.get("compare", {}))
+        for k, v in tol.items():
+            if v is not None:
+                cm[k] = v
+        report = compare(out_csv, ref, columns=list(ref.dtype.names[1:]), num=cm.get("num"),
+                         dx=cm.get("dx", 20), dy=cm.get("dy", 0.1), abs_tol=cm.get("abs_tol"),
+                         rel_tol=cm.get("rel_tol"), reference_label=str(f["ref"]))
+    return rc, report, out_csv

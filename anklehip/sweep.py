@@ -1,0 +1,102 @@
+"""Parameter sweeps with Dask: peak push force x controller variant -> outcome.
+
+Each grid point scales the scenario's push profile so that its peak force equals the grid value
+and runs the closed loop in a worker process (each worker extracts the FMUs once).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+VARIANTS_HELP = "NAME or NAME:controller.P=V,plant.Q=W (e.g. full  ankle_only:controller.hip_strategy=false)"
+
+
+@dataclass
+class Variant:
+    name: str
+    controller: dict[str, Any]
+    plant: dict[str, Any]
+
+
+def parse_variant(spec: str) -> Variant:
+    from .scenario import parse_set
+    name, _, rest = spec.partition(":")
+    items = [s for s in rest.split(",") if s.strip()]
+    c, p = parse_set(items)
+    return Variant(name or "default", c, p)
+
+
+def _one(scenario_path: str, fmu_dir: str | None, peak: float, variant: Variant) -> dict[str, Any]:
+    from .master import Models, simulate
+    from .scenario import load_scenario
+    sc = load_scenario(scenario_path)
+    base = sc.push.peak()
+    if base == 0:
+        raise ValueError(f"{scenario_path}: the scenario has no push to scale")
+    res = simulate(sc, Models.load(fmu_dir), controller_overrides=variant.controller,
+                   plant_overrides=variant.plant, push=sc.push.scaled(peak / base), progress=False)
+    d = res.data
+    return {"variant": variant.name, "peak_force": peak, "outcome": res.outcome,
+            "fell_at": res.fell_at if res.fell_at is not None else float("nan"),
+            "max_phase": int(d["phase"].max()) if "phase" in d.dtype.names else -1,
+            "max_abs_zmp": float(np.max(np.abs(d["zmp_x"]))),
+            "max_abs_hip": float(np.max(np.abs(d["theta_hip"]))),
+            "wall_time": res.wall_time}
+
+
+def run_sweep(scenario_path: str, forces: list[float], variants: list[Variant], fmu_dir: str | None = None,
+              workers: int = 2) -> list[dict[str, Any]]:
+    import dask
+    tasks = [dask.delayed(_one)(str(scenario_path), fmu_dir, float(f), v) for v in variants for f in forces]
+    if workers <= 1:
+        return list(dask.compute(*tasks, scheduler="synchronous"))
+    from dask.distributed import Client, LocalCluster
+    with LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None) as cl, \
+            Client(cl) as client:
+        futs = client.compute(tasks)
+        import sys
+        if sys.stderr.isatty():
+            try:
+                from dask.distributed import progress
+                progress(futs)
+            except Exception:
+                pass
+        return client.gather(futs)
+
+
+def write_table(rows: list[dict[str, Any]], path: Path) -> Path:
+    keys = list(rows[0].keys())
+    lines = [",".join(keys)] + [",".join(str(r[k]) for k in keys) for r in rows]
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+def plot_sweep(rows: list[dict[str, Any]], path: Path, title: str = "") -> Path:
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    variants = list(dict.fromkeys(r["variant"] for r in rows))
+    fig, ax = plt.subplots(figsize=(8, 1.2 + 0.7 * len(variants)))
+    for i, v in enumerate(variants):
+        rr = [r for r in rows if r["variant"] == v]
+        for r in rr:
+            fell = r["outcome"] == "fell"
+            ax.scatter(r["peak_force"], i, marker="x" if fell else "o", s=60,
+                       c="tab:red" if fell else ("tab:green" if r["max_phase"] <= 0 else "tab:blue"))
+            if not fell:
+                ax.annotate(str(r["max_phase"]), (r["peak_force"], i), textcoords="offset points",
+                            xytext=(0, 7), ha="center", fontsize=7)
+    ax.set_yticks(range(len(variants)), variants)
+    ax.set_ylim(-0.7, len(variants) - 0.3)
+    ax.set_xlabel("peak push force [N]")
+    ax.set_title(title or "outcome (o stood, number = highest phase; x fell)", fontsize=9)
+    ax.grid(alpha=0.3)
+    fig.tight_layout()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return path

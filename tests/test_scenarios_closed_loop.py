@@ -1,0 +1,99 @@
+"""Every scenario in scenarios/: closed-loop run of both FMUs, expected outcome, reference tube.
+
+Regenerate the references deliberately with `anklehip regen-references` (docs/scenarios.md).
+"""
+import json
+
+import numpy as np
+import pytest
+
+from anklehip.cli import compare_with_reference, main
+from anklehip.master import Models, simulate
+from anklehip.paths import scenarios_dir
+from anklehip.results import check_expect
+from anklehip.scenario import load_scenario
+
+SCENARIOS = sorted(p.stem for p in scenarios_dir().glob("*.toml"))
+
+
+@pytest.fixture(scope="module")
+def models():
+    return Models.load()      # $ANKLEHIP_FMU_DIR or <repo>/build/fmus, clear error if missing
+
+
+@pytest.mark.parametrize("name", SCENARIOS)
+def test_scenario(models, name):
+    sc = load_scenario(scenarios_dir() / f"{name}.toml")
+    res = simulate(sc, models, progress=False)
+    assert res.outcome in ("completed", "fell"), res.message
+    failed = [f"{c.name}: {c.detail}" for c in check_expect(res, sc.expect) if not c.ok]
+    assert not failed, f"{name}: expected outcome not met: " + "; ".join(failed)
+    if sc.reference is not None:
+        assert sc.reference.file.is_file(), (f"{sc.reference.file} missing; create it with "
+                                             f"`anklehip regen-references {name}`")
+        rep = compare_with_reference(sc, res)
+        assert rep.passed, rep.text(verbose=False)
+
+
+def test_run_writes_csv_summary_and_marks_a_fall(models, tmp_path, capsys):
+    """`anklehip run` on the falling scenario: the data up to the fall is kept in
+    <name>.incomplete.csv, never in <name>.csv, and the summary says so."""
+    out = tmp_path / "run"
+    (out).mkdir()
+    (out / "hip_disabled_falls.csv").write_text("stale")           # from an earlier run
+    rc = main(["run", "hip_disabled_falls", "--out", str(out), "--no-progress", "--stop-time", "4"])
+    assert rc == 0
+    s = json.loads((out / "hip_disabled_falls.summary.json").read_text())
+    assert s["outcome"] == "fell" and s["complete"] is False and s["fell_at"] > 1.0
+    assert s["message"].startswith("fell at t=")
+    assert not (out / "hip_disabled_falls.csv").exists()
+    from fmpy.util import read_csv
+    d = read_csv(out / "hip_disabled_falls.incomplete.csv")
+    assert d["time"][-1] == pytest.approx(s["fell_at"]) and d["fallen"][-1] == 1
+    assert "fell at t=" in capsys.readouterr().out
+
+
+def test_unknown_parameter_override_names_fmu_and_parameter(models, capsys):
+    assert main(["run", "ankle_small_push", "--set", "controller.Kx=3", "--no-progress"]) == 2
+    err = capsys.readouterr().err
+    assert "AnkleHipController.fmu has no parameter 'Kx'" in err
+
+
+def test_override_changes_the_run(models):
+    sc = load_scenario(scenarios_dir() / "ankle_small_push.toml")
+    a = simulate(sc, models, stop_time=2.0, progress=False)
+    b = simulate(sc, models, stop_time=2.0, controller_overrides={"Ka": 25.0}, progress=False)
+    assert a.complete and b.complete and len(a.data) == 2001
+    assert np.max(np.abs(b.data["theta_ankle"])) > 1.05 * np.max(np.abs(a.data["theta_ankle"]))
+
+
+def test_sweep_two_workers(models, tmp_path, capsys):
+    rc = main(["sweep", "ankle_small_push", "--forces", "3,5", "--variant", "full",
+               "--variant", "ankle_only:controller.hip_strategy_enabled=0", "--workers", "2",
+               "--out", str(tmp_path)])
+    assert rc == 0
+    lines = (tmp_path / "sweep.csv").read_text().splitlines()
+    assert lines[0].startswith("variant,peak_force,outcome") and len(lines) == 5
+    assert (tmp_path / "sweep.png").is_file()
+    assert "largest survived 5 N" in capsys.readouterr().out
+
+
+def test_run_plots(models, tmp_path):
+    assert main(["run", "ankle_small_push", "--out", str(tmp_path), "--plots", "--no-progress"]) == 0
+    for suffix in ("_overview.png", "_fig4_joint_angles.png", "_fig5_first_cycle.png", ".csv", ".summary.json"):
+        assert (tmp_path / f"ankle_small_push{suffix}").is_file(), suffix
+    s = json.loads((tmp_path / "ankle_small_push.summary.json").read_text())
+    assert s["complete"] and s["expectations_met"] and s["comparison"]["passed"]
+    assert len(s["pushes"]) == 1 and s["pushes"][0]["phases"] == [0]
+
+
+def test_override_types_are_checked(models):
+    from anklehip.fmu import FMUError
+    from anklehip.master import check_overrides
+    with pytest.raises(FMUError, match="parameter 'hip_strategy_enabled' is Integer, got 0.5"):
+        check_overrides(models, {"hip_strategy_enabled": 0.5}, {})
+    with pytest.raises(FMUError, match="Hoap2Plant.fmu has no parameter 'Ka'"):
+        check_overrides(models, {}, {"Ka": 3.0})
+    with pytest.raises(FMUError, match="parameter 'Ka' is Real, got boolean True"):
+        check_overrides(models, {"Ka": True}, {})
+    check_overrides(models, {"hip_strategy_enabled": False, "Ka": 30}, {"h_push": 0.3})
