@@ -23,7 +23,10 @@ static double clampd(double v, double lo, double hi) { return v < lo ? lo : (v >
 /* Context of one tick: measured/derived quantities shared by the laws. */
 typedef struct {
     double h;
-    double rx, rz;   /* CoM projection and height (kinematics angles) */
+    double rx, rz;   /* CoM projection and height from the kinematics angles (kinematics_source):
+                        used by the kinematic laws (eqs. 23-24) and the phase triggers */
+    double rx_meas, rz_meas; /* the same from the measured angles: the physical CoM, used by the
+                                disturbance estimate and the com_x/com_z outputs */
     double a;        /* k_m lg2 C12 = second entry of J_cx (eq. 20) */
     double ratio;    /* reactionless ratio (eq. 15) */
     double Ja;       /* whole-body inertia about the ankle (eq. 11 denominator) */
@@ -57,6 +60,7 @@ static void compute_derived(ahc_controller *c)
     c->J2 = p->I2 + p->m2 * p->lg2 * p->lg2;
     ahc_com(p, 0.0, 0.0, NULL, &c->rz_erect);
     c->zmp_alpha = p->zmp_filter_tau > 0.0 ? 1.0 - exp(-p->sample_period / p->zmp_filter_tau) : 1.0;
+    c->d_alpha = p->zmp_filter_tau > 0.0 ? 1.0 - exp(-2.0 * p->sample_period / p->zmp_filter_tau) : 1.0;
 }
 
 int ahc_update_params(ahc_controller *c, const ahc_params *p)
@@ -282,8 +286,8 @@ static void write_outputs(ahc_controller *c, const tick_ctx *k, ahc_outputs *out
     out->dtheta_ankle_ref = c->dth1;
     out->dtheta_hip_ref = c->dth2;
     out->phase = c->phase;
-    out->com_x = k->rx;
-    out->com_z = k->rz;
+    out->com_x = k->rx_meas;
+    out->com_z = k->rz_meas;
     out->disturbance_moment = k->d;
     out->k_w = c->phase == AHC_PHASE_ANKLE ? 0.0 : c->k_w;
     out->com_x_desired = c->phase == AHC_PHASE_ANKLE ? k->rx : c->rxd;
@@ -291,11 +295,111 @@ static void write_outputs(ahc_controller *c, const tick_ctx *k, ahc_outputs *out
     c->last_out = *out;
 }
 
+/* Paper reading of the disturbance: d = m g (p - r_x) from the filtered ZMP, with the feet handled
+ * as feet_offset_mode says (DESIGN lesson 5). */
+static double disturbance_paper(ahc_controller *c, const tick_ctx *k)
+{
+    const ahc_params *p = &c->p;
+    const double e = c->zmp_f - k->rx_meas;
+    switch (p->feet_offset_mode) {
+    case AHC_FEET_MODEL:
+        /* Quasi-static moment balance about the ankle projection with the feet included:
+         * (m + m_f) g p = m g r_x + m_f g x_f + tau_push  =>  tau_push = m g (p - r_x) + m_f g (p - x_f). */
+        return c->m * p->g * e + p->feet_mass * p->g * (c->zmp_f - p->feet_com_x);
+    case AHC_FEET_CALIBRATE:
+        if (!c->calib_done) {
+            c->calib_sum += e;
+            c->calib_n++;
+            if ((double)c->calib_n * k->h >= p->feet_calibration_time - 0.5 * k->h) {
+                c->calib_bias = c->calib_sum / (double)c->calib_n;
+                c->calib_done = 1;
+            }
+            return 0.0;
+        }
+        return c->m * p->g * (e - c->calib_bias);
+    default:
+        return c->m * p->g * e;
+    }
+}
+
+/* Reaction-compensated disturbance (reaction_compensation = 1). Moment balance of the whole robot
+ * about the sole point O under the ankle (x forward, z up, feet resting flat):
+ *     p f_z = g sum_i m_i x_i + d + dH_O/dt,
+ *     dH_O/dt = sum_i m_i (x_i z_i'' - z_i x_i'') - I_1 th1'' - I_2 (th1'' + th2''),
+ * with z measured from the sole (ankle_height + link geometry). The measured ZMP contains the
+ * reaction of the robot's own motion (dH_O/dt); eq. 11 and eq. 16 fed with it form an algebraic
+ * loop (gain ~1.1 at the ankle, ~1.3 at the hip for HOAP-2). Subtracting dH_O/dt computed from the
+ * measured joint angles (backward differences over the last three ticks) leaves the external
+ * disturbance moment about O. The sum is low-passed by two first-order stages of zmp_filter_tau/2. */
+static double disturbance_moment_balance(ahc_controller *c, const ahc_sensors *s, const tick_ctx *k)
+{
+    const ahc_params *p = &c->p;
+    const double h = p->sample_period;
+    const double th1 = s->theta_ankle, th12 = s->theta_ankle + s->theta_hip;
+    double w1 = 0.0, w12 = 0.0, a1 = 0.0, a12 = 0.0, raw;
+    double x1, z1, x2, z2, ddx1, ddz1, ddx2, ddz2, dH, grav;
+    const double S1 = sin(th1), C1 = cos(th1), S12 = sin(th12), C12 = cos(th12);
+
+    if (c->hist_n >= 1) {
+        w1 = (th1 - c->hist_th1[0]) / h;
+        w12 = (th12 - c->hist_th1[0] - c->hist_th2[0]) / h;
+    }
+    if (c->hist_n >= 2) {
+        a1 = (th1 - 2.0 * c->hist_th1[0] + c->hist_th1[1]) / (h * h);
+        a12 = (th12 - 2.0 * (c->hist_th1[0] + c->hist_th2[0]) + c->hist_th1[1] + c->hist_th2[1]) / (h * h);
+    }
+    c->hist_th1[1] = c->hist_th1[0];
+    c->hist_th2[1] = c->hist_th2[0];
+    c->hist_th1[0] = s->theta_ankle;
+    c->hist_th2[0] = s->theta_hip;
+    if (c->hist_n < 2) c->hist_n++;
+
+    x1 = p->lg1 * S1;
+    z1 = p->ankle_height + p->lg1 * C1;
+    x2 = p->l1 * S1 + p->lg2 * S12;
+    z2 = p->ankle_height + p->l1 * C1 + p->lg2 * C12;
+    ddx1 = p->lg1 * (C1 * a1 - S1 * w1 * w1);
+    ddz1 = -p->lg1 * (S1 * a1 + C1 * w1 * w1);
+    ddx2 = p->l1 * (C1 * a1 - S1 * w1 * w1) + p->lg2 * (C12 * a12 - S12 * w12 * w12);
+    ddz2 = -p->l1 * (S1 * a1 + C1 * w1 * w1) - p->lg2 * (S12 * a12 + C12 * w12 * w12);
+    dH = p->m1 * (x1 * ddz1 - z1 * ddx1) + p->m2 * (x2 * ddz2 - z2 * ddx2) - p->I1 * a1 - p->I2 * a12;
+
+    /* Gravity moment of the measured posture, and of the feet if modelled. */
+    grav = p->g * c->m * k->rx_meas;
+    if (p->feet_offset_mode != AHC_FEET_IGNORE) grav += p->g * p->feet_mass * p->feet_com_x;
+    raw = s->zmp_x * s->fz - grav - dH;
+
+    /* Two first-order stages of tau/2 each: the same DC gain and about the same delay as the ZMP
+     * filter, but the double-differenced encoder noise is attenuated by alpha^2 instead of alpha
+     * at high frequency. */
+    if (!c->d_f_valid) {
+        c->d_f1 = raw;
+        c->d_f = raw;
+    } else {
+        c->d_f1 += c->d_alpha * (raw - c->d_f1);
+        c->d_f += c->d_alpha * (c->d_f1 - c->d_f);
+    }
+    c->d_f_valid = 1;
+    if (p->feet_offset_mode == AHC_FEET_CALIBRATE) {
+        if (!c->calib_done) {
+            c->calib_sum += c->d_f;
+            c->calib_n++;
+            if ((double)c->calib_n * h >= p->feet_calibration_time - 0.5 * h) {
+                c->calib_bias = c->calib_sum / (double)c->calib_n;
+                c->calib_done = 1;
+            }
+            return 0.0;
+        }
+        return c->d_f - c->calib_bias;
+    }
+    return c->d_f;
+}
+
 void ahc_step(ahc_controller *c, const ahc_sensors *s, ahc_outputs *out)
 {
     const ahc_params *p = &c->p;
     tick_ctx k;
-    double kin1, kin2, e;
+    double kin1, kin2;
     unsigned f;
 
     memset(&k, 0, sizeof k);
@@ -317,6 +421,8 @@ void ahc_step(ahc_controller *c, const ahc_sensors *s, ahc_outputs *out)
         c->fallback_timer = 0.0;
         c->fault = f;
         ahc_com(p, c->started ? c->last_th1 : c->th1, c->started ? c->last_th2 : c->th2, &k.rx, &k.rz);
+        k.rx_meas = k.rx;
+        k.rz_meas = k.rz;
         k.d = 0.0;
         write_outputs(c, &k, out);
         c->tick++;
@@ -331,9 +437,11 @@ void ahc_step(ahc_controller *c, const ahc_sensors *s, ahc_outputs *out)
         c->started = 1;
     }
     if (c->holding) {
-        /* Recovery: restart the ZMP filter from the fresh sample. */
+        /* Recovery: restart the ZMP filter and the finite differences from the fresh sample. */
         c->holding = 0;
         c->zmp_f_valid = 0;
+        c->hist_n = 0;
+        c->d_f_valid = 0;
     }
     c->last_th1 = s->theta_ankle;
     c->last_th2 = s->theta_hip;
@@ -350,35 +458,14 @@ void ahc_step(ahc_controller *c, const ahc_sensors *s, ahc_outputs *out)
     kin1 = p->kinematics_source == AHC_KIN_REFERENCE ? c->th1 : s->theta_ankle;
     kin2 = p->kinematics_source == AHC_KIN_REFERENCE ? c->th2 : s->theta_hip;
     ahc_com(p, kin1, kin2, &k.rx, &k.rz);
+    ahc_com(p, s->theta_ankle, s->theta_hip, &k.rx_meas, &k.rz_meas);
     k.a = c->km * p->lg2 * cos(kin1 + kin2);
     k.ratio = ahc_reactionless_ratio(p, kin1, kin2);
     k.Ja = ahc_ankle_inertia(p, kin2);
 
-    /* Disturbance estimate d (DESIGN lesson 5). */
-    e = c->zmp_f - k.rx;
-    switch (p->feet_offset_mode) {
-    case AHC_FEET_MODEL:
-        /* Quasi-static moment balance about the ankle projection with the feet included:
-         * (m + m_f) g p = m g r_x + m_f g x_f + tau_push  =>  tau_push = m g (p - r_x) + m_f g (p - x_f). */
-        k.d = c->m * p->g * e + p->feet_mass * p->g * (c->zmp_f - p->feet_com_x);
-        break;
-    case AHC_FEET_CALIBRATE:
-        if (!c->calib_done) {
-            c->calib_sum += e;
-            c->calib_n++;
-            if ((double)c->calib_n * k.h >= p->feet_calibration_time - 0.5 * k.h) {
-                c->calib_bias = c->calib_sum / (double)c->calib_n;
-                c->calib_done = 1;
-            }
-            k.d = 0.0;
-        } else {
-            k.d = c->m * p->g * (e - c->calib_bias);
-        }
-        break;
-    default:
-        k.d = c->m * p->g * e;
-        break;
-    }
+    /* Disturbance estimate d (eq. 11's m g (p - r_x); DESIGN lessons 1 and 5). */
+    k.d = p->reaction_compensation ? disturbance_moment_balance(c, s, &k)
+                                   : disturbance_paper(c, &k);
 
     phase_transitions(c, &k);
 

@@ -40,13 +40,14 @@ void ahc_params_default(ahc_params *p)
     p->Kpr = 100.0;    /* paper, 1/s             */
     p->Kp_theta = 15.0;/* paper, 1/s             */
 
-    /* phase logic. ZMP limits: the paper's 45 mm leaves 12.5 mm to the toe, too little for the
-     * transition (DESIGN lesson 4); defaults keep ~40 % of each half-sole as margin. The paper's
-     * numbers are in ahc_params_paper(). */
+    /* phase logic. The paper's 45 mm limit leaves 12.5 mm to the toe, too little for the
+     * transition (DESIGN lesson 4). Defaults chosen by a push sweep on the plant FMU
+     * (docs/controller.md section 5.1): trigger at 25 mm, T_ah = 0.5 s. The paper's numbers are
+     * in ahc_params_paper(). */
     p->hip_strategy_enabled = 1;
-    p->zmp_limit_front = 0.035;
-    p->zmp_limit_back = -0.0225;
-    p->T_ah = 1.0;                 /* paper: 1 s */
+    p->zmp_limit_front = 0.025;
+    p->zmp_limit_back = -0.016;    /* the same 43 % of the half-sole as the front limit */
+    p->T_ah = 0.5;                 /* paper: 1 s; 0.5 s survives larger pushes (docs) */
     p->rz_band_low = -0.002;       /* paper: 264.5 mm < r_z < 266.5 mm, a 2 mm band below erect */
     p->rz_band_high = 0.001;
     p->fallback_disturbance_tol = 0.1;  /* ~1.6 mm of p - r_x with m g = 63.8 N */
@@ -59,7 +60,7 @@ void ahc_params_default(ahc_params *p)
     p->zmp_filter_tau = 0.02;      /* DESIGN lesson 1: 10-30 ms */
     p->feet_offset_mode = AHC_FEET_MODEL;
     p->feet_calibration_time = 0.2;
-    p->kinematics_source = AHC_KIN_MEASURED;
+    p->kinematics_source = AHC_KIN_REFERENCE; /* measured: unstable behind HOAP-2's servo (docs) */
 
     /* faults */
     p->fz_lifted = 10.0;           /* ~14 % of the robot's weight (70 N) */
@@ -67,6 +68,10 @@ void ahc_params_default(ahc_params *p)
     p->angle_fault_margin = 0.1;
 
     p->sample_period = AHC_HOAP2_SAMPLE_PERIOD;
+    /* On by default: eqs. 11 and 16 fed with the raw measured ZMP close an algebraic loop through
+     * the robot's own reaction (-dH/dt/(m g) in p) with gain about 1.1 at the ankle and 1.4-1.6 at
+     * the hip for HOAP-2 (docs/controller.md section 4.4; controller_c/tests/test_disturbance.c). */
+    p->reaction_compensation = 1;
 }
 
 void ahc_params_paper(ahc_params *p)
@@ -74,6 +79,7 @@ void ahc_params_paper(ahc_params *p)
     ahc_params_default(p);
     p->zmp_limit_front = 0.045;  /* paper: p_lim = 45 mm (12.5 mm from the toe) */
     p->zmp_limit_back = -0.025;  /* same 12.5 mm margin at the heel (our symmetric extension) */
+    p->T_ah = 1.0;               /* paper: 1 s */
 }
 
 /* ------------------------------------------------------------------------------------------- */
@@ -98,7 +104,7 @@ static const ahc_param_info k_table[] = {
     PI_D(feet_com_z, "m", 0.0, 1.0, 0, "Feet CoM height above the sole (informational; not used by the control laws)"),
     PI_D(toe_x, "m", 0.0, 1.0, 1, "Toe edge x from the ankle axis (> 0)"),
     PI_D(heel_x, "m", -1.0, 0.0, 0, "Heel edge x from the ankle axis (< 0)"),
-    PI_D(ankle_height, "m", 0.0, 1.0, 0, "Ankle axis height above the sole (informational; not used by the control laws)"),
+    PI_D(ankle_height, "m", 0.0, 1.0, 0, "Ankle axis height above the sole (lever of the disturbance moment balance)"),
     PI_D(ankle_min, "rad", -3.2, 0.0, 0, "Ankle joint lower limit"),
     PI_D(ankle_max, "rad", 0.0, 3.2, 0, "Ankle joint upper limit"),
     PI_D(hip_min, "rad", -3.2, 0.0, 0, "Hip joint lower limit"),
@@ -143,6 +149,8 @@ static const ahc_param_info k_table[] = {
     PI_D(angle_fault_margin, "rad", 0.0, 3.2, 0,
          "Measured angle beyond its joint limit by more than this is a sensor fault"),
     PI_D(sample_period, "s", 0.0, 1.0, 1, "Control period; one ahc_step advances by this"),
+    PI_I(reaction_compensation, 0.0, 1.0,
+         "Disturbance estimate: 1 moment balance minus the measured motion's reaction, 0 paper m g (p - r_x)"),
 };
 
 #define TABLE_LEN (sizeof k_table / sizeof k_table[0])

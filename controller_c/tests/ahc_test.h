@@ -45,39 +45,102 @@ static inline double test_rand(unsigned long long *state, double lo, double hi)
     return lo + (hi - lo) * (double)(*state >> 11) / 9007199254740992.0;
 }
 
+/* Rigid-body terms of the two-link body on a flat, resting foot (DESIGN section 3 conventions:
+ * x forward, z up from the SOLE, angles positive pitching forward), for given joint angles,
+ * rates and accelerations:
+ *   dH_O = sum_i m_i (x_i z_i'' - z_i x_i'') - I1 th1'' - I2 (th1'' + th2'')
+ *        = minus the rate of change of the body's angular momentum about the sole point O under
+ *          the ankle (y axis), so that the moment balance about O reads
+ *          p f_z = g (sum_i m_i x_i + m_f x_f) + d_ext + dH_O;
+ *   mzdd = sum_i m_i z_i''  (f_z = (m + m_f) g + mzdd);
+ *   Hy   = the angular momentum about O itself, sum_i m_i (z_i x_i' - x_i z_i') + I1 th1' +
+ *          I2 (th1' + th2') (dHy/dt = -dH_O; lets a test check dH_O by differentiation).
+ * Written out per link (position, velocity, acceleration of each CoM) independently of the
+ * controller's implementation. Any output pointer may be NULL. */
+static inline void test_body_dynamics(const ahc_params *p, double th1, double th2, double w1, double w2,
+                                      double a1, double a2, double *dH_O, double *mzdd, double *Hy)
+{
+    const double q[2] = { th1, th1 + th2 }, w[2] = { w1, w1 + w2 }, a[2] = { a1, a1 + a2 };
+    /* CoM i = ankle + sum over segments j <= i of L_ij (sin q_j, cos q_j) */
+    const double L[2][2] = { { p->lg1, 0.0 }, { p->l1, p->lg2 } };
+    const double m[2] = { p->m1, p->m2 }, I[2] = { p->I1, p->I2 };
+    double dH = 0.0, mz = 0.0, H = 0.0;
+    int i, j;
+    for (i = 0; i < 2; ++i) {
+        double x = 0.0, z = p->ankle_height, vx = 0.0, vz = 0.0, ax = 0.0, az = 0.0;
+        for (j = 0; j <= i; ++j) {
+            const double S = sin(q[j]), C = cos(q[j]), l = L[i][j];
+            x += l * S;
+            z += l * C;
+            vx += l * C * w[j];
+            vz -= l * S * w[j];
+            ax += l * (C * a[j] - S * w[j] * w[j]);
+            az -= l * (S * a[j] + C * w[j] * w[j]);
+        }
+        dH += m[i] * (x * az - z * ax) - I[i] * a[i];
+        mz += m[i] * az;
+        H += m[i] * (z * vx - x * vz) + I[i] * w[i];
+    }
+    if (dH_O) *dH_O = dH;
+    if (mzdd) *mzdd = mz;
+    if (Hy) *Hy = H;
+}
+
 /* Quasi-static robot: the joints follow the references with a one-tick delay (ideal servo), the
- * foot is flat, and the ZMP follows from the static moment balance about the ankle projection
+ * foot is flat, and the ZMP follows from the moment balance about the sole point under the ankle
  * including the feet and a horizontal push force F at height push_height above the sole:
- *   (m + m_f) g p = m g r_x + m_f g x_f + F push_height,   fz = (m + m_f) g.
- * No dynamic reaction terms (those belong to the plant). */
+ *   reaction = 0 (static): (m + m_f) g p = m g r_x + m_f g x_f + F push_height, fz = (m + m_f) g;
+ *   reaction = 1 (physically consistent for moving joints): p fz = g (m r_x + m_f x_f) +
+ *     F push_height + dH_O, fz = (m + m_f) g + sum m_i z_i'', with the joint rates and
+ *     accelerations of the robot's own (discrete) motion taken as backward differences over its
+ *     last three ticks (test_body_dynamics).
+ * reaction = 0 is the world of the paper-literal estimator (reaction_compensation = 0): fed with
+ * the reaction through an ideal one-tick servo, eq. 11/16 would close the algebraic loop of
+ * docs/controller.md. Tests of the defaults set reaction = 1. */
 typedef struct {
     ahc_params p;          /* the "true" robot (same nominal numbers as the controller) */
     double th1, th2;       /* current joint angles */
     double push_height;
+    int reaction;          /* 1: include the reaction of the robot's own motion (see above) */
+    double prev1[2], prev2[2]; /* angles one and two ticks ago */
+    int nprev;             /* valid entries of prev* (0..2) */
 } qs_robot;
 
 static inline void qs_init(qs_robot *r, const ahc_params *p)
 {
+    memset(r, 0, sizeof *r);
     r->p = *p;
     r->th1 = 0.0;
     r->th2 = 0.0;
     r->push_height = 0.335;
+    r->reaction = 0;
 }
 
 static inline void qs_sense(const qs_robot *r, double push, ahc_sensors *s)
 {
     const ahc_params *p = &r->p;
-    const double m = p->m1 + p->m2, M = m + p->feet_mass;
-    double rx;
+    const double m = p->m1 + p->m2, M = m + p->feet_mass, h = p->sample_period;
+    double rx, dH = 0.0, mzdd = 0.0;
     ahc_com(p, r->th1, r->th2, &rx, NULL);
+    if (r->reaction && r->nprev >= 1) {
+        const double w1 = (r->th1 - r->prev1[0]) / h, w2 = (r->th2 - r->prev2[0]) / h;
+        const double a1 = r->nprev >= 2 ? (r->th1 - 2.0 * r->prev1[0] + r->prev1[1]) / (h * h) : 0.0;
+        const double a2 = r->nprev >= 2 ? (r->th2 - 2.0 * r->prev2[0] + r->prev2[1]) / (h * h) : 0.0;
+        test_body_dynamics(p, r->th1, r->th2, w1, w2, a1, a2, &dH, &mzdd, NULL);
+    }
     s->theta_ankle = r->th1;
     s->theta_hip = r->th2;
-    s->zmp_x = (m * p->g * rx + p->feet_mass * p->g * p->feet_com_x + push * r->push_height) / (M * p->g);
-    s->fz = M * p->g;
+    s->fz = M * p->g + mzdd;
+    s->zmp_x = (m * p->g * rx + p->feet_mass * p->g * p->feet_com_x + push * r->push_height + dH) / s->fz;
 }
 
 static inline void qs_apply(qs_robot *r, const ahc_outputs *o)
 {
+    r->prev1[1] = r->prev1[0];
+    r->prev2[1] = r->prev2[0];
+    r->prev1[0] = r->th1;
+    r->prev2[0] = r->th2;
+    if (r->nprev < 2) r->nprev++;
     r->th1 = o->theta_ankle_ref;
     r->th2 = o->theta_hip_ref;
 }

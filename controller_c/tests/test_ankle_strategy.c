@@ -1,17 +1,22 @@
 /*
  * test_ankle_strategy — establishes the ankle strategy (paper eq. 11):
  *  1. Open loop (robot held erect, constant measured ZMP p0, no ZMP filter, feet ignored):
- *     the reference obeys J th'' + Ca th' + Ka th = m g p0 from rest, so it must follow the
+ *     the reference obeys J th'' + Ca th' + Ka th = d0 from rest, so it must follow the
  *     analytic second-order step response (J = whole-body inertia about the ankle) and settle
- *     at th1 = m g (p - r_x)/Ka. Tolerance for the transient: semi-implicit Euler is first
- *     order; its error on this response is bounded by ~ h (|s1| + |s2|) th_ss (poles s1, s2),
- *     ~2 % here; a wrong inertia or gain gives errors of >10 %.
- *  2. Closed loop through the quasi-static robot (joints follow the reference, ZMP from the
- *     static moment balance with a constant push, default ZMP filter, feet modelled): the
- *     reference converges to the static lean th1 = m g (p - r_x)/Ka = F h / Ka, where p - r_x
- *     is measured, and the hip stays erect.
- *  3. The default feet handling removes the rest offset of DESIGN lesson 5 (no lean without a
- *     push), while the paper-literal mode leans by ~ m_f g (x_f - r_x)/Ka.
+ *     at th1 = d0/Ka. Run twice: with the paper-literal estimator (reaction_compensation = 0,
+ *     d0 = m g (p0 - r_x), fz = 70 N is ignored) and with the default moment balance
+ *     (reaction_compensation = 1; robot at rest, so dH_O = 0 and d0 = p0 fz - g m r_x = m g p0
+ *     with the physically consistent fz = m g of a robot without feet). Tolerance for the
+ *     transient: semi-implicit Euler is first order; its error on this response is bounded by
+ *     ~ h (|s1| + |s2|) th_ss (poles s1, s2), ~2 % here; a wrong inertia or gain gives >10 %.
+ *  2. Closed loop with the defaults through the quasi-static robot with the reaction of its own
+ *     motion in the ZMP (joints follow the reference, constant push, default ZMP filter, feet
+ *     modelled): the reference converges to the static lean th1 = F h / Ka, the estimate d to
+ *     the push moment F h, and the hip stays erect.
+ *  3. Feet (DESIGN lesson 5), static quasi-static robot: the feet handling of modes 1 and 2
+ *     removes the rest offset (no lean without a push) with either estimator; feet ignored,
+ *     the paper-literal estimator (reaction_compensation = 0) leans by ~ m_f g (x_f - r_x)/Ka
+ *     (fixed point with r_x ~ r_z th), the moment balance by exactly m_f g x_f / Ka.
  *  4. Bumpless start: the first reference equals the measured posture (within one tick of
  *     motion), and the hip is then brought back to erect by the eq. 25 regulator (rate -Kp th2).
  */
@@ -37,46 +42,50 @@ int main(void)
     ahc_controller c;
     ahc_outputs o;
     ahc_sensors s;
-    int n, N;
+    int n, N, rc;
     double m, J, p0, xss, maxerr = 0.0, h, poles;
 
-    /* ---- 1. open loop, analytic ---- */
-    ahc_params_default(&p);
-    p.hip_strategy_enabled = 0;
-    p.zmp_filter_tau = 0.0;
-    p.feet_offset_mode = AHC_FEET_IGNORE;
-    CHECK(ahc_init(&c, &p) == AHC_OK, "init");
-    m = p.m1 + p.m2;
-    J = ahc_ankle_inertia(&p, 0.0);
-    h = p.sample_period;
-    p0 = 0.02;
-    xss = m * p.g * p0 / p.Ka;
-    poles = (p.Ca / J); /* |s1| + |s2| = Ca/J for real poles */
-    s.theta_ankle = 0.0;
-    s.theta_hip = 0.0;
-    s.zmp_x = p0;
-    s.fz = 70.0;
-    N = 5000;
-    for (n = 1; n <= N; ++n) {
-        double ref;
-        ahc_step(&c, &s, &o);
-        ref = step_response(n * h, J, p.Ca, p.Ka, xss);
-        if (fabs(o.theta_ankle_ref - ref) > maxerr) maxerr = fabs(o.theta_ankle_ref - ref);
-        CHECK(o.phase == AHC_PHASE_ANKLE, "phase %d", o.phase);
-        if (n == 100) CHECK(fabs(o.theta_ankle_ref - ref) <= 1.5 * h * poles * xss,
-                            "t = 0.1 s: %.6g vs analytic %.6g", o.theta_ankle_ref, ref);
-    }
-    printf("open loop: static lean %.6f rad, analytic %.6f; max transient error %.3g rad (%.2f %% of static)\n",
-           o.theta_ankle_ref, xss, maxerr, 100.0 * maxerr / xss);
-    CHECK_NEAR(o.theta_ankle_ref, xss, 1e-9, "static lean m g p / Ka");
-    CHECK_NEAR(o.dtheta_ankle_ref, 0.0, 1e-9, "rate at rest");
-    CHECK(maxerr <= 1.5 * h * poles * xss, "transient error %.3g > bound %.3g", maxerr, 1.5 * h * poles * xss);
-    CHECK_NEAR(o.disturbance_moment, m * p.g * p0, 1e-12, "disturbance output m g (p - r_x)");
-    CHECK_NEAR(o.theta_hip_ref, 0.0, 1e-15, "hip stays erect");
+    /* ---- 1. open loop, analytic; rc = reaction_compensation ---- */
+    for (rc = 0; rc <= 1; ++rc) {
+        maxerr = 0.0;
+        ahc_params_default(&p);
+        p.hip_strategy_enabled = 0;
+        p.zmp_filter_tau = 0.0;
+        p.feet_offset_mode = AHC_FEET_IGNORE;
+        p.reaction_compensation = rc;
+        CHECK(ahc_init(&c, &p) == AHC_OK, "init");
+        m = p.m1 + p.m2;
+        J = ahc_ankle_inertia(&p, 0.0);
+        h = p.sample_period;
+        p0 = 0.02;
+        xss = m * p.g * p0 / p.Ka;
+        poles = (p.Ca / J); /* |s1| + |s2| = Ca/J for real poles */
+        s.theta_ankle = 0.0;
+        s.theta_hip = 0.0;
+        s.zmp_x = p0;
+        s.fz = rc ? m * p.g : 70.0; /* rc = 0 ignores fz; rc = 1 needs the consistent fz = m g */
+        N = 5000;
+        for (n = 1; n <= N; ++n) {
+            double ref;
+            ahc_step(&c, &s, &o);
+            ref = step_response(n * h, J, p.Ca, p.Ka, xss);
+            if (fabs(o.theta_ankle_ref - ref) > maxerr) maxerr = fabs(o.theta_ankle_ref - ref);
+            CHECK(o.phase == AHC_PHASE_ANKLE, "phase %d", o.phase);
+            if (n == 100) CHECK(fabs(o.theta_ankle_ref - ref) <= 1.5 * h * poles * xss,
+                                "t = 0.1 s: %.6g vs analytic %.6g", o.theta_ankle_ref, ref);
+        }
+        printf("open loop (reaction_compensation %d): static lean %.6f rad, analytic %.6f; max transient error %.3g rad (%.2f %% of static)\n",
+               rc, o.theta_ankle_ref, xss, maxerr, 100.0 * maxerr / xss);
+        CHECK_NEAR(o.theta_ankle_ref, xss, 1e-9, "static lean m g p / Ka");
+        CHECK_NEAR(o.dtheta_ankle_ref, 0.0, 1e-9, "rate at rest");
+        CHECK(maxerr <= 1.5 * h * poles * xss, "transient error %.3g > bound %.3g", maxerr, 1.5 * h * poles * xss);
+        CHECK_NEAR(o.disturbance_moment, m * p.g * p0, 1e-12, "disturbance output m g (p - r_x)");
+        CHECK_NEAR(o.theta_hip_ref, 0.0, 1e-15, "hip stays erect");
 
-    /* a different stiffness must give a visibly different response (the test can fail) */
-    CHECK(fabs(step_response(0.1, J, p.Ca, 1.2 * p.Ka, xss) - step_response(0.1, J, p.Ca, p.Ka, xss)) >
-              3.0 * maxerr, "analytic comparison is discriminating");
+        /* a different stiffness must give a visibly different response (the test can fail) */
+        CHECK(fabs(step_response(0.1, J, p.Ca, 1.2 * p.Ka, xss) - step_response(0.1, J, p.Ca, p.Ka, xss)) >
+                  3.0 * maxerr, "analytic comparison is discriminating");
+    }
 
     /* ---- 2. closed loop through the quasi-static robot ---- */
     {
@@ -86,6 +95,7 @@ int main(void)
         p.hip_strategy_enabled = 0;
         CHECK(ahc_init(&c, &p) == AHC_OK, "init");
         qs_init(&r, &p);
+        r.reaction = 1; /* defaults: physically consistent sensor model */
         for (n = 0; n < 8000; ++n) {
             qs_sense(&r, F, &s);
             ahc_step(&c, &s, &o);
@@ -110,18 +120,25 @@ int main(void)
     {
         qs_robot r;
         int mode;
+        for (rc = 0; rc <= 1; ++rc)
         for (mode = 0; mode <= 2; ++mode) {
             ahc_params_default(&p);
             p.feet_offset_mode = mode;
+            p.reaction_compensation = rc;
             CHECK(ahc_init(&c, &p) == AHC_OK, "init");
             qs_init(&r, &p);
+            r.reaction = rc; /* the sensor world each estimator is meant for (ahc_test.h) */
             for (n = 0; n < 5000; ++n) {
                 qs_sense(&r, 0.0, &s);
                 ahc_step(&c, &s, &o);
                 qs_apply(&r, &o);
             }
-            printf("feet mode %d: rest lean %.6f rad\n", mode, o.theta_ankle_ref);
-            if (mode == AHC_FEET_IGNORE) {
+            printf("reaction_compensation %d, feet mode %d: rest lean %.6f rad\n", rc, mode, o.theta_ankle_ref);
+            if (mode == AHC_FEET_IGNORE && rc) {
+                /* moment balance without the feet: d = p fz - g m r_x = m_f g x_f exactly */
+                CHECK_NEAR(o.theta_ankle_ref, p.feet_mass * p.g * p.feet_com_x / p.Ka, 1e-9,
+                           "moment-balance rest lean m_f g x_f / Ka");
+            } else if (mode == AHC_FEET_IGNORE) {
                 /* equilibrium: Ka th = m g (p - r_x) with p = (m r_x + m_f x_f)/M, r_x ~ r_z th */
                 const double m_ = p.m1 + p.m2, M = m_ + p.feet_mass;
                 const double rz = AHC_HOAP2_ERECT_COM_Z;

@@ -66,7 +66,9 @@ int main(void)
     q = paper;
     q.zmp_limit_front = p.zmp_limit_front;
     q.zmp_limit_back = p.zmp_limit_back;
-    CHECK(memcmp(&q, &p, sizeof p) == 0, "paper differs only in the ZMP limits");
+    CHECK(paper.T_ah == 1.0, "paper T_ah = 1 s");
+    q.T_ah = p.T_ah;
+    CHECK(memcmp(&q, &p, sizeof p) == 0, "paper differs only in the ZMP limits and T_ah");
 
     /* table covers the struct */
     CHECK(count >= 40, "table has %zu rows", count);

@@ -5,14 +5,20 @@
  *  B. phase 1 lasts exactly T_ah (round(T_ah / h) ticks), also when T_ah is changed meanwhile;
  *     k_w rises monotonically 0 -> 1;
  *  C. 2 -> 3 paper condition: fires on exactly the tick where r_z is in the band AND p is on the
- *     side opposite to the push; not when only one of them holds; mirrored for front pushes;
+ *     side opposite to the push; not when only one of them holds; mirrored for front pushes.
+ *     C1 with the defaults (kinematics_source = reference: r_z of the reference angles at the
+ *     start of the tick, i.e. of the previous tick's outputs); C2 with kinematics_source =
+ *     measured, where the test steps the measured hip angle (a pure trigger-logic check; those
+ *     one-tick steps are unphysical accelerations, so the paper-literal estimator is used there);
  *  D. 2 -> 3 fallback: fires after exactly fallback_dwell of |d| <= tol and |th2_ref| <= tol;
  *  E. 3 -> 0 fires on the first tick after |th2_ref| <= tol and |dth2_ref| <= tol;
  *     3 -> 2 when the ZMP reaches a limit again;
- *  F. the sequence 0 -> 1 -> 2 -> 3 -> 0 for a push applied and removed, from behind (returns
- *     through the fallback: in a quasi-static world p never goes behind the ankle, DESIGN
- *     lesson 3) and from the front (returns through the paper condition), driven through the
- *     quasi-static robot of ahc_test.h; the front response mirrors the back one;
+ *  F. the sequence 0 -> 1 -> 2 -> 3 -> 0 for a push applied and removed, from behind and from
+ *     the front (with the reaction in the ZMP both return through the paper condition, ~0.1 s
+ *     after the release; without it p never goes behind the ankle and a push from behind
+ *     returns through the fallback, DESIGN lesson 3), driven through the
+ *     quasi-static robot of ahc_test.h with the reaction of its own motion in the ZMP (physically
+ *     consistent for the default estimator); the front response mirrors the back one;
  *  G. every switch is bumpless: reference angles move by at most h * rate per tick, and the
  *     reference rates change at a switch by no more than the largest change of an ordinary tick;
  *  H. ankle-only mode never leaves phase 0 and the ZMP limit changes nothing (bit-identical).
@@ -23,13 +29,22 @@
 static ahc_outputs rec[NMAX];
 static ahc_outputs rec2[NMAX];
 
+/* Robot held erect (at rest): the physically consistent normal force is the weight (m + m_f) g;
+ * the moment-balance estimate is then d = zmp (m + m_f) g - m_f g x_f. */
+static double weight(void)
+{
+    ahc_params q;
+    ahc_params_default(&q);
+    return (q.m1 + q.m2 + q.feet_mass) * q.g;
+}
+
 static ahc_sensors erect_sensors(double zmp)
 {
     ahc_sensors s;
     s.theta_ankle = 0.0;
     s.theta_hip = 0.0;
     s.zmp_x = zmp;
-    s.fz = 70.0;
+    s.fz = weight();
     return s;
 }
 
@@ -55,6 +70,7 @@ static int run_qs(const ahc_params *p, double F, double t_end, ahc_outputs *out)
     int n, N = (int)(t_end / p->sample_period + 0.5);
     if (ahc_init(&c, p) != AHC_OK) return 0;
     qs_init(&r, p);
+    r.reaction = 1;
     for (n = 0; n < N && n < NMAX; ++n) {
         const double t = n * p->sample_period;
         qs_sense(&r, push_profile(t, F, 0.5, 0.5, 3.0), &s);
@@ -184,19 +200,73 @@ int main(void)
         }
     }
 
-    /* ---- C. 2 -> 3 paper condition (no filter, so the ZMP enters directly) ---- */
+    /* ---- C1. 2 -> 3 paper condition, defaults (reference kinematics), no ZMP filter ---- */
+    for (side = 0; side < 2; ++side) {
+        const double sg = side == 0 ? 1.0 : -1.0;
+        ahc_params q = p;
+        ahc_outputs prev;
+        double rz0, drz = 0.0;
+        int in_band = 0;
+        q.zmp_filter_tau = 0.0;
+        CHECK(q.kinematics_source == AHC_KIN_REFERENCE, "default kinematics source");
+        ahc_com(&q, 0.0, 0.0, NULL, &rz0);
+        CHECK(ahc_init(&c, &q) == AHC_OK, "init");
+        CHECK(drive_to_phase(&c, sg * 0.045, AHC_PHASE_HIP, 3000), "reach phase 2");
+        s = erect_sensors(sg * 0.045);
+        for (n = 0; n < 200; ++n) ahc_step(&c, &s, &o);
+        prev = o;
+        /* reference hip bent (~0.5 rad): reference r_z out of band; p opposite: no switch */
+        ahc_com(&q, prev.theta_ankle_ref, prev.theta_hip_ref, NULL, &drz);
+        drz -= rz0;
+        CHECK(drz < q.rz_band_low, "side %d: band check setup, reference r_z - erect = %.4f", side, drz);
+        s = erect_sensors(-sg * 0.005);
+        ahc_step(&c, &s, &o);
+        CHECK(o.phase == AHC_PHASE_HIP, "side %d: no switch with reference r_z out of band", side);
+        /* p on the push side (d ~ 0.84 N m: fallback not involved) while eq. 16 relaxes the
+         * reference hip to ~0.14 rad, into the band: no switch on any tick */
+        s = erect_sensors(sg * 0.012);
+        prev = o;
+        for (n = 0; n < 5000 && !in_band; ++n) {
+            ahc_com(&q, prev.theta_ankle_ref, prev.theta_hip_ref, NULL, &drz);
+            drz -= rz0;
+            in_band = drz >= q.rz_band_low && drz <= q.rz_band_high;
+            if (in_band) break;
+            ahc_step(&c, &s, &o);
+            CHECK(o.phase == AHC_PHASE_HIP, "side %d: no switch with p on the push side", side);
+            CHECK(fabs(o.disturbance_moment) > q.fallback_disturbance_tol, "fallback not involved");
+            prev = o;
+        }
+        CHECK(in_band && n > 10, "side %d: reference r_z entered the band after %d ticks (hip %.3f)", side, n,
+              prev.theta_hip_ref);
+        /* one more tick on the push side with r_z in band: no switch */
+        ahc_step(&c, &s, &o);
+        CHECK(o.phase == AHC_PHASE_HIP, "side %d: no switch with p on the push side, r_z in band", side);
+        ahc_com(&q, o.theta_ankle_ref, o.theta_hip_ref, NULL, &drz);
+        drz -= rz0;
+        CHECK(drz >= q.rz_band_low && drz <= q.rz_band_high, "side %d: still in band (%.4f)", side, drz);
+        /* both: switch on this very tick */
+        s = erect_sensors(-sg * 0.001);
+        ahc_step(&c, &s, &o);
+        CHECK(o.phase == AHC_PHASE_HIP_TO_ANKLE, "side %d: paper condition switches to phase 3 (got %d)", side,
+              o.phase);
+    }
+
+    /* ---- C2. the same trigger on measured kinematics (kinematics_source = measured; the
+     *      measured hip is stepped, so the paper-literal estimator: reaction_compensation = 0) ---- */
     for (side = 0; side < 2; ++side) {
         const double sg = side == 0 ? 1.0 : -1.0;
         ahc_params q = p;
         q.zmp_filter_tau = 0.0;
+        q.kinematics_source = AHC_KIN_MEASURED;
+        q.reaction_compensation = 0;
         CHECK(ahc_init(&c, &q) == AHC_OK, "init");
         CHECK(drive_to_phase(&c, sg * 0.045, AHC_PHASE_HIP, 3000), "reach phase 2");
-        for (n = 0; n < 200; ++n) ahc_step(&c, &(ahc_sensors){ 0.0, 0.0, sg * 0.045, 70.0 }, &o);
+        s = erect_sensors(sg * 0.045);
+        for (n = 0; n < 200; ++n) ahc_step(&c, &s, &o);
         /* r_z out of band (hip 0.3 rad: 3.2 mm below erect), p opposite: no switch */
         s.theta_ankle = 0.0;
         s.theta_hip = sg * 0.3;
         s.zmp_x = -sg * 0.005;
-        s.fz = 70.0;
         ahc_step(&c, &s, &o);
         CHECK(o.phase == AHC_PHASE_HIP, "side %d: no switch with r_z out of band (r_z - erect = %.4f)", side,
               o.com_z - AHC_HOAP2_ERECT_COM_Z);
@@ -224,7 +294,7 @@ int main(void)
         q.zmp_filter_tau = 0.0;
         CHECK(ahc_init(&c, &q) == AHC_OK, "init");
         CHECK(drive_to_phase(&c, 0.045, AHC_PHASE_HIP, 3000), "reach phase 2");
-        for (n = 0; n < 300; ++n) ahc_step(&c, &(ahc_sensors){ 0.0, 0.0, 0.045, 70.0 }, &o);
+        for (n = 0; n < 300; ++n) { s = erect_sensors(0.045); ahc_step(&c, &s, &o); }
         th2_prev = o.theta_hip_ref;
         CHECK(th2_prev > q.fallback_hip_tol, "hip bent before release: %g", th2_prev);
         s = erect_sensors(p_rest);
@@ -264,7 +334,7 @@ int main(void)
         /* 3 -> 2 on a new push */
         CHECK(ahc_init(&c, &q) == AHC_OK, "init");
         CHECK(drive_to_phase(&c, 0.045, AHC_PHASE_HIP, 3000), "reach phase 2");
-        for (n = 0; n < 300; ++n) ahc_step(&c, &(ahc_sensors){ 0.0, 0.0, 0.045, 70.0 }, &o);
+        for (n = 0; n < 300; ++n) { s = erect_sensors(0.045); ahc_step(&c, &s, &o); }
         s = erect_sensors(p_rest);
         CHECK(drive_to_phase(&c, p_rest, AHC_PHASE_HIP_TO_ANKLE, 5000), "reach phase 3");
         s = erect_sensors(q.zmp_limit_back - 0.001);

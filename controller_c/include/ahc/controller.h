@@ -69,14 +69,20 @@ enum {
 enum {
     AHC_FEET_IGNORE = 0,    /* paper literal: d = m g (p - r_x); the feet bias d by ~ +0.07 N m */
     AHC_FEET_MODEL = 1,     /* include the feet's weight: d = m g (p - r_x) + m_f g (p - x_f)   */
-    AHC_FEET_CALIBRATE = 2  /* zero d at rest: mean of (p - r_x) over feet_calibration_time
-                               after init/reset is subtracted (robot must stand still then)   */
+    AHC_FEET_CALIBRATE = 2  /* zero d at rest: the mean of (p - r_x), or of d with
+                               reaction_compensation, over feet_calibration_time after
+                               init/reset is subtracted (robot must stand still then)         */
 };
 
-/* Source of the kinematic quantities r_x, r_z, C1, C12 (DESIGN section 4). */
+/* Source of the kinematic quantities r_x, r_z, C1, C12 of the kinematic laws (eqs. 15, 23, 24)
+ * and the phase triggers. The disturbance estimate and the com_x/com_z outputs always use the
+ * measured angles. */
 enum {
-    AHC_KIN_MEASURED = 0,   /* measured joint angles (default; the paper's reading)            */
-    AHC_KIN_REFERENCE = 1   /* the controller's own reference angles                           */
+    AHC_KIN_MEASURED = 0,   /* measured joint angles (DESIGN section 4's first reading): eq. 24's
+                               CoM feedback at Kpr = 100/s then closes through the servo, which is
+                               unstable unless the servo is much faster than 100 rad/s          */
+    AHC_KIN_REFERENCE = 1   /* the controller's own reference angles (default): eqs. 23-24 are a
+                               resolved-rate reference generator, the servo follows it          */
 };
 
 /* ---------------------------------------------------------------------------------------------
@@ -138,13 +144,19 @@ typedef struct {
 
     /* timing */
     double sample_period;       /* one ahc_step advances by this [s]                             */
+
+    /* sensing (appended: the parameter table's row order is stable) */
+    int reaction_compensation;  /* 1: the disturbance estimate subtracts the rate of change of
+                                   angular momentum of the measured joint motion (moment balance
+                                   about the sole point, docs/controller.md "disturbance
+                                   estimate"); 0: paper literal, d = m g (p - r_x)             */
 } ahc_params;
 
 /* Fill with the HOAP-2 defaults (hoap2_model.h) and the SI gains. */
 void ahc_params_default(ahc_params *p);
 
 /* Defaults, but with the paper's ZMP limit p_lim = 45 mm at the toe (and the same 12.5 mm margin
- * at the heel: -25 mm). Everything else as ahc_params_default. */
+ * at the heel: -25 mm) and the paper's T_ah = 1 s. Everything else as ahc_params_default. */
 void ahc_params_paper(ahc_params *p);
 
 /* Validate. Returns AHC_OK (0) or an AHC_ERR_* code; on error writes a message naming the field
@@ -190,7 +202,8 @@ typedef struct {
     int phase;                 /* AHC_PHASE_*                                                  */
     double com_x;              /* CoM projection r_x of the two-link body [m]                  */
     double com_z;              /* CoM height r_z above the ankle [m]                           */
-    double disturbance_moment; /* d = m g (p - r_x) (+ feet correction, feet_offset_mode) [N m] */
+    double disturbance_moment; /* d: external moment about the sole point under the ankle
+                                  (reaction_compensation) or m g (p - r_x) [N m]            */
     double k_w;                /* reactionless weight of eq. 23 [1]                            */
     double com_x_desired;      /* r_x_d in phases 1-3; equals com_x in phase 0 [m]             */
     unsigned fault;            /* AHC_FAULT_* bit mask; 0 = healthy                            */
@@ -233,10 +246,17 @@ typedef struct {
     double zmp_f;             /* filtered ZMP [m]                                            */
     int zmp_f_valid;
     double calib_sum;         /* AHC_FEET_CALIBRATE accumulator                              */
-    double calib_bias;        /* subtracted from (p - r_x) [m]                               */
+    double calib_bias;        /* subtracted from p - r_x [m] (or from d [N m] with
+                                 reaction_compensation)                                  */
     unsigned long long calib_n;
     int calib_done;
     double last_th1, last_th2; /* last healthy measured angles                                */
+    double hist_th1[2], hist_th2[2]; /* measured angles one and two ticks ago (finite differences) */
+    int hist_n;               /* number of valid entries in hist_* (0..2)                     */
+    double d_f1, d_f;         /* two-stage filtered disturbance estimate (reaction_compensation
+                                 = 1): first stage, output [N m]                             */
+    double d_alpha;           /* coefficient of each stage, 1 - exp(-2 h/tau)                  */
+    int d_f_valid;
     /* faults */
     unsigned fault;           /* bits of the last tick                                       */
     int holding;              /* 1 while a hold fault is active                              */
