@@ -121,20 +121,31 @@ def cmd_list(a) -> int:
     return rc
 
 
+def _scenario_and_models(a):
+    """The scenario named on the command line with its --set overrides applied, and the FMUs, checked
+    against each other. Raises ScenarioError, MissingFileError or FMUError with a message that names
+    the file, key or variable."""
+    from .master import Models, check_overrides
+    from .paths import find_scenario
+    from .scenario import load_scenario, parse_set
+    sc = load_scenario(find_scenario(a.scenario))
+    c_set, p_set = parse_set(a.set or [])
+    sc.controller.update(c_set)
+    sc.plant.update(p_set)
+    models = Models.load(a.fmu_dir)
+    check_overrides(models, sc.controller, sc.plant, f"{_rel(sc.path)} / --set")
+    return sc, models
+
+
 def cmd_run(a) -> int:
     from .fmu import FMUError
-    from .master import Models, simulate, check_overrides
-    from .paths import MissingFileError, find_scenario
+    from .master import simulate
+    from .paths import MissingFileError
     from .results import (atomic_write_csv, check_expect, clear_previous, format_summary, result_paths,
                           summarize_pushes, summary_dict, write_summary_json)
-    from .scenario import ScenarioError, load_scenario, parse_set
+    from .scenario import ScenarioError
     try:
-        sc = load_scenario(find_scenario(a.scenario))
-        c_set, p_set = parse_set(a.set or [])
-        sc.controller.update(c_set)
-        sc.plant.update(p_set)
-        models = Models.load(a.fmu_dir)
-        check_overrides(models, sc.controller, sc.plant, f"{_rel(sc.path)} / --set")
+        sc, models = _scenario_and_models(a)
     except (ScenarioError, MissingFileError, FMUError) as e:
         return _err(str(e))
     out = Path(a.out) if a.out else Path("results") / sc.name
@@ -296,17 +307,12 @@ def cmd_steptest(a) -> int:
 
 def cmd_record(a) -> int:
     from .fmu import FMUError
-    from .master import Models, simulate, check_overrides
-    from .paths import MissingFileError, find_scenario
-    from .scenario import ScenarioError, load_scenario, parse_set
+    from .master import simulate
+    from .paths import MissingFileError
+    from .scenario import ScenarioError
     from .steptest import record_case
     try:
-        sc = load_scenario(find_scenario(a.scenario))
-        c_set, p_set = parse_set(a.set or [])
-        sc.controller.update(c_set)
-        sc.plant.update(p_set)
-        models = Models.load(a.fmu_dir)
-        check_overrides(models, sc.controller, sc.plant, f"{_rel(sc.path)} / --set")
+        sc, models = _scenario_and_models(a)
     except (ScenarioError, MissingFileError, FMUError) as e:
         return _err(str(e))
     res = simulate(sc, models, stop_time=a.stop_time, progress=None)

@@ -38,15 +38,6 @@ Snapshot* toSnap(Instance* inst, fmi2FMUstate s, const char* fn) {
   return snap;
 }
 
-const char* typeName(Type t) {
-  switch (t) {
-    case Type::Real: return "Real";
-    case Type::Integer: return "Integer";
-    case Type::Boolean: return "Boolean";
-    case Type::String: return "String";
-  }
-  return "?";
-}
 
 // Common checks of fmi2Get*/fmi2Set* arguments; returns the store indices in `idx`.
 bool resolve(Instance* inst, const char* fn, const fmi2ValueReference vr[], size_t nvr, const void* values,
@@ -64,7 +55,7 @@ bool resolve(Instance* inst, const char* fn, const fmi2ValueReference vr[], size
     if (i < 0) { inst->error("%s: unknown value reference %u (element %zu)", fn, vr[k], k); return false; }
     if (inst->info.variables[i].type != t) {
       inst->error("%s: value reference %u is %s \"%s\", not %s", fn, vr[k],
-                  typeName(inst->info.variables[i].type), inst->info.variables[i].name.c_str(), typeName(t));
+                  xmlName(inst->info.variables[i].type), inst->info.variables[i].name.c_str(), xmlName(t));
       return false;
     }
     idx[k] = i;

@@ -14,36 +14,6 @@
 using namespace fmuglue;
 
 namespace {
-const char* causality(Causality c) {
-  switch (c) {
-    case Causality::Parameter: return "parameter";
-    case Causality::CalculatedParameter: return "calculatedParameter";
-    case Causality::Input: return "input";
-    case Causality::Output: return "output";
-    case Causality::Local: return "local";
-    case Causality::Independent: return "independent";
-  }
-  return "";
-}
-const char* variability(Variability v) {
-  switch (v) {
-    case Variability::Constant: return "constant";
-    case Variability::Fixed: return "fixed";
-    case Variability::Tunable: return "tunable";
-    case Variability::Discrete: return "discrete";
-    case Variability::Continuous: return "continuous";
-  }
-  return "";
-}
-const char* type(Type t) {
-  switch (t) {
-    case Type::Real: return "Real";
-    case Type::Integer: return "Integer";
-    case Type::Boolean: return "Boolean";
-    case Type::String: return "String";
-  }
-  return "";
-}
 std::string g(double v) {
   if (std::isnan(v)) return "";
   char b[40];
@@ -80,8 +50,8 @@ int main(int argc, char** argv) {
     std::cout << "| name | vr | type | causality | variability | unit | start | min | max | description |\n"
               << "|---|---|---|---|---|---|---|---|---|---|\n";
     for (const auto& v : info.variables)
-      std::cout << "| `" << v.name << "` | " << v.vr << " | " << type(v.type) << " | " << causality(v.causality)
-                << " | " << variability(v.variability) << " | " << v.unit << " | " << startText(v) << " | "
+      std::cout << "| `" << v.name << "` | " << v.vr << " | " << xmlName(v.type) << " | " << xmlName(v.causality)
+                << " | " << xmlName(v.variability) << " | " << v.unit << " | " << startText(v) << " | "
                 << g(v.min) << " | " << g(v.max) << " | " << v.description << " |\n";
     return 0;
   }
@@ -107,8 +77,8 @@ int main(int argc, char** argv) {
     f << ".</p>\n<table border=\"1\" cellspacing=\"0\" cellpadding=\"3\">\n<tr><th>name</th><th>vr</th><th>type</th>"
          "<th>causality</th><th>variability</th><th>unit</th><th>start</th><th>min</th><th>max</th><th>description</th></tr>\n";
     for (const auto& v : info.variables)
-      f << "<tr><td>" << html(v.name) << "</td><td>" << v.vr << "</td><td>" << type(v.type) << "</td><td>"
-        << causality(v.causality) << "</td><td>" << variability(v.variability) << "</td><td>" << html(v.unit)
+      f << "<tr><td>" << html(v.name) << "</td><td>" << v.vr << "</td><td>" << xmlName(v.type) << "</td><td>"
+        << xmlName(v.causality) << "</td><td>" << xmlName(v.variability) << "</td><td>" << html(v.unit)
         << "</td><td>" << html(startText(v)) << "</td><td>" << g(v.min) << "</td><td>" << g(v.max) << "</td><td>"
         << html(v.description) << "</td></tr>\n";
     f << "</table>\n</body></html>\n";

@@ -12,36 +12,6 @@ namespace fmuglue {
 
 namespace {
 
-const char* causalityName(Causality c) {
-  switch (c) {
-    case Causality::Parameter: return "parameter";
-    case Causality::CalculatedParameter: return "calculatedParameter";
-    case Causality::Input: return "input";
-    case Causality::Output: return "output";
-    case Causality::Local: return "local";
-    case Causality::Independent: return "independent";
-  }
-  return "local";
-}
-const char* variabilityName(Variability v) {
-  switch (v) {
-    case Variability::Constant: return "constant";
-    case Variability::Fixed: return "fixed";
-    case Variability::Tunable: return "tunable";
-    case Variability::Discrete: return "discrete";
-    case Variability::Continuous: return "continuous";
-  }
-  return "continuous";
-}
-const char* initialName(Initial i) {
-  switch (i) {
-    case Initial::Exact: return "exact";
-    case Initial::Approx: return "approx";
-    case Initial::Calculated: return "calculated";
-    default: return "";
-  }
-}
-
 std::string esc(const std::string& s) {
   std::string o;
   o.reserve(s.size());
@@ -152,10 +122,10 @@ std::string xmlWithGuid(const ModelInfo& info, const std::string& guid) {
     ++index;
     o << "    <!-- index " << index << " -->\n";
     o << "    <ScalarVariable name=\"" << esc(v.name) << "\" valueReference=\"" << v.vr << "\" description=\""
-      << esc(v.description) << "\" causality=\"" << causalityName(v.causality) << "\" variability=\""
-      << variabilityName(v.variability) << "\"";
+      << esc(v.description) << "\" causality=\"" << xmlName(v.causality) << "\" variability=\""
+      << xmlName(v.variability) << "\"";
     if (v.initial != Initial::Default && v.causality != Causality::Input && v.causality != Causality::Independent)
-      o << " initial=\"" << initialName(v.initial) << "\"";
+      o << " initial=\"" << xmlName(v.initial) << "\"";
     o << ">\n      ";
     bool st = hasStart(v);
     switch (v.type) {
@@ -289,5 +259,47 @@ std::string modelGuid(const ModelInfo& info) {
 }
 
 std::string modelDescriptionXml(const ModelInfo& info) { return xmlWithGuid(info, modelGuid(info)); }
+
+const char* xmlName(Type t) {
+  switch (t) {
+    case Type::Real: return "Real";
+    case Type::Integer: return "Integer";
+    case Type::Boolean: return "Boolean";
+    case Type::String: return "String";
+  }
+  return "?";
+}
+
+const char* xmlName(Causality c) {
+  switch (c) {
+    case Causality::Parameter: return "parameter";
+    case Causality::CalculatedParameter: return "calculatedParameter";
+    case Causality::Input: return "input";
+    case Causality::Output: return "output";
+    case Causality::Local: return "local";
+    case Causality::Independent: return "independent";
+  }
+  return "local";
+}
+
+const char* xmlName(Variability v) {
+  switch (v) {
+    case Variability::Constant: return "constant";
+    case Variability::Fixed: return "fixed";
+    case Variability::Tunable: return "tunable";
+    case Variability::Discrete: return "discrete";
+    case Variability::Continuous: return "continuous";
+  }
+  return "continuous";
+}
+
+const char* xmlName(Initial i) {
+  switch (i) {
+    case Initial::Exact: return "exact";
+    case Initial::Approx: return "approx";
+    case Initial::Calculated: return "calculated";
+    default: return "";
+  }
+}
 
 }  // namespace fmuglue

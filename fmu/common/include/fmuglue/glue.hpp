@@ -235,6 +235,12 @@ std::string validateModelInfo(const ModelInfo& info);
 std::string modelGuid(const ModelInfo& info);
 // The complete modelDescription.xml text.
 std::string modelDescriptionXml(const ModelInfo& info);
+// The modelDescription.xml spelling of each enum value ("" for Initial::Default): one table for the
+// XML, the generated documentation and log messages.
+const char* xmlName(Type t);
+const char* xmlName(Causality c);
+const char* xmlName(Variability v);
+const char* xmlName(Initial i);
 // The effective initial attribute of a variable (resolves Initial::Default per FMI 2.0).
 Initial effectiveInitial(const Variable& v);
 
