@@ -77,9 +77,9 @@ ModelInfo makeInfo() {
   out("dtheta_ankle_ref", vr::dtheta_ankle_ref, Type::Real, "rad/s", "Ankle reference rate");
   out("dtheta_hip_ref", vr::dtheta_hip_ref, Type::Real, "rad/s", "Hip reference rate");
   out("phase", vr::phase, Type::Integer, "", "Phase: 0 ankle, 1 ankle-to-hip, 2 hip, 3 hip-to-ankle");
-  out("com_x", vr::com_x, Type::Real, "m", "CoM ground projection r_x (two-link model, measured angles)");
-  out("com_z", vr::com_z, Type::Real, "m", "CoM height r_z above the ankle joint");
-  out("disturbance_moment", vr::disturbance_moment, Type::Real, "N.m", "Disturbance estimate m g (p - r_x)");
+  out("com_x", vr::com_x, Type::Real, "m", "CoM ground projection r_x of the two-link model from the measured angles");
+  out("com_z", vr::com_z, Type::Real, "m", "CoM height r_z above the ankle joint from the measured angles");
+  out("disturbance_moment", vr::disturbance_moment, Type::Real, "N.m", "Disturbance moment estimate d: external moment about the sole point under the ankle (reaction_compensation = 1) or m g (p - r_x) (= 0)");
   out("k_w", vr::k_w, Type::Real, "1", "Reactionless weight of eq. 23 (0 ankle strategy, 1 hip strategy)");
   out("com_x_desired", vr::com_x_desired, Type::Real, "m", "Desired CoM projection r_x_d (= com_x in phase 0)");
   out("fault", vr::fault, Type::Integer, "", "Fault bit mask (AHC_FAULT_*; 0 = healthy, docs/fmu.md)");

@@ -14,6 +14,16 @@
 using namespace fmuglue;
 
 namespace {
+// A Markdown table cell: '|' would end the cell.
+std::string markdownCell(const std::string& s) {
+  std::string o;
+  for (char c : s) {
+    if (c == '|') o += '\\';
+    o += c;
+  }
+  return o;
+}
+
 std::string g(double v) {
   if (std::isnan(v)) return "";
   char b[40];
@@ -52,7 +62,7 @@ int main(int argc, char** argv) {
     for (const auto& v : info.variables)
       std::cout << "| `" << v.name << "` | " << v.vr << " | " << xmlName(v.type) << " | " << xmlName(v.causality)
                 << " | " << xmlName(v.variability) << " | " << v.unit << " | " << startText(v) << " | "
-                << g(v.min) << " | " << g(v.max) << " | " << v.description << " |\n";
+                << g(v.min) << " | " << g(v.max) << " | " << markdownCell(v.description) << " |\n";
     return 0;
   }
   if (argc != 2) {
