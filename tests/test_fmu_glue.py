@@ -12,7 +12,7 @@ import zipfile
 
 import pytest
 
-from conftest import (fmi2Error, fmi2OK, fmi2Warning, CONTROLLER_OUTPUTS)
+from conftest import (fmi2Discard, fmi2Error, fmi2OK, fmi2Warning, CONTROLLER_OUTPUTS)
 
 fmi2LastSuccessfulTime, fmi2Terminated = 2, 3
 
@@ -96,6 +96,160 @@ def test_state_machine(raw_controller, state, call):
     else:
         assert st == fmi2Error, (call, state)
         assert any(call in m and "state" in m for m in inst.errors()), inst.log
+    inst.free()
+
+
+# The rest of the FMI 2.0 co-simulation API (FMI 2.0.4 section 4.2.4, state table): the FMU-state
+# functions, the typed get/set functions on variables of each kind, the status functions. Each
+# entry: (function, states in which the call is legal, statuses expected there). In every other
+# state the call must return fmi2Error with "<function> must not be called in state <state>" and
+# leave the instance's state unchanged. The variable rules (causality/variability) are part of the
+# table: a fixed parameter is settable only before fmi2ExitInitializationMode, a tunable one also
+# in stepComplete, an input in all three set states, an output never.
+fmi2PendingStatus = 1
+_BLOB: list[bytes] = []
+
+
+def _blob(inst):
+    """A serialized state of a running instance of the same FMU (made once)."""
+    if not _BLOB:
+        donor = RawInstanceOf(inst)
+        assert donor.fmi2SetupExperiment(0, 0.0, 0.0, 0, 0.0) == fmi2OK
+        assert donor.fmi2EnterInitializationMode() == fmi2OK
+        assert donor.fmi2ExitInitializationMode() == fmi2OK
+        assert donor.fmi2DoStep(0.0, 1e-3, 1) == fmi2OK
+        _BLOB.append(_snapshot_bytes(donor))
+        donor.free()
+    return _BLOB[0]
+
+
+def RawInstanceOf(inst):
+    from conftest import RawInstance
+    return RawInstance(inst.lib, inst.md, name="donor")
+
+
+def _with_state_object(inst, use):
+    """DeSerialize the donor blob into an FMUstate of `inst` (legal in every state of ALL), call
+    use(state), free the state."""
+    data = _blob(inst)
+    s = ctypes.c_void_p()
+    assert inst.fmi2DeSerializeFMUstate(data, len(data), ctypes.byref(s)) == fmi2OK, inst.log
+    st = use(s)
+    assert inst.fmi2FreeFMUstate(ctypes.byref(s)) == fmi2OK
+    return st
+
+
+def _deserialize(inst):
+    data = _blob(inst)
+    s = ctypes.c_void_p()
+    st = inst.fmi2DeSerializeFMUstate(data, len(data), ctypes.byref(s))
+    if s.value:
+        inst.fmi2FreeFMUstate(ctypes.byref(s))
+    return st
+
+
+def _serialize(inst):
+    def use(s):
+        n = ctypes.c_size_t()
+        assert inst.fmi2SerializedFMUstateSize(s, ctypes.byref(n)) == fmi2OK
+        buf = ctypes.create_string_buffer(n.value)
+        return inst.fmi2SerializeFMUstate(s, buf, n.value)
+    return _with_state_object(inst, use)
+
+
+def _status(fn_name, kind, ctype):
+    def call(inst):
+        v = ctype()
+        return getattr(inst, fn_name)(kind, ctypes.byref(v))
+    return call
+
+
+_LIVE = {"instantiated", "initializationMode", "stepComplete", "terminated", "error"}
+_STATE_FNS = {"instantiated", "initializationMode", "stepComplete", "terminated"}
+CALLS_MORE = {
+    "fmi2SetReal/input": (lambda i: i.set_real({"zmp_x": 0.001}),
+                          {"instantiated", "initializationMode", "stepComplete"}, {fmi2OK}),
+    "fmi2SetReal/tunable": (lambda i: i.set_real({"Ka": 41.0}),
+                            {"instantiated", "initializationMode", "stepComplete"}, {fmi2OK}),
+    "fmi2SetReal/fixed": (lambda i: i.set_real({"m1": 1.8}), {"instantiated", "initializationMode"}, {fmi2OK}),
+    "fmi2SetReal/output": (lambda i: i.set_real({"com_x": 0.0}), set(), {fmi2OK}),
+    "fmi2SetInteger/fixed": (lambda i: i.set_integer({"hip_strategy_enabled": 0}),
+                             {"instantiated", "initializationMode"}, {fmi2OK}),
+    "fmi2SetInteger/output": (lambda i: i.set_integer({"fault": 0}), set(), {fmi2OK}),
+    "fmi2GetInteger/param": (lambda i: i.get_integer(["feet_offset_mode"])[0],
+                             {"initializationMode", "stepComplete", "terminated", "error"}, {fmi2OK}),
+    "fmi2GetReal/param": (lambda i: i.get_real(["m1", "Ka", "zmp_x"])[0],
+                          {"initializationMode", "stepComplete", "terminated", "error"}, {fmi2OK}),
+    "fmi2GetFMUstate": (_get_state, _STATE_FNS, {fmi2OK}),
+    "fmi2SetFMUstate": (lambda i: _with_state_object(i, lambda s: i.fmi2SetFMUstate(s)), _LIVE, {fmi2OK}),
+    "fmi2DeSerializeFMUstate": (_deserialize, _LIVE, {fmi2OK}),
+    "fmi2SerializeFMUstate": (_serialize, _LIVE, {fmi2OK}),
+    "fmi2GetStatus": (_status("fmi2GetStatus", 0, ctypes.c_int), {"stepComplete", "terminated"}, {fmi2Discard}),
+    "fmi2GetStringStatus": (_status("fmi2GetStringStatus", fmi2PendingStatus, ctypes.c_char_p),
+                            {"stepComplete", "terminated"}, {fmi2Discard}),
+    "fmi2GetRealStatus": (_real_status, {"stepComplete", "terminated"}, {fmi2OK}),
+    "fmi2GetBooleanStatus": (_bool_status, {"stepComplete", "terminated"}, {fmi2OK}),
+    # no Integer status exists in FMI 2.0 CS: legal call, but always an (explained) error
+    "fmi2GetIntegerStatus": (_status("fmi2GetIntegerStatus", 0, ctypes.c_int),
+                             {"stepComplete", "terminated"}, {fmi2Error}),
+}
+
+
+def _state_of(inst, state):
+    """Probe that `inst` is still in `state` (the states of ALL are distinguishable by calls that
+    do not change the state)."""
+    inst.log.clear()
+    get_ok = inst.get_real(["com_z"])[0] == fmi2OK
+    real_status_ok = _real_status(inst) == fmi2OK
+    fixed_set_ok = inst.set_real({"m1": 1.79}) == fmi2OK  # the default value: no change
+    got = {(False, False, True): "instantiated", (True, False, True): "initializationMode",
+           (True, True, False): "stepComplete/terminated", (True, False, False): "error"}
+    res = got.get((get_ok, real_status_ok, fixed_set_ok), "?")
+    if res == "stepComplete/terminated":
+        res = "terminated" if inst.fmi2DoStep(inst_time(inst), 1e-3, 1) == fmi2Error and any(
+            "state terminated" in m for m in inst.errors()) else "stepComplete"
+    return res
+
+
+def inst_time(inst):
+    v = ctypes.c_double()
+    inst.fmi2GetRealStatus(fmi2LastSuccessfulTime, ctypes.byref(v))
+    return v.value
+
+
+@pytest.mark.parametrize("state", sorted(ALL))
+@pytest.mark.parametrize("call", sorted(CALLS_MORE))
+def test_state_machine_all_functions(raw_controller, state, call):
+    inst = _to_state(raw_controller, state)
+    fn, allowed, ok = CALLS_MORE[call]
+    fname = call.split("/")[0]
+    st = fn(inst)
+    if state in allowed:
+        assert st in ok, (call, state, st, inst.log)
+        assert not any("must not be called" in m for m in inst.errors()), inst.log
+    else:
+        assert st == fmi2Error, (call, state, st)
+        errs = inst.errors()
+        assert any((fname in m and f"in state {state}" in m) or "cannot be set" in m for m in errs), errs
+    if call != "fmi2SetFMUstate":  # restoring a state legitimately moves the instance to stepComplete
+        assert _state_of(inst, state) == state, (call, state, inst.log)
+    inst.free()
+
+
+def test_unsupported_functions_are_explained(raw_controller):
+    inst = _running(raw_controller)
+    lib = raw_controller.lib
+    vr = (ctypes.c_uint * 1)(inst.vr("theta_ankle_ref"))
+    ivr = (ctypes.c_uint * 1)(inst.vr("zmp_x"))
+    order = (ctypes.c_int * 1)(1)
+    val = (ctypes.c_double * 1)(0.0)
+    for fn, args in (("fmi2GetDirectionalDerivative", (vr, 1, ivr, 1, val, val)),
+                     ("fmi2SetRealInputDerivatives", (ivr, 1, order, val)),
+                     ("fmi2GetRealOutputDerivatives", (vr, 1, order, val))):
+        inst.log.clear()
+        assert getattr(lib, fn)(ctypes.c_void_p(inst.c), *args) == fmi2Error, fn
+        assert any("not supported" in m for m in inst.errors()), (fn, inst.log)
+    assert inst.fmi2DoStep(0.0, 1e-3, 1) == fmi2OK  # the instance is still usable
     inst.free()
 
 
@@ -383,6 +537,30 @@ def test_state_from_other_model_rejected(raw_controller):
     b.free()
 
 
+def test_forged_state_with_valid_checksum_rejected(raw_controller):
+    """The checksum only catches accidents. A blob whose controller struct holds parameters that
+    ahc_params_validate rejects (here g = NaN or sample_period-like garbage), re-signed with a
+    valid checksum, must be rejected by the model's own check, not restored."""
+    import struct
+
+    a = _running(raw_controller)
+    _drive(a, 0.0, 50)
+    blob = bytearray(_snapshot_bytes(a))
+    g = struct.pack("<d", 9.81)
+    pos = blob.rfind(g)  # the last copy is ahc_controller.p.g in the model bytes (the store's is earlier)
+    assert pos > 0 and blob.find(g) < pos
+    for forged_g in (float("nan"), 0.0, -9.81):
+        forged = bytearray(blob)
+        forged[pos:pos + 8] = struct.pack("<d", forged_g)
+        forged[-8:] = _fnv1a64(bytes(forged[:-8])).to_bytes(8, "little")
+        b = _running(raw_controller, name="victim")
+        assert _restore_bytes(b, bytes(forged)) == fmi2Error, forged_g
+        assert any("invalid parameters" in m and "g = " in m for m in b.errors()), b.log
+        assert b.fmi2DoStep(0.0, 1e-3, 1) == fmi2OK  # unchanged and usable
+        b.free()
+    a.free()
+
+
 def test_two_instances_independent(raw_controller):
     solo_a = _running(raw_controller, name="soloA")
     ref_a = _drive(solo_a, 0.0, 500, push=True)
@@ -455,8 +633,26 @@ def test_model_description_contents(controller_fmu):
             outputs.append(i)
     ms = root.find("ModelStructure")
     assert [int(u.attrib["index"]) for u in ms.find("Outputs")] == outputs
+    # sampled outputs without direct feed-through (test_outputs_have_no_direct_feedthrough)
+    assert all(u.attrib.get("dependencies") == "" for u in ms.find("Outputs"))
+    # outputs have no initial attribute = "calculated": all of them are initial unknowns, with the
+    # dependencies left out (= on all knowns: the initial outputs follow the measured posture)
+    assert all("initial" not in sv.attrib for sv in svs if sv.attrib["causality"] == "output")
     assert [int(u.attrib["index"]) for u in ms.find("InitialUnknowns")] == outputs
     assert len({sv.attrib["valueReference"] for sv in svs}) == len(svs)
+
+
+def test_outputs_have_no_direct_feedthrough(raw_controller):
+    """What dependencies="" in <Outputs> promises: setting inputs between steps does not change
+    any output before the next fmi2DoStep."""
+    inst = _running(raw_controller)
+    _drive(inst, 0.0, 20)
+    before = inst.get_real(CONTROLLER_OUTPUTS[:4] + CONTROLLER_OUTPUTS[5:10])[1]
+    assert inst.set_real({"theta_ankle": 0.2, "theta_hip": -0.3, "zmp_x": 0.04, "fz": 50.0}) == fmi2OK
+    assert inst.get_real(CONTROLLER_OUTPUTS[:4] + CONTROLLER_OUTPUTS[5:10])[1] == before
+    _step(inst, 0.02)
+    assert inst.get_real(CONTROLLER_OUTPUTS[:4] + CONTROLLER_OUTPUTS[5:10])[1] != before
+    inst.free()
 
 
 def test_guid_is_deterministic(controller_fmu, native_tool, tmp_path):
@@ -479,7 +675,7 @@ def test_binary_exports_only_fmi2_and_needs_only_libc(controller_unzipped):
     assert names and all(n.startswith("fmi2") for n in names), [n for n in names if not n.startswith("fmi2")]
     dyn = subprocess.run([readelf, "-d", str(so)], check=True, capture_output=True, text=True).stdout
     needed = {line.split("[")[1].split("]")[0] for line in dyn.splitlines() if "(NEEDED)" in line}
-    allowed = {"libc.so.6", "libm.so.6", "ld-linux-x86-64.so.2", "libdl.so.2", "libpthread.so.0"}
+    allowed = {"libc.so.6", "libm.so.6", "ld-linux-x86-64.so.2"}  # issue 3: C library and libm only
     assert needed <= allowed, needed - allowed
 
 

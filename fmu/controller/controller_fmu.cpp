@@ -160,12 +160,23 @@ class ControllerModel final : public Model {
       ctx.log(kLogStatusError, fmi2Error, "invalid tunable parameter: %s", msg);
       return fmi2Error;
     }
-    ctl_.p = p;
+    // The library's entry point for running instances (it recomputes the derived constants; the
+    // tunable set does not enter them, so this equals a plain copy of the parameters).
+    rc = ahc_update_params(&ctl_, &p);
+    if (rc != AHC_OK) {
+      ctx.log(kLogStatusError, fmi2Error, "ahc_update_params failed: %s", ahc_error_string(rc));
+      return fmi2Error;
+    }
     return fmi2OK;
   }
 
   StepResult do_step(Context& ctx, double t, double h, bool) override {
     StepResult r;
+    if (!ctl_.valid || !(ctl_.p.sample_period > 0.0)) {  // unreachable after a successful exit_initialization
+      ctx.log(kLogStatusError, fmi2Error, "t=%.9g: the controller is not initialized", t);
+      r.status = fmi2Error;
+      return r;
+    }
     ahc_sensors s;
     s.theta_ankle = ctx.real(vr::theta_ankle);
     s.theta_hip = ctx.real(vr::theta_hip);
@@ -238,6 +249,24 @@ class ControllerModel final : public Model {
     }
     if (phase < 0 || phase > 3 || !std::isfinite(t0)) {
       err = "controller state corrupt";
+      return false;
+    }
+    // The checksum only catches accidental corruption: check that the controller struct is one
+    // ahc_init could have produced, so that a forged blob cannot make fmi2DoStep divide by a zero
+    // sample period or run with parameters ahc_params_validate would reject.
+    if (c.valid) {
+      char msg[256] = {0};
+      if (ahc_params_validate(&c.p, msg, sizeof msg) != AHC_OK) {
+        err = std::string("controller state has invalid parameters: ") + msg;
+        return false;
+      }
+      if (c.valid != 1 || c.phase < AHC_PHASE_ANKLE || c.phase > AHC_PHASE_HIP_TO_ANKLE ||
+          !std::isfinite(c.th1) || !std::isfinite(c.dth1) || !std::isfinite(c.th2) || !std::isfinite(c.dth2)) {
+        err = "controller state corrupt (phase or reference states)";
+        return false;
+      }
+    } else if (ticks != 0) {
+      err = "controller state corrupt (ticks counted on an uninitialized controller)";
       return false;
     }
     ctl_ = c;
