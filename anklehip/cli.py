@@ -43,9 +43,17 @@ def reference_columns(sc, data: np.ndarray) -> list[str]:
 def compare_with_reference(sc, res):
     """Compare a run with the scenario's reference; None when it has none or the file is missing."""
     from .compare import compare
+    from .scenario import ScenarioError
     r = sc.reference
     if r is None or not r.file.is_file():
         return None
+    if r.signals:
+        from .compare import read_result_csv
+        cols = r.columns or list(read_result_csv(r.file, "reference").dtype.names[1:])
+        for name in r.signals:
+            if name not in cols:
+                raise ScenarioError(f"{_rel(sc.path) if sc.path else sc.name}: reference.signals.{name}: "
+                                    f"not a compared signal (compared: {', '.join(cols)})")
     # the reference holds every interval-th row of a run: compare the same rows of this run (a
     # 1-2 ms transient between two reference samples is not a deviation from the reference)
     return compare(decimate(res.data, res.step, r.interval), r.file, columns=r.columns, num=r.num, dx=r.dx, dy=r.dy, abs_tol=r.abs_tol,
@@ -133,7 +141,7 @@ def _scenario_and_models(a):
     sc.controller.update(c_set)
     sc.plant.update(p_set)
     models = Models.load(a.fmu_dir)
-    check_overrides(models, sc.controller, sc.plant, f"{_rel(sc.path)} / --set")
+    check_overrides(models, sc.controller, sc.plant, _rel(sc.path) + (" / --set" if a.set else ""))
     return sc, models
 
 
@@ -158,12 +166,19 @@ def cmd_run(a) -> int:
     pushes = summarize_pushes(res, sc.push, sc.expect.erect_tol)
     checks = check_expect(res, sc.expect) if a.stop_time is None else []
     cmp = None
-    if not a.no_compare and a.stop_time is None and not a.set:   # overrides change the reference
+    warnings: list[str] = []
+    # overrides change the reference; an interrupted or failed run is not a result to compare
+    if not a.no_compare and a.stop_time is None and not a.set and res.outcome not in ("error", "interrupted"):
         try:
             rep = compare_with_reference(sc, res)
         except Exception as e:   # a broken reference must not lose the run
             rep = None
-            print(f"anklehip: warning: reference comparison failed: {e}", file=sys.stderr)
+            warnings.append(f"reference comparison failed: {e}")
+        if rep is None and sc.reference is not None and not sc.reference.file.is_file():
+            warnings.append(f"{_rel(sc.path)}: reference.file: {_rel(sc.reference.file)} does not exist, "
+                            f"the run was not compared (create it with `anklehip regen-references {sc.name}`)")
+        for w in warnings:
+            print(f"anklehip: warning: {w}", file=sys.stderr)
         if rep is not None:
             cmp = rep.as_dict()
             if not rep.passed:
@@ -180,6 +195,8 @@ def cmd_run(a) -> int:
         record_case(res, Path(a.record_steptest), sc.controller, source=sc.name)
         files["steptest_case"] = a.record_steptest
     s = summary_dict(sc, res, pushes, checks, files, cmp)
+    if warnings:
+        s["warnings"] = warnings
     write_summary_json(paths["summary"], s)
     print(format_summary(s, pushes))
     if res.outcome in ("error", "interrupted"):

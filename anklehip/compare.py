@@ -114,10 +114,36 @@ def read_result_csv(path: str | Path, what: str = "file") -> np.ndarray:
     try:
         data = read_csv(str(path))
     except Exception as e:
-        raise CompareError(f"{what} {path}: not a valid result CSV ({type(e).__name__}: {e})") from None
+        where = _locate_csv_problem(path)
+        raise CompareError(f"{what} {path}: not a valid result CSV: "
+                           + (where or f"{type(e).__name__}: {e}")) from None
     if data.dtype.names is None or len(data.dtype.names) < 1:
         raise CompareError(f"{what} {path}: no columns")
+    first = data.dtype.names[0]
+    if first.strip().lower() != "time":
+        raise CompareError(f"{what} {path}: the first column must be the time column 'time' "
+                           f"(FMI cross-check / FMPy CSV layout), got {first!r}")
     return np.atleast_1d(data)
+
+
+def _locate_csv_problem(path: Path) -> str | None:
+    """The first cell of a CSV that FMPy's read_csv cannot read: 'line L, column C: ...'."""
+    with open(path) as f:
+        lines = f.read().splitlines()
+    names = [n.strip().strip('"') for n in lines[0].split(",")]
+    for i, line in enumerate(lines[1:], 2):
+        if not line.strip():
+            return f"line {i}: empty line"
+        cells = line.split(",")
+        if len(cells) != len(names):
+            return f"line {i}: {len(cells)} cells, the header has {len(names)} columns"
+        for name, cell in zip(names, cells):
+            for lit in cell.split(" "):
+                try:
+                    float(lit)
+                except ValueError:
+                    return f"line {i}, column {name!r}: value {cell!r} is not a number"
+    return None
 
 
 def _time(data: np.ndarray, label: str) -> np.ndarray:
@@ -281,6 +307,10 @@ def compare(result: np.ndarray | str | Path, reference: np.ndarray | str | Path,
     if extra and columns is ref_cols:
         notes.append(f"{len(extra)} result column(s) not in the reference, not compared: {', '.join(extra[:8])}"
                      + (" ..." if len(extra) > 8 else ""))
+    unknown_tol = [c for c in (tolerances or {}) if c not in columns]
+    if unknown_tol:
+        raise CompareError(f"tolerances given for signal(s) that are not compared: {', '.join(unknown_tol)} "
+                           f"(compared: {', '.join(columns)})")
     if t_start is not None or t_stop is not None:
         a = -math.inf if t_start is None else t_start
         b = math.inf if t_stop is None else t_stop

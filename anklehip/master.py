@@ -178,6 +178,7 @@ def simulate(scenario: Scenario, models: Models | None = None, *, fmu_dir=None,
     c_init: dict[str, float] = {}
     failed_at = -1
     j = 0
+    bar = None
     try:
         ctrl = Slave(models.controller, "controller", logger=logger)
         plant = Slave(models.plant, "plant", logger=logger)
@@ -204,7 +205,6 @@ def simulate(scenario: Scenario, models: Models | None = None, *, fmu_dir=None,
         oF, oO = 8 * L.off_feed, 8 * L.off_cother
         oPB, oCI, oCB = 4 * L.off_pbool, 4 * L.off_cint, 4 * L.off_cbool
 
-        bar = None
         if progress is None:
             progress = T >= 5.0
         if progress:
@@ -245,6 +245,7 @@ def simulate(scenario: Scenario, models: Models | None = None, *, fmu_dir=None,
             k = kend
         if bar is not None:
             bar.close()
+            bar = None
 
         if failed_at >= 0:
             k = failed_at
@@ -286,14 +287,16 @@ def simulate(scenario: Scenario, models: Models | None = None, *, fmu_dir=None,
                 p_getB(pc, vr_pB, n_pB, rI + oPB)
             t_end = t0 + N * h
     except KeyboardInterrupt:
-        outcome, message = "interrupted", "interrupted by the user"
         last = max(j - 1, 0)
         t_end = t0 + last * h
+        outcome, message = "interrupted", f"interrupted by the user; data kept up to t={t_end:.3f} s"
     except Exception as e:   # keep what was computed, mark it as an error
-        outcome, message = "error", f"{type(e).__name__}: {e}"
         last = failed_at if failed_at >= 0 else max(j - 1, 0)
         t_end = t0 + last * h
+        outcome, message = "error", f"error, data kept up to t={t_end:.3f} s: {type(e).__name__}: {e}"
     finally:
+        if bar is not None:            # interrupted or failed mid-run: do not leave the bar behind
+            bar.close()
         for s in (plant, ctrl):
             if s is not None:
                 s.free(terminate=outcome == "completed")

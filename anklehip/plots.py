@@ -31,9 +31,15 @@ def shade_phases(ax, t: np.ndarray, phase: np.ndarray, legend: bool = False) -> 
     for a, b in zip(starts, ends):
         p = int(phase[a])
         if p in PHASE_COLORS:
-            ax.axvspan(t[a], t[b], color=PHASE_COLORS[p], alpha=0.35, lw=0,
-                       label=PHASE_LABELS[p] if legend and p not in used else None)
+            ax.axvspan(t[a], t[b], color=PHASE_COLORS[p], alpha=0.35, lw=0)   # legend below
             used.add(p)
+    if legend and used:
+        # phase 0 (ankle strategy) is the unshaded background: say so in the legend
+        from matplotlib.patches import Patch
+        ax.add_artist(ax.legend(handles=[Patch(facecolor="white", edgecolor="0.6", label="0 ankle (unshaded)")]
+                                + [Patch(facecolor=PHASE_COLORS[q], alpha=0.35, label=PHASE_LABELS[q])
+                                   for q in sorted(used)], fontsize=7, loc="best", title="phase",
+                                title_fontsize=7))
 
 
 def _save(fig, out: Path) -> Path:
@@ -114,8 +120,8 @@ def fig5(d: np.ndarray, out: Path, window: tuple[float, float] | None = None,
     if _has(d, "com_x_desired"):
         ax[1].plot(t, 1000 * d["com_x_desired"], color="tab:green", ls="--", lw=0.8, label="r_x desired")
     if zmp_limits:
-        for z in zmp_limits:
-            ax[1].axhline(1000 * z, color="k", ls=":", lw=0.8)
+        for i, z in enumerate(zmp_limits):
+            ax[1].axhline(1000 * z, color="k", ls=":", lw=0.8, label="ZMP limits" if i == 0 else None)
     ax[1].set_ylabel("x [mm]")
     ax[1].legend(fontsize=7, ncol=3, loc="upper right")
     ax[2].plot(t, 1000 * (d["zmp_x"] - d["com_x"]), color="k", lw=1, label="p − r_x (measured)")

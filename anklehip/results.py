@@ -64,9 +64,15 @@ def result_paths(out_dir: Path, name: str) -> dict[str, Path]:
             "summary": out_dir / f"{name}.summary.json"}
 
 
+FIGURE_SUFFIXES = ("_overview.png", "_fig4_joint_angles.png", "_fig5_first_cycle.png", ".gif",
+                   "_reference_failed.png")
+
+
 def clear_previous(out_dir: Path, name: str) -> None:
-    """Remove the files of an earlier run so that nothing stale looks like this run's result."""
-    for p in result_paths(out_dir, name).values():
+    """Remove the files of an earlier run (data, summary, figures) so that nothing stale looks like
+    this run's result."""
+    extra = [Path(out_dir) / f"{name}{s}" for s in FIGURE_SUFFIXES]
+    for p in list(result_paths(out_dir, name).values()) + extra:
         try:
             p.unlink()
         except FileNotFoundError:
@@ -277,6 +283,8 @@ def format_summary(s: dict[str, Any], pushes: list[PushSummary]) -> str:
         cmp = s["comparison"]
         lines.append(f"  [{'PASS' if cmp['passed'] else 'FAIL'}] reference {cmp['reference']}: "
                      f"{cmp['n_failed']} of {cmp['n_signals']} signals outside the band")
+    for w in s.get("warnings", []):
+        lines.append(f"  [WARN] {w}")
     for k, v in s["files"].items():
         lines.append(f"  {k}: {v}")
     return "\n".join(lines)

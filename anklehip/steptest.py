@@ -189,8 +189,13 @@ class StepTestResult:
 
 def run_controller(fmu: Path | FMUInfo, inputs: np.ndarray, start: float, stop: float, step: float,
                    parameters: dict[str, Any] | None = None, outputs: list[str] | None = None,
-                   realtime: bool = False, spin_us: float = 0.0) -> tuple[np.ndarray, RTStats | None]:
-    """Step the controller FMU alone on recorded inputs; outputs in the cross-check convention."""
+                   realtime: bool = False, spin_us: float = 0.0,
+                   source: str = "input CSV") -> tuple[np.ndarray, RTStats | None]:
+    """Step the controller FMU alone on recorded inputs; outputs in the cross-check convention.
+
+    The inputs must cover every communication point start, start + h, ..., stop - h (they are
+    interpolated linearly onto that grid, exactly where the grids match); ``source`` names them in
+    error messages."""
     info = fmu if isinstance(fmu, FMUInfo) else FMUInfo.load(fmu)
     parameters = parameters or {}
     info.check_overrides(parameters, "step-test case")
@@ -198,7 +203,7 @@ def run_controller(fmu: Path | FMUInfo, inputs: np.ndarray, start: float, stop: 
     names = inputs.dtype.names
     missing = [v.name for v in in_vars if v.name not in names[1:]]
     if missing:
-        raise StepTestError(f"input CSV lacks column(s) {', '.join(missing)} for the inputs of {info.name} "
+        raise StepTestError(f"{source} lacks column(s) {', '.join(missing)} for the inputs of {info.name} "
                             f"(it has: {', '.join(names[1:])})")
     out_vars = [v for v in info.by_causality("output")]
     if outputs is not None:
@@ -211,6 +216,17 @@ def run_controller(fmu: Path | FMUInfo, inputs: np.ndarray, start: float, stop: 
         raise StepTestError("nothing to step: StopTime - StartTime < StepSize")
     t_in = np.asarray(inputs[names[0]], float)
     tk = start + step * np.arange(n)
+    if not np.all(np.isfinite(t_in)):
+        raise StepTestError(f"{source}: the time column {names[0]!r} has NaN/Inf at row "
+                            f"{int(np.argmax(~np.isfinite(t_in))) + 2}")
+    if len(t_in) > 1 and np.any(np.diff(t_in) <= 0):
+        k = int(np.argmax(np.diff(t_in) <= 0))
+        raise StepTestError(f"{source}: time must increase strictly; row {k + 3} has t={t_in[k + 1]:g} "
+                            f"after t={t_in[k]:g}")
+    eps = 1e-9 * max(1.0, abs(tk[-1]))
+    if t_in[0] > tk[0] + eps or t_in[-1] < tk[-1] - eps:
+        raise StepTestError(f"{source}: the inputs cover t={t_in[0]:g}..{t_in[-1]:g} s, the step test needs "
+                            f"{tk[0]:g}..{tk[-1]:g} s (StartTime .. StopTime - StepSize of the .opt file)")
     U = np.empty((n, len(in_vars)), float)
     for j, v in enumerate(in_vars):
         col = np.asarray(inputs[v.name], float)
@@ -321,7 +337,7 @@ def run_case(case_dir: Path, fmu: Path, out_dir: Path | None = None, *, realtime
     ref = read_result_csv(f["ref"], "reference") if compare_ref and f["ref"].is_file() else None
     outputs = list(ref.dtype.names[1:]) if ref is not None else None
     data, rt = run_controller(fmu, inputs, opts["StartTime"], opts["StopTime"], opts["StepSize"],
-                              params, outputs=None, realtime=realtime, spin_us=spin_us)
+                              params, outputs=None, realtime=realtime, spin_us=spin_us, source=str(f["in"]))
     out_csv = None
     if out_dir is not None:
         out_csv = Path(out_dir) / f"{model}_out.csv"

@@ -172,3 +172,31 @@ def test_band_floor_for_nearly_constant_signals():
     res["fz"][1500:] += 1.0
     rep = compare(res, ref, band_floor=0.05)
     assert not rep.passed and rep.signals[0].first_outside == pytest.approx(T[1500])
+
+
+def test_non_numeric_cell_names_line_and_column(tmp_path):
+    write_csv(tmp_path / "ref.csv", ref_signals(T))
+    lines = (tmp_path / "ref.csv").read_text().splitlines()
+    cells = lines[5].split(",")
+    cells[2] = "oops"
+    lines[5] = ",".join(cells)
+    (tmp_path / "res.csv").write_text("\n".join(lines) + "\n")
+    with pytest.raises(CompareError, match=r"result .*res.csv: not a valid result CSV: line 6, column 'ramp': "
+                                           r"value 'oops' is not a number"):
+        compare(tmp_path / "res.csv", tmp_path / "ref.csv")
+
+
+def test_reference_without_time_column_is_a_clear_error(tmp_path, capsys):
+    write_csv(tmp_path / "res.csv", ref_signals(T))
+    (tmp_path / "ref.csv").write_text('"y","ramp"\n1,2\n3,4\n')
+    with pytest.raises(CompareError, match=r"reference .*ref.csv: the first column must be the time column "
+                                           r"'time'.*got 'y'"):
+        compare(tmp_path / "res.csv", tmp_path / "ref.csv")
+    assert main(["compare", str(tmp_path / "res.csv"), str(tmp_path / "ref.csv")]) == 2
+    assert "first column must be the time column" in capsys.readouterr().err
+
+
+def test_tolerance_for_a_signal_that_is_not_compared_is_an_error():
+    ref = ref_signals(T)
+    with pytest.raises(CompareError, match=r"tolerances given for signal\(s\) that are not compared: yy"):
+        compare(ref, ref, tolerances={"yy": {"abs_tol": 1.0}})

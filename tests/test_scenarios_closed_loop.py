@@ -97,3 +97,76 @@ def test_override_types_are_checked(models):
     with pytest.raises(FMUError, match="parameter 'Ka' is Real, got boolean True"):
         check_overrides(models, {"Ka": True}, {})
     check_overrides(models, {"hip_strategy_enabled": False, "Ka": 30}, {"h_push": 0.3})
+
+
+def _plant_step_that_raises(monkeypatch, exc, at_step):
+    """Make the plant's fmi2DoStep raise `exc` at its `at_step`-th call (a Ctrl-C or a crash mid-run)."""
+    from anklehip import master
+    from anklehip.fmu import Slave
+
+    class S(Slave):
+        def __init__(self, info, *a, **k):
+            super().__init__(info, *a, **k)
+            if info.name.startswith("Hoap2Plant"):
+                real, n = self.do_step, [0]
+
+                def do_step(c, t, h, flag):
+                    n[0] += 1
+                    if n[0] == at_step:
+                        raise exc
+                    return real(c, t, h, flag)
+                self.do_step = do_step
+    monkeypatch.setattr(master, "Slave", S)
+
+
+@pytest.mark.parametrize("exc, outcome", [(KeyboardInterrupt(), "interrupted"), (RuntimeError("boom"), "error")])
+def test_interrupted_or_failed_run_keeps_partial_data_marked_incomplete(models, monkeypatch, tmp_path, capsys,
+                                                                        exc, outcome):
+    _plant_step_that_raises(monkeypatch, exc, 1500)
+    out = tmp_path / "o"
+    out.mkdir()
+    for stale in ("_reference_failed.png", "_fig5_first_cycle.png", ".csv"):   # from an earlier run
+        (out / f"ankle_small_push{stale}").write_text("stale")
+    assert main(["run", "ankle_small_push", "--out", str(out), "--no-progress"]) == 1
+    assert not (out / "ankle_small_push.csv").exists()
+    s = json.loads((out / "ankle_small_push.summary.json").read_text())
+    assert s["outcome"] == outcome and s["complete"] is False and not s["expectations_met"]
+    from fmpy.util import read_csv
+    d = read_csv(out / "ankle_small_push.incomplete.csv")
+    # rows 0..1498 are complete (the 1500th plant step, from t=1.499, never finished)
+    assert len(d) == 1499 and d["time"][-1] == pytest.approx(1.498) and np.all(d["fz"] > 10)
+    assert f"data kept up to t=1.498 s" in capsys.readouterr().out
+    assert s["comparison"] is None and not (out / "ankle_small_push_reference_failed.png").exists()
+    assert not (out / "ankle_small_push_fig5_first_cycle.png").exists()
+
+
+def test_unknown_parameter_in_scenario_file_names_file_and_parameter(models, tmp_path, capsys):
+    f = tmp_path / "x.toml"
+    f.write_text("stop_time = 0.5\n[controller]\nKx = 3.0\n")
+    assert main(["run", str(f), "--out", str(tmp_path / "o"), "--no-progress"]) == 2
+    err = capsys.readouterr().err
+    assert "AnkleHipController.fmu has no parameter 'Kx'" in err and "x.toml [controller]" in err
+    assert "--set" not in err
+
+
+def test_missing_reference_file_is_reported_not_silently_skipped(models, tmp_path, capsys):
+    f = tmp_path / "y.toml"
+    f.write_text("stop_time = 0.2\n[reference]\nfile = 'reference/nope.csv'\n")
+    assert main(["run", str(f), "--out", str(tmp_path / "o"), "--no-progress"]) == 0
+    cap = capsys.readouterr()
+    assert "y.toml: reference.file:" in cap.err and "nope.csv does not exist" in cap.err
+    assert "[WARN]" in cap.out
+    s = json.loads((tmp_path / "o" / "y.summary.json").read_text())
+    assert s["comparison"] is None and "nope.csv does not exist" in s["warnings"][0]
+
+
+def test_reference_signal_override_with_a_typo_is_an_error(models, tmp_path, capsys):
+    """[reference.signals.<typo>] must not be silently ignored (unknown keys are errors)."""
+    import shutil
+    (tmp_path / "reference").mkdir()
+    shutil.copy(scenarios_dir() / "reference" / "short_impact.csv", tmp_path / "reference" / "z.csv")
+    f = tmp_path / "z.toml"
+    f.write_text("stop_time = 0.2\n[reference]\nfile = 'reference/z.csv'\n[reference.signals.fZ]\nband_floor = 0.5\n")
+    assert main(["run", str(f), "--out", str(tmp_path / "o"), "--no-progress"]) == 0
+    cap = capsys.readouterr()
+    assert "z.toml: reference.signals.fZ: not a compared signal" in cap.err and "[WARN]" in cap.out

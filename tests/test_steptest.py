@@ -88,7 +88,27 @@ def test_case_errors_are_clear(controller_fmu, tmp_path, capsys):
     d["time"] = t
     write_csv(bad / "AnkleHipController_in.csv", d)
     assert main(["steptest", str(bad), "--no-compare"]) == 2
-    assert "input CSV lacks column(s) theta_hip, fz" in capsys.readouterr().err
+    assert "AnkleHipController_in.csv lacks column(s) theta_hip, fz" in capsys.readouterr().err
+
+
+def test_inputs_that_do_not_cover_the_run_are_an_error(controller_fmu, tmp_path, capsys):
+    case = tmp_path / "short_in"
+    case.mkdir()
+    f = case_files(case)
+    f["opt"].write_text("StartTime, 0\nStopTime, 0.02\nStepSize, 0.001\n")
+    t = np.arange(0, 0.0105, 0.001)            # inputs up to 0.01 s, the run needs 0..0.019 s
+    d = np.zeros(len(t), [("time", float), ("theta_ankle", float), ("theta_hip", float), ("zmp_x", float),
+                          ("fz", float)])
+    d["time"], d["fz"] = t, 70.0
+    write_csv(f["in"], d)
+    assert main(["steptest", str(case), "--no-compare"]) == 2
+    err = capsys.readouterr().err
+    assert "AnkleHipController_in.csv: the inputs cover t=0..0.01 s, the step test needs 0..0.019 s" in err
+    d["time"][5] = d["time"][4]
+    write_csv(f["in"], d)
+    f["opt"].write_text("StartTime, 0\nStopTime, 0.01\nStepSize, 0.001\n")
+    assert main(["steptest", str(case), "--no-compare"]) == 2
+    assert "time must increase strictly; row 7" in capsys.readouterr().err
 
 
 def test_case_works_with_fmpy_simulate_fmu(controller_fmu):
