@@ -152,7 +152,8 @@ def test_unknown_parameter_in_scenario_file_names_file_and_parameter(models, tmp
 def test_missing_reference_file_is_reported_not_silently_skipped(models, tmp_path, capsys):
     f = tmp_path / "y.toml"
     f.write_text("stop_time = 0.2\n[reference]\nfile = 'reference/nope.csv'\n")
-    assert main(["run", str(f), "--out", str(tmp_path / "o"), "--no-progress"]) == 0
+    # the results are written, but a broken reference set-up fails the run (exit 1)
+    assert main(["run", str(f), "--out", str(tmp_path / "o"), "--no-progress"]) == 1
     cap = capsys.readouterr()
     assert "y.toml: reference.file:" in cap.err and "nope.csv does not exist" in cap.err
     assert "[WARN]" in cap.out
@@ -167,6 +168,25 @@ def test_reference_signal_override_with_a_typo_is_an_error(models, tmp_path, cap
     shutil.copy(scenarios_dir() / "reference" / "short_impact.csv", tmp_path / "reference" / "z.csv")
     f = tmp_path / "z.toml"
     f.write_text("stop_time = 0.2\n[reference]\nfile = 'reference/z.csv'\n[reference.signals.fZ]\nband_floor = 0.5\n")
-    assert main(["run", str(f), "--out", str(tmp_path / "o"), "--no-progress"]) == 0
+    assert main(["run", str(f), "--out", str(tmp_path / "o"), "--no-progress"]) == 1
     cap = capsys.readouterr()
     assert "z.toml: reference.signals.fZ: not a compared signal" in cap.err and "[WARN]" in cap.out
+
+
+def test_reference_outside_the_band_fails_the_run_but_keeps_the_results(models, tmp_path, capsys):
+    """A run that meets its expectations but leaves its reference's band exits 1, with the CSV and
+    the summary written (nothing is lost, and the failure is not silent)."""
+    from fmpy.util import read_csv, write_csv
+    (tmp_path / "reference").mkdir()
+    ref = read_csv(str(scenarios_dir() / "reference" / "short_impact.csv"))
+    ref["theta_hip"] += 0.05                      # 50 mrad off everywhere: far outside the band
+    write_csv(str(tmp_path / "reference" / "t.csv"), ref)
+    f = tmp_path / "t.toml"
+    f.write_text((scenarios_dir() / "short_impact.toml").read_text()
+                 .replace("reference/short_impact.csv", "reference/t.csv"))
+    out = tmp_path / "o"
+    assert main(["run", str(f), "--out", str(out), "--no-progress"]) == 1
+    assert (out / "t.csv").is_file()
+    s = json.loads((out / "t.summary.json").read_text())
+    assert s["comparison"]["passed"] is False
+    assert s["comparison"]["signals"]["theta_hip"]["passed"] is False
