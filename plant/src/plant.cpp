@@ -325,6 +325,22 @@ bool Plant::handle_roots(double t, const int* found) {
     case ContactMode::Airborne: {
       const ContactMode m = found[0] ? ContactMode::Toe : ContactMode::Heel;
       const Vec5 qd2 = model_.impact(m, q(), qd());
+      {
+        // A sticking plastic point impact: if the edge arrives with a large tangential velocity
+        // the impulse that stops it can have a pulling normal component (a frictional impact law
+        // would be needed). Not modelled; reported (docs/plant.md, known simplifications).
+        Mat5 M;
+        Vec5 hb;
+        model_.mass_bias(q(), qd(), M, hb);
+        const double Pn = (M * (qd2 - qd()))[1];
+        if (Pn < 0) {
+          char buf[160];
+          std::snprintf(buf, sizeof buf,
+                        "t=%.6f s: warning: touch-down impulse has a pulling normal component "
+                        "(%.3g N s); sticking impact assumed", t_, Pn);
+          log(buf);
+        }
+      }
       for (int i = 0; i < 5; ++i) y_[5 + i] = qd2[i];
       ++stats_.impacts;
       set_mode(m, "edge touched down (plastic impact)");
