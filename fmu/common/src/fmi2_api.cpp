@@ -463,7 +463,7 @@ fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte serializedSta
     // Check the blob completely (header, checksum, values and the model's part) by decoding it
     // into this instance and restoring the instance's own state afterwards.
     const State saved = inst->state;
-    if (saved == State::Error) inst->state = State::Instantiated;  // encodable placeholder
+    if (saved == State::Error) inst->state = State::Instantiated;  // encodeState needs a non-error state to snapshot
     std::vector<std::uint8_t> backup = encodeState(*inst);
     inst->state = saved;
     std::string err;
