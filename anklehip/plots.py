@@ -42,6 +42,18 @@ def shade_phases(ax, t: np.ndarray, phase: np.ndarray, legend: bool = False) -> 
                                 title_fontsize=7))
 
 
+def _phase_axes_with_angles(d: np.ndarray, t: np.ndarray, figsize, height_ratios):
+    """Four stacked axes sharing time, the phases shaded on each, the joint angles in the first."""
+    fig, ax = plt.subplots(4, 1, figsize=figsize, sharex=True, gridspec_kw={"height_ratios": height_ratios})
+    for i, x in enumerate(ax):
+        if _has(d, "phase"):
+            shade_phases(x, t, d["phase"], legend=i == 0)
+        x.grid(alpha=0.3)
+    ax[0].plot(t, np.degrees(d["theta_ankle"]), color="tab:blue", label="ankle θ1")
+    ax[0].plot(t, np.degrees(d["theta_hip"]), color="tab:red", label="hip θ2")
+    return fig, ax
+
+
 def _save(fig, out: Path) -> Path:
     out = Path(out)
     out.parent.mkdir(parents=True, exist_ok=True)
@@ -102,13 +114,7 @@ def fig5(d: np.ndarray, out: Path, window: tuple[float, float] | None = None,
     m = (d["time"] >= a) & (d["time"] <= b)
     d = d[m]
     t = d["time"]
-    fig, ax = plt.subplots(4, 1, figsize=(9, 9), sharex=True, gridspec_kw={"height_ratios": [3, 3, 2, 1.3]})
-    for i, x in enumerate(ax):
-        if _has(d, "phase"):
-            shade_phases(x, t, d["phase"], legend=i == 0)
-        x.grid(alpha=0.3)
-    ax[0].plot(t, np.degrees(d["theta_ankle"]), color="tab:blue", label="ankle θ1")
-    ax[0].plot(t, np.degrees(d["theta_hip"]), color="tab:red", label="hip θ2")
+    fig, ax = _phase_axes_with_angles(d, t, (9, 9), [3, 3, 2, 1.3])
     if _has(d, "theta_ankle_ref"):
         ax[0].plot(t, np.degrees(d["theta_ankle_ref"]), color="tab:blue", ls="--", lw=0.8, label="θ1 ref")
         ax[0].plot(t, np.degrees(d["theta_hip_ref"]), color="tab:red", ls="--", lw=0.8, label="θ2 ref")
@@ -151,13 +157,7 @@ def overview(d: np.ndarray, out: Path, title: str = "") -> Path:
         ax[0, 0].set_title(title)
         fig.tight_layout()
         return _save(fig, out)
-    fig, ax = plt.subplots(4, 1, figsize=(10, 9), sharex=True, gridspec_kw={"height_ratios": [3, 3, 1.5, 1.2]})
-    for i, x in enumerate(ax):
-        if _has(d, "phase"):
-            shade_phases(x, t, d["phase"], legend=i == 0)
-        x.grid(alpha=0.3)
-    ax[0].plot(t, np.degrees(d["theta_ankle"]), color="tab:blue", label="ankle θ1")
-    ax[0].plot(t, np.degrees(d["theta_hip"]), color="tab:red", label="hip θ2")
+    fig, ax = _phase_axes_with_angles(d, t, (10, 9), [3, 3, 1.5, 1.2])
     ax[0].set_ylabel("angle [deg]")
     ax[0].legend(fontsize=7, ncol=4, loc="upper right")
     ax[0].set_title(title)

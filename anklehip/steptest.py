@@ -229,10 +229,8 @@ def run_controller(fmu: Path | FMUInfo, inputs: np.ndarray, start: float, stop: 
                             f"{tk[0]:g}..{tk[-1]:g} s (StartTime .. StopTime - StepSize of the .opt file)")
     U = np.empty((n, len(in_vars)), float)
     for j, v in enumerate(in_vars):
-        col = np.asarray(inputs[v.name], float)
-        if not np.all(np.isfinite(col)):
-            pass     # NaN/Inf inputs are passed on: the FMU must contain them (DESIGN 7)
-        U[:, j] = np.interp(tk, t_in, col)       # exact on a matching grid
+        # NaN/Inf inputs are passed on: the FMU must contain them (DESIGN 7)
+        U[:, j] = np.interp(tk, t_in, np.asarray(inputs[v.name], float))   # exact on a matching grid
     reals = [v for v in out_vars if v.type == "Real"]
     ints = [v for v in out_vars if v.type in ("Integer", "Enumeration")]
     bools = [v for v in out_vars if v.type == "Boolean"]
@@ -249,23 +247,23 @@ def run_controller(fmu: Path | FMUInfo, inputs: np.ndarray, start: float, stop: 
         bR, sR, bI, sI, bU, sU = R.ctypes.data, R.strides[0], I.ctypes.data, I.strides[0], U.ctypes.data, U.strides[0]
         oB = 4 * nI
         gR, gI, gB, setR, step_fn, c = s.get_real, s.get_integer, s.get_boolean, s.set_real, s.do_step, s.c
-        st = gR(c, vR, nR, bR) if nR else 0
-        if nI:
-            st |= gI(c, vI, nI, bI)
-        if nB:
-            st |= gB(c, vB, nB, bI + oB)
+
+        def read_outputs(row: int) -> int:
+            """Outputs straight into row `row` of R and I; returns the OR of the fmi2 statuses."""
+            r, i = bR + row * sR, bI + row * sI
+            st = gR(c, vR, nR, r) if nR else 0
+            if nI:
+                st |= gI(c, vI, nI, i)
+            if nB:
+                st |= gB(c, vB, nB, i + oB)
+            return st
+
+        st = read_outputs(0)
         if not realtime:
             for k in range(n):
                 st |= setR(c, vin, nin, bU + k * sU)
                 sd = step_fn(c, start + k * step, step, 1)
-                r1 = bR + (k + 1) * sR
-                i1 = bI + (k + 1) * sI
-                if nR:
-                    st |= gR(c, vR, nR, r1)
-                if nI:
-                    st |= gI(c, vI, nI, i1)
-                if nB:
-                    st |= gB(c, vB, nB, i1 + oB)
+                st |= read_outputs(k + 1)
                 if sd > 1 or st > 1:
                     raise FMUError(f"{info.name}: step at t={start + k * step:.6f} s failed (doStep status {sd}, "
                                    f"get/set status {st})")
@@ -290,14 +288,7 @@ def run_controller(fmu: Path | FMUInfo, inputs: np.ndarray, start: float, stop: 
                 a = clock()
                 sd = step_fn(c, start + k * step, step, 1)
                 b = clock()
-                r1 = bR + (k + 1) * sR
-                i1 = bI + (k + 1) * sI
-                if nR:
-                    st |= gR(c, vR, nR, r1)
-                if nI:
-                    st |= gI(c, vI, nI, i1)
-                if nB:
-                    st |= gB(c, vB, nB, i1 + oB)
+                st |= read_outputs(k + 1)
                 done = clock()
                 ex[k] = b - a
                 late[k] = wake - deadline

@@ -83,12 +83,26 @@ def controller_fmu(fmu_path) -> Path:
     return fmu_path("AnkleHipController")
 
 
-@pytest.fixture(scope="session")
-def controller_unzipped(controller_fmu, tmp_path_factory) -> Path:
-    d = tmp_path_factory.mktemp("AnkleHipController")
-    with zipfile.ZipFile(controller_fmu) as z:
+def _unzip(fmu: Path, tmp_path_factory) -> Path:
+    d = tmp_path_factory.mktemp(fmu.stem)
+    with zipfile.ZipFile(fmu) as z:
         z.extractall(d)
     return d
+
+
+@pytest.fixture(scope="session")
+def controller_unzipped(controller_fmu, tmp_path_factory) -> Path:
+    return _unzip(controller_fmu, tmp_path_factory)
+
+
+@pytest.fixture(scope="session")
+def plant_fmu(fmu_path) -> Path:
+    return fmu_path("Hoap2Plant")
+
+
+@pytest.fixture(scope="session")
+def plant_unzipped(plant_fmu, tmp_path_factory) -> Path:
+    return _unzip(plant_fmu, tmp_path_factory)
 
 
 # ---------------------------------------------------------------------------------------------

@@ -9,7 +9,6 @@ from __future__ import annotations
 import shutil
 import subprocess
 import sys
-import zipfile
 from pathlib import Path
 
 import numpy as np
@@ -22,27 +21,14 @@ G = 9.81
 MASS = 1.79 + 4.71 + 0.66  # nominal HOAP-2 (ahc/hoap2_model.h)
 
 
-@pytest.fixture(scope="module")
-def plant_fmu(fmu_path) -> Path:
-    return fmu_path("Hoap2Plant")
-
-
-@pytest.fixture(scope="module")
-def unzipped(plant_fmu, tmp_path_factory) -> Path:
-    d = tmp_path_factory.mktemp("hoap2plant")
-    with zipfile.ZipFile(plant_fmu) as z:
-        z.extractall(d)
-    return d
-
-
 class Slave:
     """Small FMPy wrapper: named access, 1 ms steps."""
 
-    def __init__(self, unzipped: Path, params: dict | None = None, name="plant", inputs: dict | None = None):
-        self.md = read_model_description(str(unzipped / "modelDescription.xml"))
+    def __init__(self, plant_unzipped: Path, params: dict | None = None, name="plant", inputs: dict | None = None):
+        self.md = read_model_description(str(plant_unzipped / "modelDescription.xml"))
         self.vr = {v.name: v.valueReference for v in self.md.modelVariables}
         self.type = {v.name: v.type for v in self.md.modelVariables}
-        self.fmu = FMU2Slave(guid=self.md.guid, unzipDirectory=str(unzipped),
+        self.fmu = FMU2Slave(guid=self.md.guid, unzipDirectory=str(plant_unzipped),
                              modelIdentifier=self.md.coSimulation.modelIdentifier, instanceName=name)
         self.fmu.instantiate(loggingOn=False)
         self.fmu.setupExperiment(startTime=0.0)
@@ -85,10 +71,10 @@ def test_validates(plant_fmu):
     assert validate_fmu(str(plant_fmu)) == []
 
 
-def test_self_contained_binary(unzipped):
+def test_self_contained_binary(plant_unzipped):
     """The binary needs only libc/libm/ld-linux (SUNDIALS, libstdc++ linked statically) and exports
     only fmi2* functions, so it loads on a machine where only the FMU exists."""
-    so = unzipped / "binaries" / "linux64" / "Hoap2Plant.so"
+    so = plant_unzipped / "binaries" / "linux64" / "Hoap2Plant.so"
     dyn = subprocess.run(["readelf", "-d", str(so)], capture_output=True, text=True, check=True).stdout
     needed = sorted(l.split("[")[1].rstrip("]") for l in dyn.splitlines() if "(NEEDED)" in l)
     assert set(needed) <= {"libc.so.6", "libm.so.6", "ld-linux-x86-64.so.2"}, needed
@@ -127,11 +113,11 @@ def test_standalone_simulation_with_input_csv(plant_fmu, tmp_path):
 
 
 @pytest.mark.parametrize("ankle,hip", [(0.0, 0.0), (0.05, 0.0), (0.03, 0.25), (-0.02, -0.2)])
-def test_static_leaned_posture(unzipped, ankle, hip):
+def test_static_leaned_posture(plant_unzipped, ankle, hip):
     """Started settled in a leaned posture (theta_*_init = set-points) the plant is in static
     equilibrium: zmp_x from the sole sensors equals the CoM ground projection (feet included),
     fz = m g, flat contact, no mode switches (the 60 s version is the CTest plant.static_standing)."""
-    s = Slave(unzipped, {"theta_ankle_init": ankle, "theta_hip_init": hip},
+    s = Slave(plant_unzipped, {"theta_ankle_init": ankle, "theta_hip_init": hip},
               inputs={"theta_ankle_ref": ankle, "theta_hip_ref": hip})
     for _ in range(2000):
         s.step()
@@ -143,11 +129,11 @@ def test_static_leaned_posture(unzipped, ankle, hip):
     s.free()
 
 
-def test_fall_discard_terminated_protocol(unzipped):
+def test_fall_discard_terminated_protocol(plant_unzipped):
     """A too-large push (60 N for 0.3 s) ends in a detected fall: doStep returns fmi2Discard,
     fmi2Terminated is true, fmi2LastSuccessfulTime is the fall time inside the failing step,
     `fallen` is true, and later steps are refused with Discard as well."""
-    s = Slave(unzipped)
+    s = Slave(plant_unzipped)
     s.set("push_force", 60.0)
     status = None
     for _ in range(3000):
@@ -166,12 +152,12 @@ def test_fall_discard_terminated_protocol(unzipped):
     s.fmu.freeInstance()
 
 
-def test_state_serialization_bit_for_bit(unzipped):
+def test_state_serialization_bit_for_bit(plant_unzipped):
     """A serialized FMU state taken while the foot rocks on its toe, de-serialized into a fresh
     instance, continues bit for bit like the uninterrupted run (CVODE re-initialized identically;
     contact mode, pivot, noise generator and statistics restored)."""
     params = {"sensor_noise": 0.2, "seed": 42}
-    a = Slave(unzipped, params, name="a")
+    a = Slave(plant_unzipped, params, name="a")
     a.set("push_force", 25.0)
     for i in range(400):
         if i == 60:
@@ -183,7 +169,7 @@ def test_state_serialization_bit_for_bit(unzipped):
         a.step()
     names = ["theta_ankle", "theta_hip", "zmp_x", "fz", "foot_pitch", "f_toe", "energy"]
     ref_final = [a.get(n) for n in names] + [a.get("contact_mode"), a.get("rhs_evals")]
-    b = Slave(unzipped, params, name="b")
+    b = Slave(plant_unzipped, params, name="b")
     st = b.fmu.deSerializeFMUstate(blob)
     b.fmu.setFMUstate(st)
     b.t = t_snap
@@ -195,11 +181,11 @@ def test_state_serialization_bit_for_bit(unzipped):
     b.free()
 
 
-def test_sensor_noise_seeded(unzipped):
+def test_sensor_noise_seeded(plant_unzipped):
     """Sole-sensor noise is off by default and, when on, reproducible per seed and different
     between seeds; its standard deviation is the parameter's."""
     def run(params):
-        s = Slave(unzipped, params)
+        s = Slave(plant_unzipped, params)
         v = []
         for _ in range(500):
             s.step()
@@ -214,10 +200,10 @@ def test_sensor_noise_seeded(unzipped):
     assert np.std(a - clean) == pytest.approx(0.5, rel=0.15)
 
 
-def test_non_finite_input_contained(unzipped):
+def test_non_finite_input_contained(plant_unzipped):
     """A NaN/Inf input is contained: the step returns fmi2Warning (logged), the last finite value
     is held, and no output becomes non-finite."""
-    s = Slave(unzipped)
+    s = Slave(plant_unzipped)
     for _ in range(10):
         s.step()
     s.set("push_force", float("nan"))

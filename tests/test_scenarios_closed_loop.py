@@ -135,7 +135,7 @@ def test_interrupted_or_failed_run_keeps_partial_data_marked_incomplete(models, 
     d = read_csv(out / "ankle_small_push.incomplete.csv")
     # rows 0..1498 are complete (the 1500th plant step, from t=1.499, never finished)
     assert len(d) == 1499 and d["time"][-1] == pytest.approx(1.498) and np.all(d["fz"] > 10)
-    assert f"data kept up to t=1.498 s" in capsys.readouterr().out
+    assert "data kept up to t=1.498 s" in capsys.readouterr().out
     assert s["comparison"] is None and not (out / "ankle_small_push_reference_failed.png").exists()
     assert not (out / "ankle_small_push_fig5_first_cycle.png").exists()
 

@@ -48,9 +48,6 @@ ModelInfo makeInfo() {
   m.description =
       "Ankle and hip balance strategies with smooth transitions (Nenchev & Nishio, ICRA 2010) for the "
       "HOAP-2 humanoid; sampled controller on its own grid (sample_period)";
-  m.author = "anklehip project";
-  m.version = "0.1.0";
-  m.license = "see the project repository";
   m.default_experiment = {0.0, 5.0, 1e-6, def.sample_period};
   m.outputs_depend_on_inputs = false;
 

@@ -90,9 +90,6 @@ ModelInfo makeInfo() {
   m.description =
       "HOAP-2 humanoid in the sagittal plane: foot (flat / toe / heel / airborne contact, CVODE root "
       "functions), legs and upper body, PD joint servos, sole load cells, push on the back, fall detection";
-  m.author = "anklehip project";
-  m.version = "0.1.0";
-  m.license = "see the project repository";
   m.default_experiment = {0.0, 5.0, 1e-6, 1e-3};
   m.outputs_depend_on_inputs = false;
   m.extra_log_categories = {{"logSolver", "CVODE messages"}};

@@ -69,10 +69,11 @@ struct DefaultExperiment {
 struct ModelInfo {
   std::string model_name;        // also the modelIdentifier (the .so name)
   std::string description;
-  std::string author;
-  std::string version;
+  // Project metadata shared by every FMU of the project; the version is CMake's PROJECT_VERSION.
+  std::string author = "anklehip project";
+  std::string version = ANKLEHIP_VERSION;
   std::string copyright;
-  std::string license;
+  std::string license = "see the project repository";
   DefaultExperiment default_experiment;
   std::vector<Variable> variables;
   std::vector<LogCategoryInfo> extra_log_categories;  // indices kFirstModelCategory, +1, ...
