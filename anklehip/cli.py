@@ -141,6 +141,11 @@ def _scenario_and_models(a):
     sc.controller.update(c_set)
     sc.plant.update(p_set)
     models = Models.load(a.fmu_dir)
+    if getattr(a, "controller_config", None):
+        sc.controller_config = a.controller_config
+        models.controller.configuration(sc.controller_config, "--controller-config")
+    else:
+        models.controller.configuration(sc.controller_config, f"{_rel(sc.path)}: controller_config")
     check_overrides(models, sc.controller, sc.plant, _rel(sc.path) + (" / --set" if a.set else ""))
     return sc, models
 
@@ -168,7 +173,11 @@ def cmd_run(a) -> int:
     cmp = None
     warnings: list[str] = []
     # overrides change the reference; an interrupted or failed run is not a result to compare
-    if not a.no_compare and a.stop_time is None and not a.set and res.outcome not in ("error", "interrupted"):
+    changed = a.set or a.controller_config
+    if changed and sc.reference is not None and not a.no_compare:
+        print("anklehip: note: --set / --controller-config change the run, so it is not compared with "
+              f"{_rel(sc.reference.file)}", file=sys.stderr)
+    if not a.no_compare and a.stop_time is None and not changed and res.outcome not in ("error", "interrupted"):
         try:
             rep = compare_with_reference(sc, res)
         except Exception as e:   # a broken reference must not lose the run
@@ -192,7 +201,7 @@ def cmd_run(a) -> int:
             files[p.stem] = str(p)
     if a.record_steptest:
         from .steptest import record_case
-        record_case(res, Path(a.record_steptest), sc.controller, source=sc.name)
+        record_case(res, Path(a.record_steptest), res.controller_overrides, source=sc.name)
         files["steptest_case"] = a.record_steptest
     s = summary_dict(sc, res, pushes, checks, files, cmp)
     if warnings:
@@ -343,7 +352,7 @@ def cmd_record(a) -> int:
     res = simulate(sc, models, stop_time=a.stop_time, progress=None)
     if res.outcome in ("error", "interrupted"):
         return _err(f"the run failed: {res.message}")
-    files = record_case(res, Path(a.out), sc.controller, source=sc.name)
+    files = record_case(res, Path(a.out), res.controller_overrides, source=sc.name)
     print(f"recorded {len(res.data) - 1} controller steps of {sc.name} ({res.message or res.outcome}):")
     for f in files.values():
         print(f"  {f}")
@@ -353,13 +362,19 @@ def cmd_record(a) -> int:
 def cmd_sweep(a) -> int:
     from .paths import MissingFileError, find_scenario
     from .scenario import ScenarioError, load_scenario
+    from .fmu import FMUError
+    from .master import Models, check_overrides
     from .sweep import parse_variant, plot_sweep, run_sweep, write_table
     try:
         path = find_scenario(a.scenario)
         sc = load_scenario(path)
         forces = _parse_grid(a.forces)
         variants = [parse_variant(v) for v in (a.variant or ["default"])]
-    except (ScenarioError, MissingFileError, ValueError) as e:
+        models = Models.load(a.fmu_dir)
+        for v in variants:    # a bad variant is an error here, not a traceback in every worker
+            models.controller.configuration(v.config or sc.controller_config, f"--variant {v.name}")
+            check_overrides(models, v.controller, v.plant, f"--variant {v.name}")
+    except (ScenarioError, MissingFileError, FMUError, ValueError) as e:
         return _err(str(e))
     if sc.push.peak() == 0:
         return _err(f"{path}: the scenario has no push to scale")
@@ -374,6 +389,11 @@ def cmd_sweep(a) -> int:
                                        for r in rr) + (f"   largest survived {max(ok, key=abs):g} N" if ok else ""))
     print(f"table {t}\nplot  {p}")
     return EXIT_OK
+
+
+def _variants_help() -> str:
+    from .sweep import VARIANTS_HELP
+    return VARIANTS_HELP
 
 
 def _parse_grid(spec: str) -> list[float]:
@@ -450,7 +470,7 @@ def regen_steptests(models) -> int:
             print(f"{_rel(case)}: run failed: {res.message}")
             rc = EXIT_FAIL
             continue
-        record_case(res, case, sc.controller, source=sc.name)
+        record_case(res, case, res.controller_overrides, source=sc.name)
         print(f"{_rel(case)}: re-recorded from {sc.name} (0..{src['stop_time']} s, {res.message or res.outcome})")
     return rc
 
@@ -479,6 +499,9 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--animate", action="store_true", help="write a stick-figure GIF")
     s.add_argument("--set", action="append", metavar="FMU.NAME=VALUE",
                    help="parameter override, e.g. controller.Ka=30 (repeatable)")
+    s.add_argument("--controller-config", metavar="NAME",
+                   help="a named controller configuration (default: the scenario's controller_config or 'default'; "
+                        "e.g. paper); --set overrides still apply on top")
     s.add_argument("--stop-time", type=float, help="stop earlier than the scenario (no outcome checks)")
     s.add_argument("--no-progress", action="store_true")
     s.add_argument("--no-compare", action="store_true", help="skip the comparison with the reference CSV")
@@ -536,12 +559,15 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("out", help="case folder to write")
     s.add_argument("--stop-time", type=float)
     s.add_argument("--set", action="append", metavar="FMU.NAME=VALUE")
+    s.add_argument("--controller-config", metavar="NAME",
+                   help="a named controller configuration (default: the scenario's controller_config or 'default'; "
+                        "e.g. paper); --set overrides still apply on top")
     s.set_defaults(fn=cmd_record)
 
     s = sub.add_parser("sweep", help="peak push force x controller variant -> outcome (Dask)")
     s.add_argument("scenario")
     s.add_argument("--forces", required=True, help="start:stop:step (inclusive) or a,b,c [N]")
-    s.add_argument("--variant", action="append", help="repeatable: " + "NAME or NAME:controller.P=V,plant.Q=W")
+    s.add_argument("--variant", action="append", help="repeatable: " + _variants_help())
     s.add_argument("--workers", type=int, default=2)
     s.add_argument("--out", help="output folder (default results/sweep_<scenario>)")
     s.set_defaults(fn=cmd_sweep)

@@ -48,6 +48,7 @@ class FMUInfo:
             raise FMUError(f"{self.path.name}: not a co-simulation FMU")
         self.model_identifier = self.md.coSimulation.modelIdentifier
         self.unzipdir = extract(str(self.path))
+        self._configurations: dict[str, dict[str, Any]] | None = None
         atexit.register(shutil.rmtree, self.unzipdir, True)
         self.vars: dict[str, Var] = {}
         for v in self.md.modelVariables:
@@ -95,6 +96,27 @@ class FMUInfo:
     def default_step(self) -> float | None:
         de = self.md.defaultExperiment
         return float(de.stepSize) if de is not None and de.stepSize else None
+
+    def configurations(self) -> dict[str, dict[str, Any]]:
+        """Named parameter configurations shipped in resources/configurations.toml (generated from
+        the model's own code): name -> {"description": str, parameter: value, ...}."""
+        if self._configurations is None:
+            import tomllib
+            f = Path(self.unzipdir) / "resources" / "configurations.toml"
+            try:
+                self._configurations = tomllib.loads(f.read_text()) if f.is_file() else {}
+            except (OSError, tomllib.TOMLDecodeError) as e:
+                raise FMUError(f"{self.name}: resources/configurations.toml is unreadable: {e}") from None
+        return self._configurations
+
+    def configuration(self, name: str, origin: str = "") -> dict[str, Any]:
+        """The parameter values of the named configuration (those that differ from the defaults)."""
+        confs = self.configurations()
+        if name not in confs:
+            src = f" ({origin})" if origin else ""
+            known = ", ".join(confs) or "none"
+            raise FMUError(f"{self.name} has no configuration {name!r}{src}; known: {known}")
+        return {k: v for k, v in confs[name].items() if k != "description"}
 
     def check_overrides(self, overrides: dict[str, Any], origin: str = "") -> None:
         params = self.parameters()

@@ -46,6 +46,8 @@ class RunResult:
     fell_at: float | None = None
     controller_initial: dict[str, float] = field(default_factory=dict)
     controller_parameters: dict[str, Any] = field(default_factory=dict)
+    controller_config: str = "default"
+    controller_overrides: dict[str, Any] = field(default_factory=dict)   # config + scenario + caller
     plant_parameters: dict[str, Any] = field(default_factory=dict)
     controller_columns: dict[str, str] = field(default_factory=dict)   # column -> FMU variable
     controller_inputs: tuple[str, ...] = CONTROLLER_INPUTS
@@ -155,9 +157,11 @@ def simulate(scenario: Scenario, models: Models | None = None, *, fmu_dir=None,
              progress: bool | None = None, logger: Callable | None = None) -> RunResult:
     """Run one closed-loop scenario; never raises for a fall (outcome 'fell')."""
     models = models or Models.load(fmu_dir)
-    c_over = dict(scenario.controller, **(controller_overrides or {}))
-    p_over = dict(scenario.plant, **(plant_overrides or {}))
     origin = str(scenario.path) if scenario.path else scenario.name
+    # precedence: the named configuration < the scenario's [controller] table < the caller's overrides
+    c_over = {**models.controller.configuration(scenario.controller_config, f"{origin}: controller_config"),
+              **scenario.controller, **(controller_overrides or {})}
+    p_over = dict(scenario.plant, **(plant_overrides or {}))
     check_overrides(models, c_over, p_over, origin)
     L = _Layout(models)
     h = scenario.step
@@ -310,6 +314,7 @@ def simulate(scenario: Scenario, models: Models | None = None, *, fmu_dir=None,
                     stop_time=T, step=h, wall_time=wall, message=message, fell_at=fell_at,
                     controller_initial=c_init,
                     controller_parameters={**models.controller.start_values(), **c_over},
+                    controller_config=scenario.controller_config, controller_overrides=c_over,
                     plant_parameters={**models.plant.start_values(), **p_over},
                     controller_columns=L.controller_columns, column_units=L.units)
     # a plant that signals a fall only through its 'fallen' output

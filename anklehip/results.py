@@ -267,6 +267,7 @@ def summary_dict(sc: Scenario, res: RunResult, pushes: list[PushSummary], checks
         "checks": [c.__dict__ for c in checks],
         "expectations_met": all(c.ok for c in checks),
         "comparison": comparison,
+        "controller_config": sc.controller_config,
         "overrides": {"controller": sc.controller, "plant": sc.plant},
         "files": files,
     }

@@ -198,6 +198,7 @@ class Scenario:
     stop_time: float = 10.0
     step: float = 1e-3
     push: PushProfile = field(default_factory=PushProfile.zero)
+    controller_config: str = "default"    # a named configuration of the controller FMU
     controller: dict[str, Any] = field(default_factory=dict)
     plant: dict[str, Any] = field(default_factory=dict)
     expect: Expect = field(default_factory=Expect)
@@ -274,8 +275,8 @@ def _tname(v: Any) -> str:
             dict: "table"}.get(type(v), type(v).__name__)
 
 
-TOP_KEYS = {"name", "description", "stop_time", "step", "push", "controller", "plant", "expect",
-            "reference", "tags"}
+TOP_KEYS = {"name", "description", "stop_time", "step", "push", "controller_config", "controller", "plant",
+            "expect", "reference", "tags"}
 PUSH_KEYS = {
     "step": ({"kind", "t", "to"}, {"to"}),
     "ramp": ({"kind", "t", "to", "duration"}, {"to", "duration"}),
@@ -441,6 +442,10 @@ def parse_scenario(data: dict, where: str = "<scenario>", path: Path | None = No
         v.fail("step", f"stop_time {sc.stop_time:g} is not a whole number of steps of {sc.step:g}")
     if "push" in data:
         sc.push = _parse_push(v, data["push"], sc.stop_time)
+    if "controller_config" in data:
+        sc.controller_config = v.str_(data["controller_config"], "controller_config")
+        if not sc.controller_config:
+            v.fail("controller_config", "must name a configuration (e.g. \"paper\"), got an empty string")
     for k in ("controller", "plant"):
         if k in data:
             setattr(sc, k, _parse_overrides(v, data[k], k))

@@ -11,7 +11,8 @@ from typing import Any
 
 import numpy as np
 
-VARIANTS_HELP = "NAME or NAME:controller.P=V,plant.Q=W (e.g. full  ankle_only:controller.hip_strategy=false)"
+VARIANTS_HELP = ("NAME or NAME:config=C,controller.P=V,plant.Q=W with C a named controller configuration "
+                 "(e.g. full  ankle_only:controller.hip_strategy_enabled=0  paper:config=paper)")
 
 
 @dataclass
@@ -19,20 +20,26 @@ class Variant:
     name: str
     controller: dict[str, Any]
     plant: dict[str, Any]
+    config: str | None = None     # a named controller configuration (None: the scenario's)
 
 
 def parse_variant(spec: str) -> Variant:
-    from .scenario import parse_set
+    from .scenario import ScenarioError, parse_set
     name, _, rest = spec.partition(":")
-    items = [s for s in rest.split(",") if s.strip()]
-    c, p = parse_set(items)
-    return Variant(name or "default", c, p)
+    items = [s.strip() for s in rest.split(",") if s.strip()]
+    configs = [s.split("=", 1)[1].strip() for s in items if s.startswith("config=")]
+    if len(configs) > 1 or (configs and not configs[0]):
+        raise ScenarioError(f"--variant {spec}: give at most one non-empty config=NAME")
+    c, p = parse_set([s for s in items if not s.startswith("config=")])
+    return Variant(name or "default", c, p, configs[0] if configs else None)
 
 
 def _one(scenario_path: str, fmu_dir: str | None, peak: float, variant: Variant) -> dict[str, Any]:
     from .master import Models, simulate
     from .scenario import load_scenario
     sc = load_scenario(scenario_path)
+    if variant.config:
+        sc.controller_config = variant.config
     base = sc.push.peak()
     if base == 0:
         raise ValueError(f"{scenario_path}: the scenario has no push to scale")

@@ -9,7 +9,8 @@
 #   <ModelName>_gen   generator built from the same sources: writes modelDescription.xml and
 #                     documentation/index.html from the variable table.
 #   <ModelName>_fmu   (ALL) packs into OUTPUT_DIR (default ${ANKLEHIP_FMU_DIR}) modelDescription.xml, binaries/linux64/<ModelName>.so and
-#                     documentation/ (index.html + DOCUMENTATION files) with `cmake -E tar --format=zip`.
+#                     documentation/ (index.html + DOCUMENTATION files) and resources/ (ModelInfo::resources)
+#                     with `cmake -E tar --format=zip`.
 # Works with CMake 3.25 and 4.x.
 include_guard(GLOBAL)
 
@@ -68,13 +69,13 @@ function(add_fmu)
   endforeach()
   add_custom_command(OUTPUT "${fmu}"
     COMMAND "${CMAKE_COMMAND}" -E rm -rf "${stage}"
-    COMMAND "${CMAKE_COMMAND}" -E make_directory "${stage}/binaries/linux64" "${stage}/documentation" "${ANKLEHIP_FMU_DIR}"
+    COMMAND "${CMAKE_COMMAND}" -E make_directory "${stage}/binaries/linux64" "${stage}/documentation" "${stage}/resources" "${ANKLEHIP_FMU_DIR}"
     COMMAND $<TARGET_FILE:${name}_gen> "${stage}"
     COMMAND "${CMAKE_COMMAND}" -E copy $<TARGET_FILE:${name}> "${stage}/binaries/linux64/${name}.so"
     ${doc_cmds}
     COMMAND "${CMAKE_COMMAND}" -E rm -f "${fmu}"
     COMMAND "${CMAKE_COMMAND}" -E chdir "${stage}" "${CMAKE_COMMAND}" -E tar cf "${fmu}" --format=zip
-            modelDescription.xml binaries documentation
+            modelDescription.xml binaries documentation resources
     DEPENDS ${name} ${name}_gen ${doc_deps}
     COMMENT "Packing ${name}.fmu"
     VERBATIM)

@@ -82,6 +82,37 @@ void ahc_params_paper(ahc_params *p)
     p->T_ah = 1.0;               /* paper: 1 s */
 }
 
+static const struct {
+    const char *name;
+    const char *description;
+    void (*fill)(ahc_params *);
+} k_configs[] = {
+    {"default", "The project's defaults, chosen by push sweeps on the plant (docs/controller.md section 4.5)",
+     ahc_params_default},
+    {"paper", "Nenchev & Nishio (ICRA 2010) as published: p_lim = 45 mm, T_ah = 1 s (docs/controller.md section 4.5)",
+     ahc_params_paper},
+};
+#define N_CONFIGS (sizeof k_configs / sizeof k_configs[0])
+
+size_t ahc_config_count(void) { return N_CONFIGS; }
+
+const char *ahc_config_name(size_t i) { return i < N_CONFIGS ? k_configs[i].name : NULL; }
+
+const char *ahc_config_description(size_t i) { return i < N_CONFIGS ? k_configs[i].description : NULL; }
+
+int ahc_params_named(ahc_params *p, const char *name)
+{
+    size_t i;
+    for (i = 0; name != NULL && i < N_CONFIGS; ++i) {
+        if (strcmp(name, k_configs[i].name) == 0) {
+            k_configs[i].fill(p);
+            return AHC_OK;
+        }
+    }
+    ahc_params_default(p);
+    return AHC_ERR_UNKNOWN_NAME;
+}
+
 /* ------------------------------------------------------------------------------------------- */
 
 #define PI_D(field, unit, lo, hi, strict, desc) \
@@ -305,6 +336,7 @@ const char *ahc_error_string(int code)
     case AHC_ERR_NONFINITE: return "non-finite parameter";
     case AHC_ERR_RANGE: return "parameter out of range";
     case AHC_ERR_INCONSISTENT: return "inconsistent parameters";
+    case AHC_ERR_UNKNOWN_NAME: return "unknown configuration name";
     default: return "unknown error";
     }
 }

@@ -70,6 +70,31 @@ int main(void)
     q.T_ah = p.T_ah;
     CHECK(memcmp(&q, &p, sizeof p) == 0, "paper differs only in the ZMP limits and T_ah");
 
+    /* named configurations: "default" first, each validates, names unique, lookup by name */
+    {
+        size_t i, j, nc = ahc_config_count();
+        ahc_params named;
+        CHECK(nc >= 2 && strcmp(ahc_config_name(0), "default") == 0, "config 0 is default");
+        CHECK(ahc_config_name(nc) == NULL && ahc_config_description(nc) == NULL, "NULL past the end");
+        for (i = 0; i < nc; ++i) {
+            CHECK(ahc_params_named(&named, ahc_config_name(i)) == AHC_OK, "config %zu found", i);
+            CHECK(ahc_params_validate(&named, msg, sizeof msg) == AHC_OK, "config %s validates: %s",
+                  ahc_config_name(i), msg);
+            CHECK(strlen(ahc_config_description(i)) > 10, "config %s described", ahc_config_name(i));
+            for (j = 0; j < i; ++j)
+                CHECK(strcmp(ahc_config_name(i), ahc_config_name(j)) != 0, "unique name %s", ahc_config_name(i));
+        }
+        CHECK(ahc_params_named(&named, "default") == AHC_OK && memcmp(&named, &p, sizeof p) == 0,
+              "default = ahc_params_default");
+        CHECK(ahc_params_named(&named, "paper") == AHC_OK && memcmp(&named, &paper, sizeof p) == 0,
+              "paper = ahc_params_paper");
+        memset(&named, 0xff, sizeof named);
+        CHECK(ahc_params_named(&named, "Paper") == AHC_ERR_UNKNOWN_NAME && memcmp(&named, &p, sizeof p) == 0,
+              "unknown name (case matters) -> error, defaults filled");
+        CHECK(ahc_params_named(&named, NULL) == AHC_ERR_UNKNOWN_NAME, "NULL name -> error");
+        CHECK(strcmp(ahc_error_string(AHC_ERR_UNKNOWN_NAME), "unknown configuration name") == 0, "error string");
+    }
+
     /* table covers the struct */
     CHECK(count >= 40, "table has %zu rows", count);
     {

@@ -6,6 +6,8 @@
 //   ticks_due = floor((t + h - t0) / T + 1e-9), run ticks while ticks_done < ticks_due.
 // Outputs are held between ticks (zero-order hold).
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <string>
 
@@ -36,6 +38,47 @@ bool isTunable(const char* name) {
   for (const char* t : kTunable)
     if (std::strcmp(t, name) == 0) return true;
   return false;
+}
+
+// resources/configurations.toml: every named configuration of the C library (ahc_params_named)
+// with the parameter values that differ from the defaults, for importers that select a
+// configuration by name (anklehip: `controller_config = "paper"`). Generated, never edited.
+std::string configurationsToml() {
+  ahc_params def;
+  ahc_params_default(&def);
+  size_t count = 0;
+  const ahc_param_info* table = ahc_param_table(&count);
+  std::string s =
+      "# Named configurations of AnkleHipController: parameter values that differ from the defaults.\n"
+      "# Generated from controller_c (ahc_params_named); see documentation/ and docs/controller.md.\n";
+  for (size_t c = 0; c < ahc_config_count(); ++c) {
+    ahc_params p;
+    ahc_params_named(&p, ahc_config_name(c));
+    s += std::string("\n[") + ahc_config_name(c) + "]\ndescription = \"" + ahc_config_description(c) + "\"\n";
+    for (size_t i = 0; i < count; ++i) {
+      const char* a = reinterpret_cast<const char*>(&p) + table[i].offset;
+      const char* b = reinterpret_cast<const char*>(&def) + table[i].offset;
+      char line[160];
+      if (table[i].is_int) {
+        int x, y;
+        std::memcpy(&x, a, sizeof x);
+        std::memcpy(&y, b, sizeof y);
+        if (x == y) continue;
+        std::snprintf(line, sizeof line, "%s = %d\n", table[i].name, x);
+      } else {
+        double x, y;
+        std::memcpy(&x, a, sizeof x);
+        std::memcpy(&y, b, sizeof y);
+        if (x == y) continue;
+        // The shortest of %.15g / %.17g that reads back exactly.
+        std::snprintf(line, sizeof line, "%.15g", x);
+        const char* fmt = std::strtod(line, nullptr) == x ? "%s = %.15g\n" : "%s = %.17g\n";
+        std::snprintf(line, sizeof line, fmt, table[i].name, x);
+      }
+      s += line;
+    }
+  }
+  return s;
 }
 
 ModelInfo makeInfo() {
@@ -105,6 +148,7 @@ ModelInfo makeInfo() {
     v.max = std::isfinite(p.max) ? p.max : kNoBound;
     m.variables.push_back(v);
   }
+  m.resources.emplace_back("configurations.toml", configurationsToml());
   return m;
 }
 

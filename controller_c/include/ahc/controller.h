@@ -62,7 +62,8 @@ enum {
     AHC_ERR_NULL = 1,          /* a NULL pointer argument                                      */
     AHC_ERR_NONFINITE = 2,     /* a parameter is NaN or Inf                                    */
     AHC_ERR_RANGE = 3,         /* a parameter is outside its allowed range                     */
-    AHC_ERR_INCONSISTENT = 4   /* parameters contradict each other (e.g. ZMP limit outside foot) */
+    AHC_ERR_INCONSISTENT = 4,  /* parameters contradict each other (e.g. ZMP limit outside foot) */
+    AHC_ERR_UNKNOWN_NAME = 5   /* no configuration of that name (ahc_params_named)             */
 };
 
 /* Handling of the feet in the disturbance estimate (DESIGN lesson 5). */
@@ -155,9 +156,20 @@ typedef struct {
 /* Fill with the HOAP-2 defaults (hoap2_model.h) and the SI gains. */
 void ahc_params_default(ahc_params *p);
 
-/* Defaults, but with the paper's ZMP limit p_lim = 45 mm at the toe (and the same 12.5 mm margin
- * at the heel: -25 mm) and the paper's T_ah = 1 s. Everything else as ahc_params_default. */
+/* The paper's configuration (ahc_params_named(p, "paper")): the paper's numbers and law wherever
+ * the paper states them and they are stable on a plant (docs/controller.md section 4.5). */
 void ahc_params_paper(ahc_params *p);
+
+/* Named configurations, selectable by name: index 0 is "default" (ahc_params_default), then
+ * "paper". ahc_config_name / ahc_config_description return NULL past the end. The controller
+ * FMU lists them, with the parameter values that differ from the defaults, in
+ * resources/configurations.toml (generated from these functions). */
+size_t ahc_config_count(void);
+const char *ahc_config_name(size_t i);
+const char *ahc_config_description(size_t i);
+/* Fill p with the named configuration. AHC_OK, or AHC_ERR_UNKNOWN_NAME for an unknown name (or NULL) (p is then
+ * filled with the defaults). */
+int ahc_params_named(ahc_params *p, const char *name);
 
 /* Validate. Returns AHC_OK (0) or an AHC_ERR_* code; on error writes a message naming the field
  * and its value into msg (if msg != NULL and msg_size > 0), e.g. "m1 = -1 must be > 0". */

@@ -1,9 +1,11 @@
 // Build-time generator: writes modelDescription.xml and documentation/index.html of one FMU
 // from its ModelInfo (the same table the FMU uses at run time).
 //   <Name>_gen <out-dir>        writes <out-dir>/modelDescription.xml, <out-dir>/documentation/index.html
+//                               and ModelInfo::resources into <out-dir>/resources/
 //   <Name>_gen --markdown       prints the variable table as Markdown (for docs/)
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <sstream>
@@ -93,6 +95,12 @@ int main(int argc, char** argv) {
         << html(v.description) << "</td></tr>\n";
     f << "</table>\n</body></html>\n";
     if (!f) { std::cerr << "cannot write " << dir << "/documentation/index.html\n"; return 1; }
+  }
+  if (!info.resources.empty()) std::filesystem::create_directories(dir + "/resources");
+  for (const auto& [file, content] : info.resources) {
+    std::ofstream f(dir + "/resources/" + file, std::ios::binary);
+    f << content;
+    if (!f) { std::cerr << "cannot write " << dir << "/resources/" << file << "\n"; return 1; }
   }
   return 0;
 }

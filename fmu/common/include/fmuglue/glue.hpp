@@ -18,6 +18,7 @@
 #include <limits>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "fmi2Functions.h"
@@ -83,6 +84,8 @@ struct ModelInfo {
   bool outputs_depend_on_inputs = false;
   bool can_handle_variable_step = true;
   bool can_interpolate_inputs = false;
+  // Files the generator writes into the FMU's resources/ folder: (file name, content).
+  std::vector<std::pair<std::string, std::string>> resources;
 };
 
 // Log categories declared by the glue for every FMU (in this order in <LogCategories>).
