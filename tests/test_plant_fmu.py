@@ -16,9 +16,10 @@ import pytest
 from fmpy import read_model_description
 from fmpy.fmi2 import FMU2Slave, fmi2Discard, fmi2LastSuccessfulTime, fmi2Terminated
 from fmpy.validation import validate_fmu
+from conftest import NOMINAL_MASS
 
 G = 9.81
-MASS = 1.79 + 4.71 + 0.66  # nominal HOAP-2 (ahc/hoap2_model.h)
+MASS = NOMINAL_MASS  # nominal HOAP-2 (hoap2/nominal.h)
 
 
 class Slave:

@@ -12,25 +12,25 @@
 void ahc_params_default(ahc_params *p)
 {
     memset(p, 0, sizeof *p);
-    /* model: hoap2_model.h (DESIGN section 5) */
-    p->g = AHC_HOAP2_G;
-    p->m1 = AHC_HOAP2_M1;
-    p->l1 = AHC_HOAP2_L1;
-    p->lg1 = AHC_HOAP2_LG1;
-    p->I1 = AHC_HOAP2_I1;
-    p->m2 = AHC_HOAP2_M2;
-    p->lg2 = AHC_HOAP2_LG2;
-    p->I2 = AHC_HOAP2_I2;
-    p->feet_mass = AHC_HOAP2_FEET_MASS;
-    p->feet_com_x = AHC_HOAP2_FEET_COM_X;
-    p->feet_com_z = AHC_HOAP2_FEET_COM_Z;
-    p->toe_x = AHC_HOAP2_TOE_X;
-    p->heel_x = AHC_HOAP2_HEEL_X;
-    p->ankle_height = AHC_HOAP2_ANKLE_HEIGHT;
-    p->ankle_min = AHC_HOAP2_ANKLE_MIN;
-    p->ankle_max = AHC_HOAP2_ANKLE_MAX;
-    p->hip_min = AHC_HOAP2_HIP_MIN;
-    p->hip_max = AHC_HOAP2_HIP_MAX;
+    /* model: hoap2/nominal.h (derived from the Webots proto by hoap2/lump.py) */
+    p->g = HOAP2_G;
+    p->m1 = HOAP2_M1;
+    p->l1 = HOAP2_L1;
+    p->lg1 = HOAP2_LG1;
+    p->I1 = HOAP2_I1;
+    p->m2 = HOAP2_M2;
+    p->lg2 = HOAP2_LG2;
+    p->I2 = HOAP2_I2;
+    p->feet_mass = HOAP2_FEET_MASS;
+    p->feet_com_x = HOAP2_FEET_COM_X;
+    p->feet_com_z = HOAP2_FEET_COM_Z;
+    p->toe_x = HOAP2_TOE_X;
+    p->heel_x = HOAP2_HEEL_X;
+    p->ankle_height = HOAP2_ANKLE_HEIGHT;
+    p->ankle_min = HOAP2_ANKLE_MIN;
+    p->ankle_max = HOAP2_ANKLE_MAX;
+    p->hip_min = HOAP2_HIP_MIN;
+    p->hip_max = HOAP2_HIP_MAX;
 
     /* gains: paper values read as N mm/rad -> SI (DESIGN section 4, docs/controller.md) */
     p->Ka = 40.0;      /* paper 40000 N mm/rad   */
@@ -67,7 +67,7 @@ void ahc_params_default(ahc_params *p)
     p->zmp_fault_margin = 0.02;
     p->angle_fault_margin = 0.1;
 
-    p->sample_period = AHC_HOAP2_SAMPLE_PERIOD;
+    p->sample_period = HOAP2_SAMPLE_PERIOD;
     /* On by default: eqs. 11 and 16 fed with the raw measured ZMP close an algebraic loop through
      * the robot's own reaction (-dH/dt/(m g) in p) with gain about 1.1 at the ankle and 1.4-1.6 at
      * the hip for HOAP-2 (docs/controller.md section 4.4; controller_c/tests/test_disturbance.c). */

@@ -141,7 +141,7 @@ int main(void)
             } else if (mode == AHC_FEET_IGNORE) {
                 /* equilibrium: Ka th = m g (p - r_x) with p = (m r_x + m_f x_f)/M, r_x ~ r_z th */
                 const double m_ = p.m1 + p.m2, M = m_ + p.feet_mass;
-                const double rz = AHC_HOAP2_ERECT_COM_Z;
+                const double rz = HOAP2_ERECT_COM_Z;
                 const double th = m_ * p.g * p.feet_mass * p.feet_com_x / M /
                                   (p.Ka + m_ * p.g * p.feet_mass * rz / M);
                 CHECK_NEAR(o.theta_ankle_ref, th, 2e-5, "paper-literal rest lean (lesson 5)");

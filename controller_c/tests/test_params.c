@@ -1,7 +1,7 @@
 /*
  * test_params — establishes the parameter interface:
  *  - the defaults (and the "paper" configuration) validate and equal the HOAP-2 numbers of
- *    hoap2_model.h and the SI gains of DESIGN section 4; the paper configuration differs only in
+ *    hoap2/nominal.h and the SI gains of DESIGN section 4; the paper configuration differs only in
  *    the ZMP limits (45 mm);
  *  - the metadata table lists every field of ahc_params exactly once, with offsets equal to
  *    offsetof and correct int flags (copying all rows through the table reproduces the struct
@@ -51,14 +51,14 @@ int main(void)
     ahc_params_default(&p);
     rc = ahc_params_validate(&p, msg, sizeof msg);
     CHECK(rc == AHC_OK, "defaults validate: %s", msg);
-    CHECK(p.m1 == AHC_HOAP2_M1 && p.m2 == AHC_HOAP2_M2 && p.l1 == AHC_HOAP2_L1 && p.lg1 == AHC_HOAP2_LG1 &&
-              p.lg2 == AHC_HOAP2_LG2 && p.I1 == AHC_HOAP2_I1 && p.I2 == AHC_HOAP2_I2 &&
-              p.feet_mass == AHC_HOAP2_FEET_MASS && p.toe_x == AHC_HOAP2_TOE_X && p.heel_x == AHC_HOAP2_HEEL_X,
-          "model defaults from hoap2_model.h");
+    CHECK(p.m1 == HOAP2_M1 && p.m2 == HOAP2_M2 && p.l1 == HOAP2_L1 && p.lg1 == HOAP2_LG1 &&
+              p.lg2 == HOAP2_LG2 && p.I1 == HOAP2_I1 && p.I2 == HOAP2_I2 &&
+              p.feet_mass == HOAP2_FEET_MASS && p.toe_x == HOAP2_TOE_X && p.heel_x == HOAP2_HEEL_X,
+          "model defaults from hoap2/nominal.h");
     CHECK(p.Ka == 40.0 && p.Ca == 10.0 && p.Kh == 4.0 && p.Ch == 1.0 && p.Kpr == 100.0 && p.Kp_theta == 15.0,
           "SI gains");
     CHECK(p.sample_period == 0.001 && p.hip_strategy_enabled == 1, "timing / mode");
-    CHECK_NEAR(AHC_HOAP2_TOTAL_MASS, 7.16, 1e-12, "total mass");
+    CHECK_NEAR(HOAP2_TOTAL_MASS, 7.1599, 1e-4, "total mass (sum of the Webots proto's body masses)");
 
     ahc_params_paper(&paper);
     CHECK(ahc_params_validate(&paper, msg, sizeof msg) == AHC_OK, "paper validates: %s", msg);

@@ -269,8 +269,8 @@ int main(void)
         s.zmp_x = -sg * 0.005;
         ahc_step(&c, &s, &o);
         CHECK(o.phase == AHC_PHASE_HIP, "side %d: no switch with r_z out of band (r_z - erect = %.4f)", side,
-              o.com_z - AHC_HOAP2_ERECT_COM_Z);
-        CHECK(o.com_z - AHC_HOAP2_ERECT_COM_Z < q.rz_band_low, "band check setup");
+              o.com_z - HOAP2_ERECT_COM_Z);
+        CHECK(o.com_z - HOAP2_ERECT_COM_Z < q.rz_band_low, "band check setup");
         /* r_z in band (hip 0.1 rad: 0.36 mm below), p on the push side: no switch */
         s.theta_hip = sg * 0.1;
         s.zmp_x = sg * 0.012;

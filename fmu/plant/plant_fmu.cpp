@@ -1,7 +1,7 @@
 // Hoap2Plant.fmu: the HOAP-2 sagittal plant (plant/, hoap2plant::Plant) behind the FMI 2.0
 // co-simulation glue (fmu/common). Signals per DESIGN section 3; model parameters carry the same
 // names as the controller's ahc_params fields where they mean the same thing; start values come
-// from hoap2plant::default_params() (which reads ahc/hoap2_model.h: one source of truth).
+// from hoap2plant::default_params() (which reads hoap2/nominal.h: one source of truth).
 // Outputs are sampled at the communication points (no direct feed-through).
 #include <cmath>
 #include <cstring>
@@ -10,6 +10,7 @@
 
 #include "fmuglue/glue.hpp"
 #include "hoap2plant/plant.hpp"
+#include "hoap2/nominal.h"
 
 using namespace fmuglue;
 using hoap2plant::Params;
@@ -76,8 +77,8 @@ const RealParam kParams[] = {
     {"sensor_bias_toe", &Params::sensor_bias_toe, "N", "Bias of the toe load cell", -1e4, 1e4},
     {"sensor_bias_heel", &Params::sensor_bias_heel, "N", "Bias of the heel load cell", -1e4, 1e4},
     {"sensor_fmin", &Params::sensor_fmin, "N", "Below this total load the sensor ZMP reads 0", 0.0, 1e4},
-    {"theta_ankle_init", &Params::theta_ankle_init, "rad", "Initial ankle set-point (starts at rest in static equilibrium under it)", -1.06, 1.06},
-    {"theta_hip_init", &Params::theta_hip_init, "rad", "Initial hip set-point (starts at rest in static equilibrium under it)", -1.43, 1.24},
+    {"theta_ankle_init", &Params::theta_ankle_init, "rad", "Initial ankle set-point (starts at rest in static equilibrium under it)", HOAP2_ANKLE_MIN, HOAP2_ANKLE_MAX},
+    {"theta_hip_init", &Params::theta_hip_init, "rad", "Initial hip set-point (starts at rest in static equilibrium under it)", HOAP2_HIP_MIN, HOAP2_HIP_MAX},
     {"rtol", &Params::rtol, "", "CVODE relative tolerance", 1e-14, 1e-2},
     {"atol", &Params::atol, "", "CVODE absolute tolerance (all states)", 1e-16, 1e-2},
 };

@@ -1,7 +1,7 @@
 /*
  * controller.h — public C99 API of the ankle/hip balance controller with smooth transitions
  * (Nenchev & Nishio, "Ankle and Hip Balance Control Strategies with Transitions", ICRA 2010),
- * for a planar double inverted pendulum on the ankle (HOAP-2 defaults in hoap2_model.h).
+ * for a planar double inverted pendulum on the ankle (HOAP-2 defaults in hoap2/nominal.h).
  *
  * Properties: C99, no heap, no globals, only libc + libm; deterministic; one POD struct per
  * instance (ahc_controller contains no pointers, so it can be snapshotted with memcpy).
@@ -14,7 +14,7 @@
 
 #include <stddef.h>
 
-#include "ahc/hoap2_model.h"
+#include "hoap2/nominal.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -153,7 +153,7 @@ typedef struct {
                                    estimate"); 0: paper literal, d = m g (p - r_x)             */
 } ahc_params;
 
-/* Fill with the HOAP-2 defaults (hoap2_model.h) and the SI gains. */
+/* Fill with the HOAP-2 defaults (hoap2/nominal.h) and the SI gains. */
 void ahc_params_default(ahc_params *p);
 
 /* The paper's configuration (ahc_params_named(p, "paper")): the paper's numbers and law wherever

@@ -23,7 +23,7 @@ using Vec2 = Eigen::Vector2d;
 enum class ContactMode : int { Flat = 0, Toe = 1, Heel = 2, Airborne = 3 };
 
 struct Params {
-  // --- model (defaults from ahc/hoap2_model.h, the controller's nominal numbers) ---
+  // --- model (defaults from hoap2/nominal.h, the nominal numbers shared with the controller) ---
   double g = 9.81;         // gravity [m/s^2]
   double m1 = 0, l1 = 0, lg1 = 0, I1 = 0;   // link 1: legs (knee rigid, straight)
   double m2 = 0, lg2 = 0, I2 = 0;           // link 2: waist, trunk, arms, head
@@ -64,7 +64,7 @@ struct Params {
   double mass() const { return feet_mass + m1 + m2; }
 };
 
-// Defaults: the HOAP-2 nominal numbers shared with the controller (ahc/hoap2_model.h).
+// Defaults: the HOAP-2 nominal numbers shared with the controller (hoap2/nominal.h).
 Params default_params();
 
 struct Kinematics {

@@ -1,0 +1,312 @@
+#!/usr/bin/env python3
+"""Derive the HOAP-2 nominal numbers from the Webots model and write include/hoap2/nominal.h.
+
+Reads hoap2/webots_hoap2.toml (the proto's masses, centres of mass, inertias and joints, each
+with its proto line), places every body in the posture the balance experiments use (all joints at
+zero, knees straight, arms hanging: shoulder pitch +pi/2) and lumps the bodies into the sagittal
+model of the controller and the plant (docs/hoap2-model.md):
+
+    feet    both ankle-pitch links, both feet and their sole sensors (below the ankle pitch axes)
+    link 1  both legs between the ankle and hip pitch axes (hip pitch, hip roll and knee links)
+    link 2  everything above the hip pitch axes: torso, waist, hip-yaw links, arms, head
+
+    python3 hoap2/lump.py            print the derivation (per-body table and the lumps)
+    python3 hoap2/lump.py --write    regenerate hoap2/include/hoap2/nominal.h
+    python3 hoap2/lump.py --check    exit 1 if the committed header differs from the derivation
+    python3 hoap2/lump.py --json     the lumps and every body in the robot frame, for other models
+
+Only numpy and the standard library; no project imports (controller, plants and tests read
+the generated header or call lumped()).
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+import tomllib
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+HERE = Path(__file__).resolve().parent
+DATA = HERE / "webots_hoap2.toml"
+HEADER = HERE / "include" / "hoap2" / "nominal.h"
+
+# The posture of the balance experiments: every joint at zero except the shoulders' pitch, which
+# turns the arms (pointing forward at zero in the proto) down along the trunk.
+POSTURE = {"larm_joint_1": math.pi / 2, "rarm_joint_1": math.pi / 2}
+
+FEET = ("ankle_pitch", "foot", "touch")
+LINK1 = ("hip_pitch", "hip_roll", "knee")
+
+# Numbers that are not in the proto (cited where they come from).
+G = 9.81                  # standard gravity [m/s^2]
+SAMPLE_PERIOD = 0.001     # HOAP-2 control period [s] (Nenchev & Nishio 2010: 1 ms)
+
+
+def rotation(axis, angle: float) -> np.ndarray:
+    """Rotation matrix about a unit axis (Rodrigues), right-handed as in Webots."""
+    a = np.asarray(axis, float)
+    a = a / np.linalg.norm(a)
+    k = np.array([[0, -a[2], a[1]], [a[2], 0, -a[0]], [-a[1], a[0], 0]])
+    return np.eye(3) + math.sin(angle) * k + (1 - math.cos(angle)) * (k @ k)
+
+
+def inertia_matrix(i6) -> np.ndarray:
+    """Webots inertiaMatrix [I11 I22 I33, I12 I13 I23] as a symmetric 3x3 matrix."""
+    i11, i22, i33, i12, i13, i23 = i6
+    return np.array([[i11, i12, i13], [i12, i22, i23], [i13, i23, i33]], float)
+
+
+def box_inertia(mass: float, size) -> np.ndarray:
+    a, b, c = size
+    return mass / 12.0 * np.diag([b * b + c * c, a * a + c * c, a * a + b * b])
+
+
+@dataclass
+class Body:
+    """One proto body placed in the Robot frame."""
+    name: str
+    mass: float
+    com: np.ndarray         # Robot frame [m]
+    inertia: np.ndarray     # about its CoM, Robot-frame axes [kg m^2]
+    rot: np.ndarray         # Solid frame -> Robot frame
+    origin: np.ndarray      # Solid origin, Robot frame
+    joint: dict | None      # the joint to the parent, axis and anchor in the Robot frame
+
+
+def load(path: Path = DATA) -> dict:
+    with open(path, "rb") as f:
+        return tomllib.load(f)
+
+
+def place(data: dict, posture: dict[str, float] = POSTURE) -> dict[str, Body]:
+    """Forward kinematics of the proto tree at the given joint positions (default: 0)."""
+    unknown = set(posture) - {b["joint"]["name"] for b in data["body"] if "joint" in b}
+    if unknown:
+        raise ValueError(f"posture names unknown joints: {sorted(unknown)}")
+    placed: dict[str, Body] = {}
+    for b in data["body"]:   # parents come first in the file
+        if b["parent"]:
+            p = placed[b["parent"]]
+            R0, o0 = p.rot, p.origin
+        else:
+            R0, o0 = np.eye(3), np.zeros(3)
+        R_local = np.eye(3)
+        t_local = np.array(b.get("translation", [0, 0, 0]), float)
+        joint = None
+        if "joint" in b:
+            j = b["joint"]
+            q = posture.get(j["name"], 0.0)
+            anchor = np.array(j["anchor"], float)
+            Rj = rotation(j["axis"], q)
+            # the child turns about the axis through the anchor (both in the parent's frame)
+            t_local = anchor + Rj @ (t_local - anchor)
+            R_local = Rj
+            joint = {"name": j["name"], "angle": q, "axis": (R0 @ np.asarray(j["axis"], float)).tolist(),
+                     "anchor": (o0 + R0 @ anchor).tolist(), "min": j["min"], "max": j["max"]}
+        if "rotation" in b:
+            *ax, ang = b["rotation"]
+            R_local = R_local @ rotation(ax, ang)
+        R = R0 @ R_local
+        origin = o0 + R0 @ t_local
+        if "com" in b:
+            com_local = np.array(b["com"], float)
+            I_local = inertia_matrix(b["inertia"])
+        else:   # Webots: CoM at the bounding box's centre, inertia of that box with that mass
+            bb = b["bounding_box"]
+            com_local = np.array(bb["translation"], float)
+            I_local = box_inertia(b["mass"], bb["size"])
+        placed[b["name"]] = Body(b["name"], float(b["mass"]), origin + R @ com_local, R @ I_local @ R.T, R,
+                                 origin, joint)
+    return placed
+
+
+@dataclass
+class Lump:
+    mass: float
+    com: np.ndarray       # Robot frame
+    Iyy: float            # pitch inertia about its own CoM [kg m^2]
+
+
+def lump(bodies: list[Body]) -> Lump:
+    m = sum(b.mass for b in bodies)
+    c = sum(b.mass * b.com for b in bodies) / m
+    # pitch (y) inertia: own inertias + parallel axis in the sagittal (x, z) plane
+    iyy = sum(b.inertia[1, 1] + b.mass * ((b.com[0] - c[0]) ** 2 + (b.com[2] - c[2]) ** 2) for b in bodies)
+    return Lump(m, c, iyy)
+
+
+def group_of(name: str) -> str:
+    part = name.split("_", 1)[1] if name.startswith(("lleg_", "rleg_")) else ""
+    if part in FEET:
+        return "feet"
+    if part in LINK1:
+        return "link1"
+    return "link2"
+
+
+def lumped(data: dict | None = None) -> dict:
+    """The sagittal model's nominal numbers (SI), derived from the proto data."""
+    data = data or load()
+    bodies = place(data)
+    groups = {g: lump([b for b in bodies.values() if group_of(b.name) == g]) for g in ("feet", "link1", "link2")}
+    # pitch axes: mean of left and right (they differ only in y)
+    ankle = np.mean([bodies[f"{s}_ankle_pitch"].joint["anchor"] for s in ("lleg", "rleg")], axis=0)
+    hip = np.mean([bodies[f"{s}_hip_pitch"].joint["anchor"] for s in ("lleg", "rleg")], axis=0)
+    ankle_height = data["source"]["robot_origin_height"] + ankle[2]   # ankle axis above the ground
+    fb = data["foot_box"]
+    # toe/heel/width from the foot box; the foot frame's origin is the ankle pitch axis
+    toe = fb["translation"][0] + fb["size"][0] / 2
+    heel = fb["translation"][0] - fb["size"][0] / 2
+    f, l1, l2 = groups["feet"], groups["link1"], groups["link2"]
+    lim = {b.joint["name"]: (b.joint["min"], b.joint["max"]) for b in bodies.values() if b.joint}
+    ankle_lim, hip_lim = lim["lleg_joint_5"], lim["lleg_joint_3"]
+    if ankle_lim != lim["rleg_joint_5"] or hip_lim != lim["rleg_joint_3"]:
+        raise ValueError("left and right pitch limits differ in the proto data")
+    return {
+        "g": G,
+        "m1": l1.mass, "l1": float(hip[2] - ankle[2]), "lg1": float(l1.com[2] - ankle[2]), "I1": l1.Iyy,
+        "m2": l2.mass, "lg2": float(l2.com[2] - hip[2]), "I2": l2.Iyy,
+        "feet_mass": f.mass, "feet_com_x": float(f.com[0] - ankle[0]),
+        "feet_com_z": float(f.com[2] - ankle[2] + ankle_height), "feet_inertia": f.Iyy,
+        "toe_x": toe, "heel_x": heel, "ankle_height": float(ankle_height), "sole_width": fb["size"][1],
+        "ankle_min": ankle_lim[0], "ankle_max": ankle_lim[1], "hip_min": hip_lim[0], "hip_max": hip_lim[1],
+        "sample_period": SAMPLE_PERIOD,
+        # neglected by the sagittal models (their links carry the CoM on the joint line), reported:
+        "link1_com_x": float(l1.com[0] - ankle[0]), "link2_com_x": float(l2.com[0] - hip[0]),
+        "total_mass": sum(b.mass for b in bodies.values()),
+    }
+
+
+# ------------------------------------------------------------------------------------------------
+# The generated header: one macro per number, with what it is and how it was derived.
+
+MACROS = [
+    ("G", "g", "Gravitational acceleration [m/s^2] (standard gravity; not from the proto)."),
+    ("M1", "m1", "Mass of link 1 [kg]: both legs between the ankle and hip pitch axes (hip pitch, hip roll and\n"
+                 " * knee links of both legs, knee straight)."),
+    ("L1", "l1", "Length of link 1 [m]: ankle pitch axis -> hip pitch axis (knee and ankle anchors 0.1 m each)."),
+    ("LG1", "lg1", "Ankle pitch axis -> CoM of link 1, along the link [m]."),
+    ("I1", "I1", "Pitch inertia of link 1 about its own CoM [kg m^2] (proto inertias + parallel axes)."),
+    ("M2", "m2", "Mass of link 2 [kg]: everything above the hip pitch axes (torso, waist, hip-yaw links, arms,\n"
+                 " * head)."),
+    ("LG2", "lg2", "Hip pitch axis -> CoM of link 2, along the link [m] (arms hanging)."),
+    ("I2", "I2", "Pitch inertia of link 2 about its own CoM [kg m^2] (arms hanging)."),
+    ("FEET_MASS", "feet_mass", "Mass of both feet [kg]: ankle-pitch links, feet and sole sensors."),
+    ("FEET_COM_X", "feet_com_x", "CoM of the feet, x forward of the ankle axis [m]."),
+    ("FEET_COM_Z", "feet_com_z", "CoM of the feet, height above the sole [m]."),
+    ("FEET_INERTIA", "feet_inertia", "Pitch inertia of both feet about their CoM [kg m^2]."),
+    ("TOE_X", "toe_x", "Toe edge of the sole, x from the ankle axis [m] (foot bounding box)."),
+    ("HEEL_X", "heel_x", "Heel edge of the sole, x from the ankle axis [m] (foot bounding box)."),
+    ("ANKLE_HEIGHT", "ankle_height", "Height of the ankle pitch axis above the sole [m] (the proto's standing height\n"
+                                     " * 0.29 m of the Robot origin minus 0.055 + 0.1 + 0.1)."),
+    ("SOLE_WIDTH", "sole_width", "Width of one sole [m] (foot bounding box)."),
+    ("ANKLE_MIN", "ankle_min", "Ankle pitch lower limit [rad] (lleg/rleg_joint_5)."),
+    ("ANKLE_MAX", "ankle_max", "Ankle pitch upper limit [rad]."),
+    ("HIP_MIN", "hip_min", "Hip pitch lower limit [rad] (lleg/rleg_joint_3)."),
+    ("HIP_MAX", "hip_max", "Hip pitch upper limit [rad]."),
+    ("LINK1_COM_X", "link1_com_x", "Informational, not used by the sagittal models: CoM of link 1 forward of the ankle-hip\n"
+                                   " * line in the proto [m] (the sagittal links carry their CoM on the joint line)."),
+    ("LINK2_COM_X", "link2_com_x", "Informational, not used by the sagittal models: CoM of link 2 forward of the hip axis\n"
+                                   " * in the proto posture [m]."),
+    ("SAMPLE_PERIOD", "sample_period", "Control period of the HOAP-2 [s] (not from the proto)."),
+]
+
+
+def fmt(x: float) -> str:
+    """Shortest of %.6g that is exact enough for a model number (6 significant digits)."""
+    s = f"{x:.6g}"
+    if "e" not in s and "." not in s:
+        s += ".0"
+    return f"({s})" if s.startswith("-") else s
+
+
+def header_text(n: dict | None = None) -> str:
+    n = n or lumped()
+    src = load()["source"]
+    lines = [
+        "/*",
+        " * hoap2/nominal.h - nominal numbers of the Fujitsu HOAP-2, lumped into the sagittal plane (both",
+        " * legs together), SI units. GENERATED by hoap2/lump.py from hoap2/webots_hoap2.toml; do not edit:",
+        " * change the data or the script and run `python3 hoap2/lump.py --write` (a test checks it).",
+        " *",
+        " * The one source of truth for these numbers: the controller's defaults (controller_c), the",
+        " * sagittal plant's defaults (plant/) and the 3D plant read this header. Pure C (C99 / C++),",
+        " * macros only, no dependencies.",
+        " *",
+        f" * Source: the Webots model of HOAP-2, {src['repository']} {src['path']}",
+        f" * at commit {src['commit']} (\"{src['title'].split(';')[1].strip()}\").",
+        " * Posture: all joints at zero (knees straight), arms hanging (shoulder pitch +pi/2).",
+        " * Derivation: docs/hoap2-model.md.",
+        " *",
+        " * Conventions: x forward (toward the toes), z up; x positions from the ankle pitch axis, heights",
+        " * from the sole unless stated.",
+        " */",
+        "#ifndef HOAP2_NOMINAL_H",
+        "#define HOAP2_NOMINAL_H",
+        "",
+    ]
+    for macro, key, doc in MACROS:
+        lines += [f"/* {doc} */", f"#define HOAP2_{macro} {fmt(n[key])}"]
+    lines += [
+        "",
+        "/* --- derived ------------------------------------------------------------------------------- */",
+        "/* Mass of the two-link body above the ankle [kg] (m = m1 + m2 of the paper). */",
+        "#define HOAP2_BODY_MASS (HOAP2_M1 + HOAP2_M2)",
+        f"/* Total robot mass incl. feet [kg] ({n['total_mass']:.5g} kg, the proto's \"7 kg\"). */",
+        "#define HOAP2_TOTAL_MASS (HOAP2_M1 + HOAP2_M2 + HOAP2_FEET_MASS)",
+        "/* Erect CoM height of the two-link body above the ankle axis [m]: (m1 lg1 + m2 (l1 + lg2)) / m. */",
+        "#define HOAP2_ERECT_COM_Z ((HOAP2_M1 * HOAP2_LG1 + HOAP2_M2 * (HOAP2_L1 + HOAP2_LG2)) / HOAP2_BODY_MASS)",
+        "",
+        "#endif /* HOAP2_NOMINAL_H */",
+        "",
+    ]
+    return "\n".join(lines)
+
+
+def report(n: dict) -> str:
+    data = load()
+    bodies = place(data)
+    out = [f"{'body':<22}{'group':<7}{'mass':>10}{'x':>10}{'y':>10}{'z':>10}{'Iyy':>12}"]
+    for b in bodies.values():
+        out.append(f"{b.name:<22}{group_of(b.name):<7}{b.mass:>10.6f}{b.com[0]:>10.5f}{b.com[1]:>10.5f}"
+                   f"{b.com[2]:>10.5f}{b.inertia[1, 1]:>12.3e}")
+    out.append("")
+    w = max(len(k) for k in n)
+    out += [f"{k:<{w}} = {v:.6g}" for k, v in n.items()]
+    return "\n".join(out)
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    g = ap.add_mutually_exclusive_group()
+    g.add_argument("--write", action="store_true", help="regenerate include/hoap2/nominal.h")
+    g.add_argument("--check", action="store_true", help="exit 1 if the header is stale")
+    g.add_argument("--json", action="store_true", help="print the lumps and all placed bodies as JSON")
+    a = ap.parse_args(argv)
+    n = lumped()
+    if a.write:
+        HEADER.parent.mkdir(parents=True, exist_ok=True)
+        HEADER.write_text(header_text(n))
+        print(f"wrote {HEADER}")
+    elif a.check:
+        if not HEADER.is_file() or HEADER.read_text() != header_text(n):
+            print(f"{HEADER} is stale: run python3 hoap2/lump.py --write", file=sys.stderr)
+            return 1
+        print(f"{HEADER} matches the derivation")
+    elif a.json:
+        bodies = place(load())
+        print(json.dumps({"sagittal": n, "posture": POSTURE,
+                          "bodies": {k: {"mass": b.mass, "com": b.com.tolist(), "inertia": b.inertia.tolist(),
+                                         "origin": b.origin.tolist(), "joint": b.joint} for k, b in bodies.items()}},
+                         indent=1))
+    else:
+        print(report(n))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
