@@ -30,7 +30,7 @@ enum : fmi2ValueReference {
   cvode_steps = 40, rhs_evals = 41, root_evals = 42, mode_switches = 43, impacts = 44,
   // parameters: 100 + index into kParams; then the non-Real ones
   first_real_param = 100,
-  servo_on = 190, seed = 191
+  servo_on = 190, seed = 191, lock_joints_at_impact = 192
 };
 }
 
@@ -139,6 +139,9 @@ ModelInfo makeInfo() {
     add(p.name, vr::first_real_param + i, Type::Real, Par, Fix, p.unit, p.description, def.*(p.field), p.min, p.max);
   }
   add("servo_on", vr::servo_on, Type::Boolean, Par, Fix, "", "Joint servos active (false: joints passive)", def.servo_on ? 1 : 0);
+  add("lock_joints_at_impact", vr::lock_joints_at_impact, Type::Boolean, Par, Fix, "",
+      "Impact law: true = servos hold the joints rigid through an impact (rigid-body rocking, for servos much "
+      "faster than the contact); false = no impulsive joint torque (for slow servos)", def.lock_joints_at_impact ? 1 : 0);
   add("seed", vr::seed, Type::Integer, Par, Fix, "", "Seed of the sensor-noise generator (splitmix64)", double(def.seed), 0, 2147483647);
   return m;
 }
@@ -153,6 +156,7 @@ class PlantFmu : public Model {
     Params p = hoap2plant::default_params();
     for (int i = 0; i < kNumParams; ++i) p.*(kParams[i].field) = ctx.real(vr::first_real_param + i);
     p.servo_on = ctx.boolean(vr::servo_on);
+    p.lock_joints_at_impact = ctx.boolean(vr::lock_joints_at_impact);
     p.seed = static_cast<std::uint64_t>(ctx.integer(vr::seed));
     if (!(p.heel_x < p.feet_com_x + 1.0) || !(p.toe_x > p.heel_x)) {
       ctx.log(kLogStatusError, fmi2Error, "toe_x (%g) must be > heel_x (%g)", p.toe_x, p.heel_x);

@@ -197,25 +197,29 @@ Vec5 Model::impact(ContactMode mode, const Vec5& q, const Vec5& qd) const {
   Vec5 h;
   mass_bias(q, qd, M, h);
   const Eigen::LDLT<Mat5> ldlt(M);
-  Eigen::MatrixXd J;
+  if (mode == ContactMode::Airborne) return qd;
+  const int nc = mode == ContactMode::Flat ? 3 : 2;      // contact rows
+  const int nj = P.lock_joints_at_impact ? 2 : 0;       // joint rows (rates held)
+  Eigen::MatrixXd J = Eigen::MatrixXd::Zero(nc + nj, 5);
   if (mode == ContactMode::Flat) {
-    J = Eigen::MatrixXd::Zero(3, 5);
     J.block<3, 3>(0, 0).setIdentity();
-  } else if (mode == ContactMode::Toe || mode == ContactMode::Heel) {
+  } else {
     Eigen::Matrix<double, 2, 5> Jp;
     Vec2 bias;
     foot_point_jac(q, qd, mode == ContactMode::Toe ? P.toe_x : P.heel_x, -P.ankle_height, Jp,
                    bias);
-    J = Jp;
-  } else {
-    return qd;
+    J.topRows<2>() = Jp;
   }
-  // Plastic impact: qd+ = qd- - M^-1 J^T (J M^-1 J^T)^-1 J qd-  (momentum-consistent, J qd+ = 0)
+  if (nj) J.bottomRightCorner<2, 2>().setIdentity();
+  // Plastic impact: qd+ = qd- + M^-1 J^T lambda with J_contact qd+ = 0 and (locked joints) the
+  // joint rates unchanged: lambda = (J M^-1 J^T)^-1 (-J_contact qd-, 0) (momentum-consistent).
   const Eigen::MatrixXd MiJt = ldlt.solve(J.transpose());
   const Eigen::MatrixXd A = J * MiJt;
-  const Eigen::VectorXd imp = A.ldlt().solve(J * qd);
-  Vec5 out = qd - MiJt * imp;
+  Eigen::VectorXd rhs = Eigen::VectorXd::Zero(nc + nj);
+  rhs.head(nc) = -(J.topRows(nc) * qd);
+  Vec5 out = qd + MiJt * A.ldlt().solve(rhs);
   if (mode == ContactMode::Flat) out.head<3>().setZero();
+  if (nj) out.tail<2>() = qd.tail<2>();
   return out;
 }
 

@@ -154,6 +154,29 @@ void Plant::set_mode(ContactMode m, const char* why) {
   ++stats_.mode_switches;
 }
 
+// The rocking foot is back at phi = 0 (rotating into the ground): apply the landing impact and
+// return the mode after it. Free joints (default): the whole sole stops the foot, the joints keep
+// their momenta. Locked joints: the robot is one rigid body; the impulse acts at the landing edge
+// (Housner) and the robot rocks on over that edge, unless the rigid impact leaves it rotating back
+// into the ground, in which case the whole sole stops it.
+ContactMode Plant::land_flat() {
+  const Params& P = model_.P;
+  const Vec5 q = this->q(), qd = this->qd();
+  ContactMode next = ContactMode::Flat;
+  Vec5 qd2;
+  if (P.lock_joints_at_impact && (mode_ == ContactMode::Toe || mode_ == ContactMode::Heel)) {
+    const ContactMode edge = mode_ == ContactMode::Toe ? ContactMode::Heel : ContactMode::Toe;
+    qd2 = model_.impact(edge, q, qd);
+    if (edge == ContactMode::Heel ? qd2[2] < 0 : qd2[2] > 0) next = edge;
+  }
+  if (next == ContactMode::Flat) qd2 = model_.impact(ContactMode::Flat, q, qd);
+  if (qd2 != qd) ++stats_.impacts;
+  for (int i = 0; i < 5; ++i) y_[5 + i] = qd2[i];
+  y_[2] = 0.0;
+  y_[1] = P.ankle_height;
+  return next;
+}
+
 // Make the contact mode consistent with the current state and inputs (inputs are piecewise
 // constant and may jump at a communication point; impacts change velocities). No cycles: a mode
 // is entered at most once per call.
@@ -189,13 +212,7 @@ void Plant::resolve_mode(const char* why) {
         break;
     }
     if (next == mode_ || visited[static_cast<int>(next)]) return;
-    if (next == ContactMode::Flat) {
-      Vec5 qd2 = model_.impact(ContactMode::Flat, q, qd);
-      if (qd2 != qd) ++stats_.impacts;
-      for (int i = 0; i < 5; ++i) y_[5 + i] = qd2[i];
-      y_[2] = 0.0;
-      y_[1] = P.ankle_height;
-    }
+    if (next == ContactMode::Flat) next = land_flat();
     set_mode(next, reason);
   }
 }
@@ -314,12 +331,9 @@ bool Plant::handle_roots(double t, const int* found) {
       if (found[1]) {
         set_mode(ContactMode::Airborne, "edge normal force reached zero");
       } else if (found[0]) {
-        const Vec5 qd2 = model_.impact(ContactMode::Flat, q(), qd());
-        for (int i = 0; i < 5; ++i) y_[5 + i] = qd2[i];
-        y_[2] = 0.0;
-        y_[1] = P.ankle_height;
-        ++stats_.impacts;
-        set_mode(ContactMode::Flat, "foot landed flat (plastic impact)");
+        const ContactMode next = land_flat();
+        set_mode(next, next == ContactMode::Flat ? "foot landed flat (plastic impact)"
+                                                 : "foot landed and rocks on over the other edge (rigid impact)");
       }
       break;
     case ContactMode::Airborne: {

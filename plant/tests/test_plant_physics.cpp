@@ -512,12 +512,154 @@ static void test_airborne() {
   }
 }
 
+// ---- rigid-body rocking (Housner) -------------------------------------------------------------
+// The robot with its joints frozen at q (phi = 0): total mass, CoM (x from the ankle axis, z above
+// the ground) and pitch inertia about the CoM.
+struct Rigid {
+  double m = 0, cx = 0, cz = 0, Ic = 0;
+};
+static Rigid rigid_body(const Model& m, Vec5 q) {
+  q[0] = 0;
+  q[1] = m.P.ankle_height;
+  q[2] = 0;
+  Kinematics k;
+  m.kinematics(q, Vec5::Zero(), k);
+  const double mass[3] = {m.P.feet_mass, m.P.m1, m.P.m2}, I[3] = {m.P.feet_inertia, m.P.I1, m.P.I2};
+  Rigid r;
+  r.m = m.P.mass();
+  for (int i = 0; i < 3; ++i) r.cx += mass[i] * k.p[i].x() / r.m, r.cz += mass[i] * k.p[i].y() / r.m;
+  for (int i = 0; i < 3; ++i) r.Ic += I[i] + mass[i] * (k.p[i] - Vec2(r.cx, r.cz)).squaredNorm();
+  return r;
+}
+// Housner's coefficient: a rigid body rotating about edge A lands on edge B; the angular momentum
+// about B is conserved, so omega+ / omega- = (Ic + m (c - B).(c - A)) / (Ic + m |c - B|^2).
+static double housner_r(const Rigid& b, double xa, double xb) {
+  return (b.Ic + b.m * ((b.cx - xb) * (b.cx - xa) + b.cz * b.cz)) /
+         (b.Ic + b.m * ((b.cx - xb) * (b.cx - xb) + b.cz * b.cz));
+}
+// Rocking about the edge at x = xp by the foot pitch phi, the CoM height is R cos(phi + beta) with
+// R = |c - P|, sin beta = (cx - xp)/R. Energy between impacts: (1/2) I_P w^2 = m g (height rise).
+static double rigid_rate2(const Rigid& b, double xp, double phi_peak, double g) {  // w^2 at phi = 0
+  const double dx = b.cx - xp, R = std::hypot(dx, b.cz), beta = std::asin(dx / R);
+  return 2.0 * b.m * g * (R * std::cos(phi_peak + beta) - b.cz) / (b.Ic + b.m * R * R);
+}
+static double rigid_peak(const Rigid& b, double xp, double w2, double g) {  // next |phi| peak
+  const double dx = b.cx - xp, R = std::hypot(dx, b.cz), beta = std::asin(dx / R);
+  const double Z = b.cz + (b.Ic + b.m * R * R) * w2 / (2.0 * b.m * g);
+  return Z >= R ? NAN : std::fabs(beta) - std::acos(Z / R);
+}
+
+// Establishes the range of the two impact laws (docs/plant.md section 3, "Which landing law").
+// (a) The locked-joint law is Housner's: at 200 random rigid rocking states (joints frozen, foot
+//     rotating about one edge) a landing multiplies the foot's pitch rate by Housner's coefficient
+//     computed from the robot's mass distribution, and the robot rocks on over the other edge.
+// (b) Dynamically, with servos stiffened from kp = 1e3 to 1e5 N m/rad, the locked law converges to
+//     rigid-body rocking: each rocking amplitude follows from the previous one by energy
+//     conservation and Housner's coefficient, with an error that falls as the servos stiffen. The
+//     free-joint law (default) does not converge to it: it loses less energy at each landing,
+//     because the joints keep their momenta through the impact. The free law is the right limit
+//     when the servos are slow compared with the impact (the default servos, 28-40 rad/s, against
+//     impacts of a few ms), the locked law when they are much faster.
+static void test_rocking() {
+  const Params P0 = default_params();
+  {
+    Params P = P0;
+    P.lock_joints_at_impact = true;
+    const Model m(P);
+    std::uint64_t s = 777;
+    auto U = [&]() {
+      s = s * 6364136223846793005ull + 1442695040888963407ull;
+      return (static_cast<double>(s >> 11) * 0x1.0p-53) * 2.0 - 1.0;
+    };
+    double worst = 0;
+    for (int k = 0; k < 200; ++k) {
+      const bool toe = k % 2 == 0;  // rocking on the toe, landing on the heel (or vice versa)
+      const double xa = toe ? P.toe_x : P.heel_x, xb = toe ? P.heel_x : P.toe_x;
+      Vec5 q, qd = Vec5::Zero();
+      q << 0, P.ankle_height, 0, 0.2 * U(), 0.4 * U();
+      qd[2] = (toe ? -1 : 1) * (0.5 + 0.4 * U());  // rotating back into the ground
+      Eigen::Matrix<double, 2, 5> J;
+      Vec2 bias;
+      m.foot_point_jac(q, qd, xa, -P.ankle_height, J, bias);
+      const Vec2 ve = J * qd;  // rotation about edge A
+      qd[0] -= ve.x();
+      qd[1] -= ve.y();
+      const Vec5 qp = m.impact(toe ? ContactMode::Heel : ContactMode::Toe, q, qd);
+      const double r = housner_r(rigid_body(m, q), xa, xb);
+      worst = std::max(worst, std::fabs(qp[2] / qd[2] - r));
+      CHECK(qp[3] == qd[3] && qp[4] == qd[4], "joint rates changed");
+      CHECK(r > 0, "Housner coefficient %g <= 0: the robot would not rock on", r);
+    }
+    CHECK(worst < 1e-12, "locked-joint landing vs Housner: max |ratio - r| = %g", worst);
+    std::printf("  locked-joint landing at 200 rigid rocking states: max |phi'+/phi'- - r_Housner| = %.1e\n", worst);
+  }
+  // (b) rocking after a 25 N x 60 ms push, sampled every 0.1 ms
+  const double J_ankle = P0.I1 + P0.m1 * P0.lg1 * P0.lg1 + P0.I2 + P0.m2 * (P0.l1 + P0.lg2) * (P0.l1 + P0.lg2);
+  const double J_hip = P0.I2 + P0.m2 * P0.lg2 * P0.lg2;
+  double err[2][3] = {};
+  const double Ks[3] = {1e3, 1e4, 1e5};
+  for (int locked = 0; locked < 2; ++locked) {
+    for (int ik = 0; ik < 3; ++ik) {
+      Params P = P0;
+      P.lock_joints_at_impact = locked;
+      P.kp_ankle = P.kp_hip = Ks[ik];
+      P.kd_ankle = 2 * 0.7 * std::sqrt(Ks[ik] * J_ankle);
+      P.kd_hip = 2 * 0.7 * std::sqrt(Ks[ik] * J_hip);
+      P.tau_max_ankle = P.tau_max_hip = P.vel_max_ankle = P.vel_max_hip = 1e4;
+      P.rtol = 1e-10;
+      P.atol = 1e-12;
+      Plant p(P);
+      CHECK(p.initialize(0.0), "%s", p.message().c_str());
+      struct Peak { double phi; Vec5 q; };
+      std::vector<Peak> peaks;
+      Peak cur{0, Vec5::Zero()};
+      for (int i = 0; i < 15000; ++i) {
+        p.set_inputs(0, 0, p.time() < 0.06 ? 25.0 : 0.0);
+        if (p.do_step(1e-4) != Plant::Result::Ok) break;
+        const double phi = p.q()[2];
+        if (phi * cur.phi < 0 || (phi == 0 && cur.phi != 0)) {   // back at flat: excursion ends
+          if (std::fabs(cur.phi) > 2e-3) peaks.push_back(cur);
+          cur = Peak{0, Vec5::Zero()};
+        }
+        if (std::fabs(phi) > std::fabs(cur.phi)) cur = Peak{phi, p.q()};
+      }
+      // predicted next peak from each peak after the push: energy + Housner (+ rigid body)
+      double worst = 0;
+      int pairs = 0;
+      for (size_t j = 0; j + 1 < peaks.size(); ++j) {
+        if (peaks[j].phi * peaks[j + 1].phi >= 0) continue;
+        const Rigid b = rigid_body(p.model(), peaks[j].q);
+        const bool toe = peaks[j].phi > 0;
+        const double xa = toe ? P.toe_x : P.heel_x, xb = toe ? P.heel_x : P.toe_x;
+        const double r = housner_r(b, xa, xb);
+        const double w2 = rigid_rate2(b, xa, peaks[j].phi, P.g);
+        const double pred = rigid_peak(b, xb, r * r * w2, P.g);
+        const double e = std::fabs(std::fabs(peaks[j + 1].phi) - pred) / pred;
+        if (pairs == 0)
+          std::printf("  %s joints, kp %.0e: first landing %+.2f -> %+.2f mrad (rigid body %.2f mrad, r = %.4f)\n",
+                      locked ? "locked" : "free  ", Ks[ik], 1e3 * peaks[j].phi, 1e3 * peaks[j + 1].phi, 1e3 * pred, r);
+        worst = std::max(worst, e);
+        ++pairs;
+      }
+      CHECK(pairs >= 2, "%s, kp %g: only %d rocking cycles", locked ? "locked" : "free", Ks[ik], pairs);
+      err[locked][ik] = worst;
+    }
+    std::printf("  %s joints: max relative error of the rocking amplitudes vs the rigid body: %.2f %% (kp 1e3), "
+                "%.2f %% (1e4), %.2f %% (1e5)\n", locked ? "locked" : "free  ", 100 * err[locked][0],
+                100 * err[locked][1], 100 * err[locked][2]);
+  }
+  CHECK(err[1][2] < err[1][1] && err[1][1] < err[1][0], "locked law does not converge with the servo stiffness");
+  CHECK(err[1][2] < 0.01, "locked law, kp 1e5: %.3g relative error vs rigid-body rocking", err[1][2]);
+  CHECK(err[0][2] > 3 * err[1][2], "free law unexpectedly close to rigid-body rocking (%.3g)", err[0][2]);
+}
+
 int main(int argc, char** argv) {
   const std::string which = argc > 1 ? argv[1] : "all";
   struct T { const char* name; void (*fn)(); } tests[] = {
       {"static_standing", test_static_standing}, {"tipping", test_tipping}, {"energy", test_energy},
       {"convergence", test_convergence}, {"contact_events", test_contact_events}, {"sensors", test_sensors},
-      {"snapshot", test_snapshot}, {"impact", test_impact}, {"airborne", test_airborne}};
+      {"snapshot", test_snapshot}, {"impact", test_impact}, {"airborne", test_airborne},
+      {"rocking", test_rocking}};
   bool ran = false;
   for (auto& t : tests)
     if (which == "all" || which == t.name) {

@@ -48,6 +48,11 @@ struct Params {
   double fall_body_pitch = 0.6;  // |lean of the ankle->CoM line| beyond this = fallen [rad]
   // --- contact ---
   double baumgarte = 20.0; // pivot-constraint stabilization rate in the rocking modes [1/s]
+  // Impact law (docs/plant.md section 3): false = the servos transmit no impulsive torque (joint
+  // momenta conserved; right when the servos are slow compared with the impact), true = the servos
+  // hold the joints rigid through the impact (joint rates unchanged; the whole robot rocks like one
+  // rigid body, Housner's law; right when the servos are much faster than the impact).
+  bool lock_joints_at_impact = false;
   // --- sole sensors ---
   double sensor_noise = 0.0;     // std dev of each load cell's white noise [N]
   double sensor_bias_toe = 0.0;  // [N]
@@ -111,7 +116,8 @@ class Model {
   // Constrained dynamics in the given mode. pivot: ground point of the rocking edge.
   Dyn dynamics(ContactMode mode, const Vec5& q, const Vec5& qd, double ref1, double ref2,
                double push, const Vec2& pivot) const;
-  // Plastic impact onto the constraint set of `mode` (velocities satisfying J qd = 0).
+  // Plastic impact onto the constraint set of `mode` (velocities satisfying J qd = 0); with
+  // P.lock_joints_at_impact the joint rates are held too (impulsive joint torques).
   Vec5 impact(ContactMode mode, const Vec5& q, const Vec5& qd) const;
 };
 

@@ -98,6 +98,7 @@ class Plant {
  private:
   void evaluate_outputs();
   void resolve_mode(const char* why);
+  ContactMode land_flat();
   void set_mode(ContactMode m, const char* why);
   bool handle_roots(double t, const int* found);
   bool cvode_reinit();
