@@ -218,7 +218,12 @@ def cmd_run(a) -> int:
     # Any failed expectation, a reference outside its band, or a broken reference set-up fails the run
     # (after everything has been written).
     reference_ok = cmp is None or cmp.get("passed", True)
-    return EXIT_OK if all(c.ok for c in checks) and reference_ok and not warnings else EXIT_FAIL
+    failed = [c.name for c in checks if not c.ok] + ([] if reference_ok else ["reference comparison"])
+    if failed or warnings:
+        why = f"{len(failed)} check(s) failed: {', '.join(failed)}" if failed else "warnings: " + "; ".join(warnings)
+        print(f"anklehip: {sc.name}: {why} (exit {EXIT_FAIL})", file=sys.stderr)
+        return EXIT_FAIL
+    return EXIT_OK
 
 
 def cmd_plot(a) -> int:
