@@ -51,6 +51,11 @@ def _one(scenario_path: str, fmu_dir: str | None, peak: float, variant: Variant)
             "max_phase": int(d["phase"].max()) if "phase" in d.dtype.names else -1,
             "max_abs_zmp": float(np.max(np.abs(d["zmp_x"]))),
             "max_abs_hip": float(np.max(np.abs(d["theta_hip"]))),
+            # how far the foot tipped (0 while it stays flat), how often the plant switched contact
+            # (including sub-millisecond switches at communication points), the last phase
+            "max_abs_foot_pitch": float(np.max(np.abs(d["foot_pitch"]))) if "foot_pitch" in d.dtype.names else float("nan"),
+            "mode_switches": int(d["mode_switches"][-1]) if "mode_switches" in d.dtype.names else -1,
+            "final_phase": int(d["phase"][-1]) if "phase" in d.dtype.names else -1,
             "wall_time": res.wall_time}
 
 
@@ -75,10 +80,13 @@ def run_sweep(scenario_path: str, forces: list[float], variants: list[Variant], 
 
 
 def write_table(rows: list[dict[str, Any]], path: Path) -> Path:
-    keys = list(rows[0].keys())
-    lines = [",".join(keys)] + [",".join(str(r[k]) for k in keys) for r in rows]
+    """CSV with a header; fields quoted where needed (variant names may contain commas)."""
+    import csv
     path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text("\n".join(lines) + "\n")
+    with open(path, "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=list(rows[0].keys()), lineterminator="\n")
+        w.writeheader()
+        w.writerows(rows)
     return path
 
 

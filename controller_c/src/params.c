@@ -58,7 +58,7 @@ void ahc_params_default(ahc_params *p)
 
     /* sensing */
     p->zmp_filter_tau = 0.02;      /* DESIGN lesson 1: 10-30 ms */
-    p->feet_offset_mode = AHC_FEET_MODEL;
+    p->feet_offset_mode = AHC_FEET_IGNORE;  /* paper; the feet model changed no push limit (docs 4.5) */
     p->feet_calibration_time = 0.2;
     p->kinematics_source = AHC_KIN_REFERENCE; /* measured: unstable behind HOAP-2's servo (docs) */
 
@@ -68,10 +68,10 @@ void ahc_params_default(ahc_params *p)
     p->angle_fault_margin = 0.1;
 
     p->sample_period = HOAP2_SAMPLE_PERIOD;
-    /* On by default: eqs. 11 and 16 fed with the raw measured ZMP close an algebraic loop through
-     * the robot's own reaction (-dH/dt/(m g) in p) with gain about 1.1 at the ankle and 1.4-1.6 at
-     * the hip for HOAP-2 (docs/controller.md section 4.4; controller_c/tests/test_disturbance.c). */
-    p->reaction_compensation = 1;
+    /* Off by default: the paper's estimate m g (p - r_x). Push sweeps on the plant, one setting at
+     * a time, show the compensated estimate survives smaller pushes in every shape and is not
+     * needed for stability (docs/controller.md sections 4.4-4.5). */
+    p->reaction_compensation = 0;
 }
 
 void ahc_params_paper(ahc_params *p)

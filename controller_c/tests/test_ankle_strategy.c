@@ -87,32 +87,44 @@ int main(void)
                   3.0 * maxerr, "analytic comparison is discriminating");
     }
 
-    /* ---- 2. closed loop through the quasi-static robot ---- */
+    /* ---- 2. closed loop through the quasi-static robot ----
+     * With the feet modelled the estimate is the push moment F h and the robot leans F h / Ka;
+     * with the paper's estimate (feet ignored, the default) it is m g (p - r_x), which sees the
+     * share m/M of the push moment plus the feet's small offset. */
     {
-        qs_robot r;
-        const double F = 4.0;
-        ahc_params_default(&p);
-        p.hip_strategy_enabled = 0;
-        CHECK(ahc_init(&c, &p) == AHC_OK, "init");
-        qs_init(&r, &p);
-        r.reaction = 1; /* defaults: physically consistent sensor model */
-        for (n = 0; n < 8000; ++n) {
+        int feet;
+        for (feet = 0; feet <= 1; ++feet) {
+            qs_robot r;
+            const double F = 4.0;
+            ahc_params_default(&p);
+            p.hip_strategy_enabled = 0;
+            p.feet_offset_mode = feet ? AHC_FEET_MODEL : AHC_FEET_IGNORE;
+            CHECK(ahc_init(&c, &p) == AHC_OK, "init");
+            qs_init(&r, &p);
+            r.reaction = 1; /* physically consistent sensor model */
+            for (n = 0; n < 8000; ++n) {
+                qs_sense(&r, F, &s);
+                ahc_step(&c, &s, &o);
+                qs_apply(&r, &o);
+            }
             qs_sense(&r, F, &s);
-            ahc_step(&c, &s, &o);
-            qs_apply(&r, &o);
-        }
-        qs_sense(&r, F, &s);
-        {
-            const double pm_rx = s.zmp_x - o.com_x; /* measured p - r_x */
-            printf("closed loop: th1 = %.6f, F h / Ka = %.6f, d = %.6f N m\n", o.theta_ankle_ref,
-                   F * r.push_height / p.Ka, o.disturbance_moment);
-            CHECK_NEAR(o.theta_ankle_ref, F * r.push_height / p.Ka, 1e-6, "static lean F h / Ka");
-            CHECK_NEAR(o.disturbance_moment, F * r.push_height, 1e-5, "d equals the push moment");
-            /* with the feet modelled: Ka th1 = m g (p - r_x) + m_f g (p - x_f) */
-            CHECK_NEAR(p.Ka * o.theta_ankle_ref,
-                       (p.m1 + p.m2) * p.g * pm_rx + p.feet_mass * p.g * (s.zmp_x - p.feet_com_x), 1e-4,
-                       "Ka th1 = m g (p - r_x) (+ feet term)");
-            CHECK_NEAR(o.theta_hip_ref, 0.0, 1e-9, "hip erect");
+            {
+                const double m = p.m1 + p.m2, M = m + p.feet_mass;
+                const double pm_rx = s.zmp_x - o.com_x; /* measured p - r_x */
+                printf("closed loop, feet %s: th1 = %.6f, F h / Ka = %.6f, d = %.6f N m\n", feet ? "modelled" : "ignored",
+                       o.theta_ankle_ref, F * r.push_height / p.Ka, o.disturbance_moment);
+                if (feet) {
+                    CHECK_NEAR(o.theta_ankle_ref, F * r.push_height / p.Ka, 1e-6, "static lean F h / Ka");
+                    CHECK_NEAR(o.disturbance_moment, F * r.push_height, 1e-5, "d equals the push moment");
+                    /* Ka th1 = m g (p - r_x) + m_f g (p - x_f) */
+                    CHECK_NEAR(p.Ka * o.theta_ankle_ref, m * p.g * pm_rx + p.feet_mass * p.g * (s.zmp_x - p.feet_com_x),
+                               1e-4, "Ka th1 = m g (p - r_x) + feet term");
+                } else {
+                    CHECK_NEAR(p.Ka * o.theta_ankle_ref, m * p.g * pm_rx, 1e-4, "Ka th1 = m g (p - r_x) (paper)");
+                    CHECK_NEAR(o.theta_ankle_ref, m / M * F * r.push_height / p.Ka, 1e-3, "lean ~ (m/M) F h / Ka");
+                }
+                CHECK_NEAR(o.theta_hip_ref, 0.0, 1e-9, "hip erect");
+            }
         }
     }
 

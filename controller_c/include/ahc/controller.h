@@ -68,7 +68,8 @@ enum {
 
 /* Handling of the feet in the disturbance estimate (DESIGN lesson 5). */
 enum {
-    AHC_FEET_IGNORE = 0,    /* paper literal: d = m g (p - r_x); the feet bias d by ~ +0.07 N m */
+    AHC_FEET_IGNORE = 0,    /* paper literal (default): d = m g (p - r_x); the feet bias d by
+                               ~ +0.03 N m (a 0.66 mrad lean at rest)                           */
     AHC_FEET_MODEL = 1,     /* include the feet's weight: d = m g (p - r_x) + m_f g (p - x_f)   */
     AHC_FEET_CALIBRATE = 2  /* zero d at rest: the mean of (p - r_x), or of d with
                                reaction_compensation, over feet_calibration_time after
@@ -150,7 +151,7 @@ typedef struct {
     int reaction_compensation;  /* 1: the disturbance estimate subtracts the rate of change of
                                    angular momentum of the measured joint motion (moment balance
                                    about the sole point, docs/controller.md "disturbance
-                                   estimate"); 0: paper literal, d = m g (p - r_x)             */
+                                   estimate"); 0 (default): paper literal, d = m g (p - r_x)   */
 } ahc_params;
 
 /* Fill with the HOAP-2 defaults (hoap2/nominal.h) and the SI gains. */
