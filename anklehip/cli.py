@@ -396,6 +396,10 @@ def cmd_sweep(a) -> int:
     return EXIT_OK
 
 
+CONTROLLER_CONFIG_HELP = ("a named controller configuration (default: the scenario's controller_config or "
+                          "'default'; e.g. paper); --set overrides still apply on top")
+
+
 def _variants_help() -> str:
     from .sweep import VARIANTS_HELP
     return VARIANTS_HELP
@@ -504,9 +508,7 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--animate", action="store_true", help="write a stick-figure GIF")
     s.add_argument("--set", action="append", metavar="FMU.NAME=VALUE",
                    help="parameter override, e.g. controller.Ka=30 (repeatable)")
-    s.add_argument("--controller-config", metavar="NAME",
-                   help="a named controller configuration (default: the scenario's controller_config or 'default'; "
-                        "e.g. paper); --set overrides still apply on top")
+    s.add_argument("--controller-config", metavar="NAME", help=CONTROLLER_CONFIG_HELP)
     s.add_argument("--stop-time", type=float, help="stop earlier than the scenario (no outcome checks)")
     s.add_argument("--no-progress", action="store_true")
     s.add_argument("--no-compare", action="store_true", help="skip the comparison with the reference CSV")
@@ -564,9 +566,7 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("out", help="case folder to write")
     s.add_argument("--stop-time", type=float)
     s.add_argument("--set", action="append", metavar="FMU.NAME=VALUE")
-    s.add_argument("--controller-config", metavar="NAME",
-                   help="a named controller configuration (default: the scenario's controller_config or 'default'; "
-                        "e.g. paper); --set overrides still apply on top")
+    s.add_argument("--controller-config", metavar="NAME", help=CONTROLLER_CONFIG_HELP)
     s.set_defaults(fn=cmd_record)
 
     s = sub.add_parser("sweep", help="peak push force x controller variant -> outcome (Dask)")

@@ -41,9 +41,9 @@ void ahc_params_default(ahc_params *p)
     p->Kp_theta = 15.0;/* paper, 1/s             */
 
     /* phase logic. The paper's 45 mm limit leaves 12.5 mm to the toe, too little for the
-     * transition (DESIGN lesson 4). Defaults chosen by a push sweep on the plant FMU
-     * (docs/controller.md section 5.1): trigger at 25 mm, T_ah = 0.5 s. The paper's numbers are
-     * in ahc_params_paper(). */
+     * transition (DESIGN lesson 4). Defaults chosen by push sweeps on the plant FMU, one setting
+     * at a time (docs/controller.md section 4.5): trigger at 25 mm, T_ah = 0.5 s. The paper's
+     * numbers are the configuration "paper" (ahc_params_paper()). */
     p->hip_strategy_enabled = 1;
     p->zmp_limit_front = 0.025;
     p->zmp_limit_back = -0.016;    /* the same 43 % of the half-sole as the front limit */
@@ -57,10 +57,11 @@ void ahc_params_default(ahc_params *p)
     p->return_hip_rate_tol = 0.05;
 
     /* sensing */
-    p->zmp_filter_tau = 0.02;      /* DESIGN lesson 1: 10-30 ms */
+    p->zmp_filter_tau = 0.02;      /* DESIGN lesson 1: 10-30 ms; not in the paper, kept on a small,
+                                      consistent sweep benefit (docs 4.5); 0 = the literal reading */
     p->feet_offset_mode = AHC_FEET_IGNORE;  /* paper; the feet model changed no push limit (docs 4.5) */
     p->feet_calibration_time = 0.2;
-    p->kinematics_source = AHC_KIN_REFERENCE; /* measured: unstable behind HOAP-2's servo (docs) */
+    p->kinematics_source = AHC_KIN_REFERENCE; /* measured: the foot rocks toe<->heel (docs 4.4) */
 
     /* faults */
     p->fz_lifted = 10.0;           /* ~14 % of the robot's weight (70 N) */
@@ -87,7 +88,8 @@ static const struct {
     const char *description;
     void (*fill)(ahc_params *);
 } k_configs[] = {
-    {"default", "The project's defaults, chosen by push sweeps on the plant (docs/controller.md section 4.5)",
+    {"default", "The paper's law with reference kinematics for eqs. 23-24, p_lim = 25 mm, T_ah = 0.5 s and a 20 ms "
+                "ZMP filter, chosen by push sweeps on the plant (docs/controller.md section 4.5)",
      ahc_params_default},
     {"paper", "Nenchev & Nishio (ICRA 2010) as published: p_lim = 45 mm, T_ah = 1 s (docs/controller.md section 4.5)",
      ahc_params_paper},
