@@ -38,15 +38,18 @@ SETTLE = 4.0   # simulated seconds after the push ends
 #   round 1 starts from the first release's defaults (every deviation on) and removes one at a time,
 #           and from the paper's law and numbers and adds one at a time;
 #   round 2 starts from the defaults round 1 chose and removes each remaining deviation in turn.
-# "paper" = the paper's law and numbers wherever the paper states them (Nenchev & Nishio 2010:
-# estimate m g (p - r_x), feet ignored, p_lim 45 mm, T_ah 1 s); it keeps the reference kinematics
-# and the 20 ms ZMP filter, which the paper does not specify (the literal measured kinematics are
-# unstable on the plant: "+ kinematics_source = 0"). Keys "plant.X" are plant overrides.
+# PAPER_R1 = the paper's law and numbers wherever the paper states them (Nenchev & Nishio 2010:
+# estimate m g (p - r_x), feet ignored, p_lim 45 mm, T_ah 1 s) with the first release's reference
+# kinematics and 20 ms ZMP filter, which the paper does not specify (the literal measured
+# kinematics: "+ kinematics_source = 0"). Round 2 starts from what round 1 chose: DEFAULT (no
+# filter, as round 2 then showed) and the named configuration "paper" = DEFAULT with the paper's
+# 45 mm / 1 s. Keys "plant.X" are plant overrides.
 FIRST_RELEASE = {"reaction_compensation": 1, "kinematics_source": 1, "zmp_filter_tau": 0.02,
                  "feet_offset_mode": 1, "zmp_limit_front": 0.025, "zmp_limit_back": -0.016, "T_ah": 0.5}
-PAPER = {"reaction_compensation": 0, "kinematics_source": 1, "zmp_filter_tau": 0.02,
-         "feet_offset_mode": 0, "zmp_limit_front": 0.045, "zmp_limit_back": -0.025, "T_ah": 1.0}
-DEFAULT = {**PAPER, "zmp_limit_front": 0.025, "zmp_limit_back": -0.016, "T_ah": 0.5}
+PAPER_R1 = {"reaction_compensation": 0, "kinematics_source": 1, "zmp_filter_tau": 0.02,
+            "feet_offset_mode": 0, "zmp_limit_front": 0.045, "zmp_limit_back": -0.025, "T_ah": 1.0}
+DEFAULT = {**PAPER_R1, "zmp_filter_tau": 0.0, "zmp_limit_front": 0.025, "zmp_limit_back": -0.016, "T_ah": 0.5}
+PAPER = {**DEFAULT, "zmp_limit_front": 0.045, "zmp_limit_back": -0.025, "T_ah": 1.0}
 
 
 def _with(base: dict, **kw) -> dict:
@@ -72,27 +75,27 @@ ROUNDS: dict[str, dict[str, dict]] = {
         ("  - feet_offset_mode = 0 (ignore feet)", _with(FIRST_RELEASE, feet_offset_mode=0)),
         ("  - p_lim 45 mm / -25 mm", _with(FIRST_RELEASE, zmp_limit_front=0.045, zmp_limit_back=-0.025)),
         ("  - T_ah = 1 s", _with(FIRST_RELEASE, T_ah=1.0)),
-        ("paper law and numbers (ks ref, tau 20 ms)", PAPER),
-        ("  + reaction_compensation = 1", _with(PAPER, reaction_compensation=1)),
-        ("  + kinematics_source = 0 (measured; fully literal)", _with(PAPER, kinematics_source=0)),
-        ("  + zmp_filter_tau = 0", _with(PAPER, zmp_filter_tau=0.0)),
-        ("  + feet_offset_mode = 1 (feet model)", _with(PAPER, feet_offset_mode=1)),
-        ("  + p_lim 25 mm / -16 mm", _with(PAPER, zmp_limit_front=0.025, zmp_limit_back=-0.016)),
-        ("  + T_ah = 0.5 s", _with(PAPER, T_ah=0.5)),
-        ("  + p_lim 25 mm / -16 mm, T_ah = 0.5 s", _with(PAPER, zmp_limit_front=0.025, zmp_limit_back=-0.016, T_ah=0.5)),
-        ("ankle strategy only (paper estimate)", _with(PAPER, hip_strategy_enabled=0)),
+        ("paper law and numbers (ks ref, tau 20 ms)", PAPER_R1),
+        ("  + reaction_compensation = 1", _with(PAPER_R1, reaction_compensation=1)),
+        ("  + kinematics_source = 0 (measured; fully literal)", _with(PAPER_R1, kinematics_source=0)),
+        ("  + zmp_filter_tau = 0", _with(PAPER_R1, zmp_filter_tau=0.0)),
+        ("  + feet_offset_mode = 1 (feet model)", _with(PAPER_R1, feet_offset_mode=1)),
+        ("  + p_lim 25 mm / -16 mm", _with(PAPER_R1, zmp_limit_front=0.025, zmp_limit_back=-0.016)),
+        ("  + T_ah = 0.5 s", _with(PAPER_R1, T_ah=0.5)),
+        ("  + p_lim 25 mm / -16 mm, T_ah = 0.5 s", _with(PAPER_R1, zmp_limit_front=0.025, zmp_limit_back=-0.016, T_ah=0.5)),
+        ("ankle strategy only (paper estimate)", _with(PAPER_R1, hip_strategy_enabled=0)),
         ("ankle strategy only (rc 1, feet model)", _with(FIRST_RELEASE, hip_strategy_enabled=0)),
     ),
     "2": _table(
-        ("default (paper estimate, ks ref, tau 20 ms, 25/-16 mm, 0.5 s)", DEFAULT),
+        ("default (paper estimate, ks ref, no ZMP filter, 25/-16 mm, 0.5 s)", DEFAULT),
         ("  - kinematics_source = 0 (measured)", _with(DEFAULT, kinematics_source=0)),
-        ("  - zmp_filter_tau = 0", _with(DEFAULT, zmp_filter_tau=0.0)),
+        ("  + zmp_filter_tau = 20 ms", _with(DEFAULT, zmp_filter_tau=0.02)),
         ("  - p_lim 45 mm / -25 mm", _with(DEFAULT, zmp_limit_front=0.045, zmp_limit_back=-0.025)),
         ("  - T_ah = 1 s", _with(DEFAULT, T_ah=1.0)),
         ("  + feet_offset_mode = 1 (feet model)", _with(DEFAULT, feet_offset_mode=1)),
         ("  + reaction_compensation = 1", _with(DEFAULT, reaction_compensation=1)),
         ("default, sole sensor noise 1 N rms", _with(DEFAULT, **{"plant.sensor_noise": 1.0})),
-        ("  - zmp_filter_tau = 0 (with the noise)", _with(DEFAULT, zmp_filter_tau=0.0, **{"plant.sensor_noise": 1.0})),
+        ("  + zmp_filter_tau = 20 ms (with the noise)", _with(DEFAULT, zmp_filter_tau=0.02, **{"plant.sensor_noise": 1.0})),
         ("paper (named configuration)", PAPER),
         ("ankle strategy only", _with(DEFAULT, hip_strategy_enabled=0)),
     ),

@@ -57,8 +57,8 @@ void ahc_params_default(ahc_params *p)
     p->return_hip_rate_tol = 0.05;
 
     /* sensing */
-    p->zmp_filter_tau = 0.02;      /* DESIGN lesson 1: 10-30 ms; not in the paper, kept on a small,
-                                      consistent sweep benefit (docs 4.5); 0 = the literal reading */
+    p->zmp_filter_tau = 0.0;       /* off, as in the paper: not needed for stability and no clear
+                                      benefit in the push sweeps (docs 4.5); 0.01-0.03 s filters it */
     p->feet_offset_mode = AHC_FEET_IGNORE;  /* paper; the feet model changed no push limit (docs 4.5) */
     p->feet_calibration_time = 0.2;
     p->kinematics_source = AHC_KIN_REFERENCE; /* measured: the foot rocks toe<->heel (docs 4.4) */

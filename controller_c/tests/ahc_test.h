@@ -95,8 +95,12 @@ static inline void test_body_dynamics(const ahc_params *p, double th1, double th
  *     accelerations of the robot's own (discrete) motion taken as backward differences over its
  *     last three ticks (test_body_dynamics).
  * reaction = 0 is the world of the paper-literal estimator (reaction_compensation = 0): fed with
- * the reaction through an ideal one-tick servo, eq. 11/16 would close the algebraic loop of
- * docs/controller.md. Tests of the defaults set reaction = 1. */
+ * the reaction through an ideal one-tick servo, eq. 11/16 close an algebraic loop of gain >= 1
+ * (docs/controller.md 4.4). A real servo's finite bandwidth breaks that loop (the plant, and
+ * test_closed_loop_dynamic's servo lag, are stable without a ZMP filter); this ideal-servo model
+ * needs the ZMP filter (DESIGN lesson 1), so the tests that use reaction = 1 with the paper's
+ * estimate set zmp_filter_tau = QS_ZMP_FILTER_TAU. */
+#define QS_ZMP_FILTER_TAU 0.02
 typedef struct {
     ahc_params p;          /* the "true" robot (same nominal numbers as the controller) */
     double th1, th2;       /* current joint angles */

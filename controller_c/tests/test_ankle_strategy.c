@@ -99,6 +99,7 @@ int main(void)
             ahc_params_default(&p);
             p.hip_strategy_enabled = 0;
             p.feet_offset_mode = feet ? AHC_FEET_MODEL : AHC_FEET_IGNORE;
+            p.zmp_filter_tau = QS_ZMP_FILTER_TAU; /* ideal-servo model (ahc_test.h) */
             CHECK(ahc_init(&c, &p) == AHC_OK, "init");
             qs_init(&r, &p);
             r.reaction = 1; /* physically consistent sensor model */

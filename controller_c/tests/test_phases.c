@@ -145,6 +145,7 @@ int main(void)
     double h;
 
     ahc_params_default(&p);
+    p.zmp_filter_tau = QS_ZMP_FILTER_TAU; /* the quasi-static robot has an ideal servo (ahc_test.h) */
     h = p.sample_period;
 
     /* ---- A. 0 -> 1 trigger, both sides, with the ZMP filter ---- */
