@@ -193,11 +193,11 @@ Model::Dyn Model::dynamics(ContactMode mode, const Vec5& q, const Vec5& qd, doub
 }
 
 Vec5 Model::impact(ContactMode mode, const Vec5& q, const Vec5& qd) const {
+  if (mode == ContactMode::Airborne) return qd;
   Mat5 M;
   Vec5 h;
   mass_bias(q, qd, M, h);
   const Eigen::LDLT<Mat5> ldlt(M);
-  if (mode == ContactMode::Airborne) return qd;
   const int nc = mode == ContactMode::Flat ? 3 : 2;      // contact rows
   const int nj = P.lock_joints_at_impact ? 2 : 0;       // joint rows (rates held)
   Eigen::MatrixXd J = Eigen::MatrixXd::Zero(nc + nj, 5);
