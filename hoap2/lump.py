@@ -217,7 +217,7 @@ MACROS = [
 
 
 def fmt(x: float) -> str:
-    """Shortest of %.6g that is exact enough for a model number (6 significant digits)."""
+    """A model number as a C literal: 6 significant digits, a decimal point, negatives in parentheses."""
     s = f"{x:.6g}"
     if "e" not in s and "." not in s:
         s += ".0"

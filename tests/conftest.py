@@ -27,6 +27,17 @@ def _nominal() -> dict[str, float]:
 
 
 NOMINAL = _nominal()
+
+
+def import_file(path: Path, name: str):
+    """Import a script that is not part of a package (hoap2/lump.py, scripts/*.py) as module `name`."""
+    import importlib.util
+    import sys
+    spec = importlib.util.spec_from_file_location(name, path)
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[name] = module          # dataclasses look their module up by name
+    spec.loader.exec_module(module)
+    return module
 NOMINAL_MASS = NOMINAL["M1"] + NOMINAL["M2"] + NOMINAL["FEET_MASS"]   # whole robot [kg]
 BUILD_HINT = "run `bash scripts/setup.sh` (or point ANKLEHIP_FMU_DIR / ANKLEHIP_BUILD_DIR at your build)"
 

@@ -5,17 +5,13 @@ also passes; the built-in configurations are unique and match the FMU's named co
 from __future__ import annotations
 
 import csv
-import importlib.util
 import subprocess
 import sys
 
-from conftest import REPO_ROOT
+from conftest import REPO_ROOT, import_file
 
 SCRIPT = REPO_ROOT / "scripts" / "deviation_sweeps.py"
-spec = importlib.util.spec_from_file_location("deviation_sweeps", SCRIPT)
-ds = importlib.util.module_from_spec(spec)
-sys.modules[spec.name] = ds
-spec.loader.exec_module(ds)
+ds = import_file(SCRIPT, "deviation_sweeps")
 
 
 def test_tiny_sweep_end_to_end(fmu_dir, tmp_path):

@@ -10,7 +10,6 @@ parameter of the controller and plant FMUs starts at the header's value.
 """
 from __future__ import annotations
 
-import importlib.util
 import json
 import math
 import subprocess
@@ -19,13 +18,10 @@ import sys
 import numpy as np
 import pytest
 
-from conftest import NOMINAL, REPO_ROOT
+from conftest import NOMINAL, REPO_ROOT, import_file
 from anklehip.fmu import FMUInfo
 
-spec = importlib.util.spec_from_file_location("hoap2_lump", REPO_ROOT / "hoap2" / "lump.py")
-lump = importlib.util.module_from_spec(spec)
-sys.modules[spec.name] = lump        # dataclasses look their module up by name
-spec.loader.exec_module(lump)
+lump = import_file(REPO_ROOT / "hoap2" / "lump.py", "hoap2_lump")
 
 
 @pytest.fixture(scope="module")
