@@ -369,11 +369,11 @@ def cmd_sweep(a) -> int:
     from .scenario import ScenarioError, load_scenario
     from .fmu import FMUError
     from .master import Models, check_overrides
-    from .sweep import parse_variant, plot_sweep, run_sweep, write_table
+    from .sweep import parse_grid, parse_variant, plot_sweep, run_sweep, write_table
     try:
         path = find_scenario(a.scenario)
         sc = load_scenario(path)
-        forces = _parse_grid(a.forces)
+        forces = parse_grid(a.forces, "--forces")
         variants = [parse_variant(v) for v in (a.variant or ["default"])]
         models = Models.load(a.fmu_dir)
         for v in variants:    # a bad variant is an error here, not a traceback in every worker
@@ -403,16 +403,6 @@ CONTROLLER_CONFIG_HELP = ("a named controller configuration (default: the scenar
 def _variants_help() -> str:
     from .sweep import VARIANTS_HELP
     return VARIANTS_HELP
-
-
-def _parse_grid(spec: str) -> list[float]:
-    """'2:12:1' (start:stop:step, inclusive) or '3,5,8'."""
-    if ":" in spec:
-        a, b, s = (float(x) for x in spec.split(":"))
-        if s <= 0 or b < a:
-            raise ValueError(f"--forces {spec}: need start <= stop and step > 0")
-        return [round(x, 9) for x in np.arange(a, b + s / 2, s)]
-    return [float(x) for x in spec.split(",") if x.strip()]
 
 
 def cmd_regen(a) -> int:

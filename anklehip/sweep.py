@@ -23,6 +23,16 @@ class Variant:
     config: str | None = None     # a named controller configuration (None: the scenario's)
 
 
+def parse_grid(spec: str, what: str = "grid") -> list[float]:
+    """'2:12:1' (start:stop:step, inclusive) or '3,5,8'."""
+    if ":" in spec:
+        a, b, s = (float(x) for x in spec.split(":"))
+        if s <= 0 or b < a:
+            raise ValueError(f"{what} {spec}: need start <= stop and step > 0")
+        return [float(round(x, 9)) for x in np.arange(a, b + s / 2, s)]
+    return [float(x) for x in spec.split(",") if x.strip()]
+
+
 def parse_variant(spec: str) -> Variant:
     from .scenario import ScenarioError, parse_set
     name, _, rest = spec.partition(":")

@@ -25,7 +25,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from anklehip.sweep import Variant, parse_variant, run_sweep, write_table  # noqa: E402
+from anklehip.sweep import Variant, parse_grid, parse_variant, run_sweep, write_table  # noqa: E402
 
 # Push shapes: (rise, total duration, direction) in s; direction +1 = on the back, -1 = on the chest.
 # short/medium/slow as in docs/controller.md section 4.5; "main" is the first push of the main job
@@ -115,12 +115,6 @@ def scenario_text(shape: str) -> str:
             f'[[push]]\nkind = "pulse"\nt = 1.0\nforce = {float(sign)}\nduration = {duration}\nrise = {rise}\n')
 
 
-def frange(spec: str) -> list[float]:
-    a, b, s = (float(x) for x in spec.split(":"))
-    n = int(round((b - a) / s))
-    return [round(a + i * s, 6) for i in range(n + 1)]
-
-
 def limit(rows: list[dict], forces: list[float], ok) -> float:
     """Largest grid force with ok(row) true for it and every weaker grid force (0 if the weakest fails)."""
     good = {abs(r["peak_force"]): ok(r) for r in rows}
@@ -157,7 +151,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--out", default=str(ROOT / "results" / "deviation_sweeps"))
     a = ap.parse_args(argv)
 
-    forces = frange(a.forces)
+    forces = parse_grid(a.forces, "--forces")
     shapes = a.shape or list(SHAPES)
     if a.config:
         variants = [parse_variant(c) for c in a.config]
