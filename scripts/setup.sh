@@ -6,8 +6,52 @@ set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$root"
 
+# --- Debian source entry (deb-src) ------------------------------------------------------------
+# The build compiles ODE from Debian's source package (cmake/OdeFromDebianSource.cmake: Debian's
+# libode.a is not position independent), fetched with `apt-get source`, which needs a deb-src
+# entry for deb.debian.org and its source index.
+apt_updated=0
+has_debsrc() {
+  local f
+  for f in /etc/apt/sources.list /etc/apt/sources.list.d/*.list; do
+    [ -f "$f" ] && grep -Eq '^[[:space:]]*deb-src[[:space:]].*deb\.debian\.org/debian/?([[:space:]]|$)' "$f" && return 0
+  done
+  for f in /etc/apt/sources.list.d/*.sources; do
+    # deb822: one stanza per paragraph; enabled, Types with deb-src, URIs on deb.debian.org/debian
+    [ -f "$f" ] && awk -v RS= '
+      /(^|\n)Types:[^\n]*deb-src/ && /(^|\n)URIs:[^\n]*deb\.debian\.org\/debian\/?([ \t\n]|$)/ &&
+      !/(^|\n)Enabled:[ \t]*no/ { found = 1 } END { exit !found }' "$f" && return 0
+  done
+  return 1
+}
+if ! has_debsrc; then
+  if [ "$(id -u)" -ne 0 ]; then echo "setup: need root to add a deb-src entry for deb.debian.org" >&2; exit 1; fi
+  # Mirror the deb entry of debian.sources (URIs, Signed-By), main component only.
+  codename="$(. /etc/os-release && echo "${VERSION_CODENAME:-bookworm}")"
+  uris=http://deb.debian.org/debian
+  signed=/usr/share/keyrings/debian-archive-keyring.gpg
+  if [ -f /etc/apt/sources.list.d/debian.sources ]; then
+    stanza="$(awk -v RS= '/(^|\n)Types:[^\n]*deb/ && /(^|\n)URIs:[^\n]*deb\.debian\.org\/debian\/?([ \t\n]|$)/ { print; exit }' \
+      /etc/apt/sources.list.d/debian.sources)"
+    u="$(sed -n 's/^URIs:[[:space:]]*//p' <<<"$stanza" | head -n1)"; [ -n "$u" ] && uris="$u"
+    s="$(sed -n 's/^Signed-By:[[:space:]]*//p' <<<"$stanza" | head -n1)"; [ -n "$s" ] && signed="$s"
+  fi
+  echo "setup: adding deb-src entry /etc/apt/sources.list.d/anklehip-deb-src.sources"
+  printf 'Types: deb-src\nURIs: %s\nSuites: %s %s-updates\nComponents: main\nSigned-By: %s\n' \
+    "$uris" "$codename" "$codename" "$signed" >/etc/apt/sources.list.d/anklehip-deb-src.sources
+  apt-get update -qq
+  apt_updated=1
+elif ! compgen -G '/var/lib/apt/lists/deb.debian.org_debian_dists_*_main_source_Sources*' >/dev/null; then
+  # The entry is there, but its source index was never downloaded.
+  if [ "$(id -u)" -ne 0 ]; then echo "setup: need root to run apt-get update (no Debian source index)" >&2; exit 1; fi
+  echo "setup: downloading the Debian source index (apt-get update)"
+  apt-get update -qq
+  apt_updated=1
+fi
+
 # --- Debian packages the build needs ---------------------------------------------------------
-debs=(build-essential cmake libeigen3-dev libsundials-dev libode-dev python3 python3-venv python3-dev)
+# dpkg-dev: dpkg-source, to unpack Debian's ODE source package.
+debs=(build-essential cmake dpkg-dev libeigen3-dev libsundials-dev libode-dev python3 python3-venv python3-dev)
 missing=()
 for p in "${debs[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
@@ -16,7 +60,7 @@ if [ "${#missing[@]}" -gt 0 ]; then
   echo "setup: installing Debian packages: ${missing[*]}"
   if [ "$(id -u)" -ne 0 ]; then echo "setup: need root to install ${missing[*]}" >&2; exit 1; fi
   export DEBIAN_FRONTEND=noninteractive
-  apt-get update -qq
+  [ "$apt_updated" -eq 1 ] || apt-get update -qq
   apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
 fi
 
