@@ -1,0 +1,397 @@
+// Hoap2Plant3D.fmu: the 3D HOAP-2 on the Open Dynamics Engine (plant3d/) behind the FMI 2.0
+// co-simulation glue (fmu/common). Every signal Hoap2Plant has and the controller or the tooling
+// uses keeps its name, unit and meaning (docs/plant3d.md section 4), so AnkleHipController.fmu
+// and every scenario connect unchanged; the 3D signals are added beside them. Servo parameters
+// are named as Hoap2Plant's (kp_ankle, ...), for both legs together.
+#include <cmath>
+#include <cstring>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "fmuglue/glue.hpp"
+#include "hoap2/nominal.h"
+#include "hoap2plant3d/plant3d.hpp"
+
+using namespace fmuglue;
+using namespace hoap2plant3d;
+
+namespace {
+
+namespace vr {
+enum : fmi2ValueReference {
+  // inputs: the sagittal two, the push, then the other set points
+  theta_ankle_ref = 0, theta_hip_ref = 1, push_force = 2, push_force_y = 3,
+  theta_ankle_roll_ref = 4, theta_hip_roll_ref = 5, theta_hip_yaw_ref = 6, theta_knee_ref = 7,
+  // outputs shared with Hoap2Plant (same value references)
+  theta_ankle = 10, theta_hip = 11, dtheta_ankle = 12, dtheta_hip = 13, zmp_x = 14, fz = 15, fx = 16,
+  com_x = 17, com_z = 18, foot_pitch = 19, contact_mode = 20, fallen = 21, f_toe = 22, f_heel = 23,
+  required_mu = 24, zmp_true = 25, fz_true = 26, energy = 27, tau_ankle = 28, tau_hip = 29,
+  moment_ankle = 30,
+  // 3D outputs
+  zmp_y = 50, fy = 51, com_y = 52, foot_roll = 53, zmp_true_y = 54, fz_left = 55, fz_right = 56,
+  slip_speed_left = 57, slip_speed_right = 58, imu_roll = 59, imu_pitch = 60, imu_yaw = 61,
+  gyro_x = 62, gyro_y = 63, gyro_z = 64, sink_depth = 65,
+  first_cell = 70,         // 8 load cells
+  first_joint = 80,        // 12 joint angles
+  ode_steps = 95, mode_switches = 96, contacts = 97,
+  first_real_param = 100,  // 100 + index into realParams()
+  servo_on = 190, seed = 191
+};
+}
+
+// A Real parameter: name, unit, description, bounds, and where it lives in Params.
+struct RealParam {
+  std::string name, unit, description;
+  double min, max;
+  std::function<double&(Params&)> field;
+};
+
+const std::vector<RealParam>& realParams() {
+  static const std::vector<RealParam> table = [] {
+    std::vector<RealParam> t = {
+        {"g", "m/s2", "Gravitational acceleration", 0.0, 100.0, [](Params& p) -> double& { return p.g; }},
+        {"mu", "", "Coulomb friction coefficient of the soles (friction pyramid along the foot axes)", 0.0, 100.0,
+         [](Params& p) -> double& { return p.mu; }},
+        {"contact_stiffness", "N/m", "Normal stiffness of each sole-corner contact (ODE ERP/CFM equivalent)", 1.0, 1e9,
+         [](Params& p) -> double& { return p.contact_stiffness; }},
+        {"contact_damping", "N.s/m", "Normal damping of each sole-corner contact", 0.0, 1e7,
+         [](Params& p) -> double& { return p.contact_damping; }},
+        {"internal_step", "s", "ODE step inside a communication step (upper bound; equal steps)", 1e-6, 0.01,
+         [](Params& p) -> double& { return p.internal_step; }},
+        {"h_push", "m", "Height of the push point above the sole (erect posture), on the trunk above the hips", 0.0, 10.0,
+         [](Params& p) -> double& { return p.h_push; }},
+        {"fall_foot_pitch", "rad", "Fallen when a sole tilts more than this", 1e-3, 1.5,
+         [](Params& p) -> double& { return p.fall_foot_pitch; }},
+        {"fall_body_pitch", "rad", "Fallen when the ankle->CoM line leans more than this", 1e-3, 1.5,
+         [](Params& p) -> double& { return p.fall_body_pitch; }},
+        {"sensor_noise", "N", "Std deviation of the white noise of each of the 8 sole load cells (0 = off)", 0.0, 1e4,
+         [](Params& p) -> double& { return p.sensor_noise; }},
+        {"sensor_bias_toe", "N", "Bias of the four toe load cells together", -1e4, 1e4,
+         [](Params& p) -> double& { return p.sensor_bias_toe; }},
+        {"sensor_bias_heel", "N", "Bias of the four heel load cells together", -1e4, 1e4,
+         [](Params& p) -> double& { return p.sensor_bias_heel; }},
+        {"sensor_fmin", "N", "Below this total load the sensor ZMP reads 0", 0.0, 1e4,
+         [](Params& p) -> double& { return p.sensor_fmin; }},
+        {"theta_ankle_init", "rad", "Initial ankle set-point (the robot settles under it before the start)",
+         HOAP2_ANKLE_MIN, HOAP2_ANKLE_MAX, [](Params& p) -> double& { return p.theta_ankle_init; }},
+        {"theta_hip_init", "rad", "Initial hip set-point (the robot settles under it before the start)", -1.2, 1.2,
+         [](Params& p) -> double& { return p.theta_hip_init; }},
+        {"settle_time", "s", "Settling time under the initial set-points before the start", 0.0, 100.0,
+         [](Params& p) -> double& { return p.settle_time; }},
+    };
+    struct Field {
+      const char* prefix;
+      const char* unit;
+      const char* what;
+      double Servo::*member;
+      double min, max;
+    };
+    const Field fields[] = {
+        {"kp_", "N.m/rad", "servo position gain", &Servo::kp, 0.0, 1e6},
+        {"kd_", "N.m.s/rad", "servo velocity gain (> 0)", &Servo::kd, 1e-6, 1e5},
+        {"tau_max_", "N.m", "servo torque limit", &Servo::tau_max, 1e-6, 1e4},
+        {"vel_max_", "rad/s", "servo velocity limit", &Servo::vel_max, 1e-6, 1e3},
+        {"damping_", "N.m.s/rad", "passive viscous damping", &Servo::damping, 0.0, 1e4},
+    };
+    for (int k = 0; k < kLegJoints; ++k) {
+      for (const Field& f : fields) {
+        double Servo::*m = f.member;
+        t.push_back({std::string(f.prefix) + joint_name(k), f.unit,
+                     std::string(joint_name(k)) + " " + f.what + ", both legs together (each leg's joint: half)",
+                     f.min, f.max, [k, m](Params& p) -> double& { return p.servo[k].*m; }});
+      }
+    }
+    return t;
+  }();
+  return table;
+}
+
+const char* kCellNames[kCells] = {"front_left", "front_right", "rear_left", "rear_right"};
+const char* kSideNames[kLegs] = {"left", "right"};
+
+ModelInfo makeInfo() {
+  Params def = default_params();
+  ModelInfo m;
+  m.model_name = "Hoap2Plant3D";
+  m.description =
+      "HOAP-2 humanoid in 3D on the Open Dynamics Engine: trunk with arms and head, two legs of six servo "
+      "joints, box soles on the ground with Coulomb friction, eight sole load cells, trunk IMU, push, fall "
+      "detection; the signals of Hoap2Plant under the same names";
+  m.default_experiment = {0.0, 5.0, 1e-6, 1e-3};
+  m.outputs_depend_on_inputs = false;
+  m.extra_log_categories = {{"logOde", "ODE messages"}};
+  auto add = [&](const std::string& n, fmi2ValueReference r, Type t, Causality c, Variability v, const char* unit,
+                 const std::string& d, double start = 0.0, double mn = kNoBound, double mx = kNoBound) {
+    Variable x;
+    x.name = n; x.vr = r; x.type = t; x.causality = c; x.variability = v; x.unit = unit; x.description = d;
+    x.start = start; x.min = mn; x.max = mx;
+    m.variables.push_back(x);
+  };
+  const auto In = Causality::Input, Out = Causality::Output, Par = Causality::Parameter;
+  const auto Cont = Variability::Continuous, Disc = Variability::Discrete, Fix = Variability::Fixed;
+  const auto R = Type::Real, I = Type::Integer, B = Type::Boolean;
+  add("theta_ankle_ref", vr::theta_ankle_ref, R, In, Cont, "rad", "Ankle pitch set point, both legs", 0.0);
+  add("theta_hip_ref", vr::theta_hip_ref, R, In, Cont, "rad", "Hip pitch set point, both legs", 0.0);
+  add("push_force", vr::push_force, R, In, Cont, "N", "Horizontal force on the trunk, x (+ forward)", 0.0);
+  add("push_force_y", vr::push_force_y, R, In, Cont, "N", "Horizontal force on the trunk, y (+ to the left)", 0.0);
+  add("theta_ankle_roll_ref", vr::theta_ankle_roll_ref, R, In, Cont, "rad", "Ankle roll set point, both legs", 0.0);
+  add("theta_hip_roll_ref", vr::theta_hip_roll_ref, R, In, Cont, "rad", "Hip roll set point, both legs", 0.0);
+  add("theta_hip_yaw_ref", vr::theta_hip_yaw_ref, R, In, Cont, "rad", "Hip yaw set point, both legs", 0.0);
+  add("theta_knee_ref", vr::theta_knee_ref, R, In, Cont, "rad", "Knee set point, both legs (+ = flexed)", 0.0);
+
+  add("theta_ankle", vr::theta_ankle, R, Out, Cont, "rad", "Ankle pitch (leg relative to foot), mean of both legs");
+  add("theta_hip", vr::theta_hip, R, Out, Cont, "rad", "Hip pitch (trunk relative to leg), mean of both legs");
+  add("dtheta_ankle", vr::dtheta_ankle, R, Out, Cont, "rad/s", "Ankle pitch rate, mean of both legs");
+  add("dtheta_hip", vr::dtheta_hip, R, Out, Cont, "rad/s", "Hip pitch rate, mean of both legs");
+  add("zmp_x", vr::zmp_x, R, Out, Cont, "m", "ZMP from the eight sole load cells, x from the ankles (feet frame); 0 when unloaded");
+  add("zmp_y", vr::zmp_y, R, Out, Cont, "m", "ZMP from the load cells, y from the middle of the ankles (feet frame)");
+  add("fz", vr::fz, R, Out, Cont, "N", "Total normal force: sum of the eight load cells");
+  add("fx", vr::fx, R, Out, Cont, "N", "Horizontal ground reaction force, x (+ forward)");
+  add("fy", vr::fy, R, Out, Cont, "N", "Horizontal ground reaction force, y (+ left)");
+  add("com_x", vr::com_x, R, Out, Cont, "m", "Whole-robot CoM, x from the ankles (feet frame)");
+  add("com_y", vr::com_y, R, Out, Cont, "m", "Whole-robot CoM, y from the middle of the ankles (feet frame)");
+  add("com_z", vr::com_z, R, Out, Cont, "m", "Whole-robot CoM, height above the ankle axes");
+  add("foot_pitch", vr::foot_pitch, R, Out, Cont, "rad", "Sole pitch, mean of both feet (+ = toes down)");
+  add("foot_roll", vr::foot_roll, R, Out, Cont, "rad", "Sole roll, mean of both feet (+ = left edge up)");
+  add("contact_mode", vr::contact_mode, I, Out, Disc, "", "Contact of both feet: 0 flat, 1 on toes, 2 on heels, 3 airborne");
+  add("fallen", vr::fallen, B, Out, Disc, "", "The robot has fallen (sole tilt or body lean past threshold)");
+  add("f_toe", vr::f_toe, R, Out, Cont, "N", "Toe load cells of both feet (sole-normal force, with noise/bias if enabled)");
+  add("f_heel", vr::f_heel, R, Out, Cont, "N", "Heel load cells of both feet");
+  add("required_mu", vr::required_mu, R, Out, Cont, "", "Friction coefficient required to prevent slip |f_horizontal|/fz");
+  add("zmp_true", vr::zmp_true, R, Out, Cont, "m", "Centre of pressure of the contact forces, x (no sensor model)");
+  add("zmp_true_y", vr::zmp_true_y, R, Out, Cont, "m", "Centre of pressure of the contact forces, y");
+  add("fz_true", vr::fz_true, R, Out, Cont, "N", "Vertical ground reaction of the contact forces");
+  add("moment_ankle", vr::moment_ankle, R, Out, Cont, "N.m", "Ground reaction moment about the mean ankle axis (foot-pitch sense)");
+  add("energy", vr::energy, R, Out, Cont, "J", "Mechanical energy (kinetic + potential)");
+  add("tau_ankle", vr::tau_ankle, R, Out, Cont, "N.m", "Ankle pitch servo torque, both legs");
+  add("tau_hip", vr::tau_hip, R, Out, Cont, "N.m", "Hip pitch servo torque, both legs");
+  add("fz_left", vr::fz_left, R, Out, Cont, "N", "Left sole load (its four cells)");
+  add("fz_right", vr::fz_right, R, Out, Cont, "N", "Right sole load (its four cells)");
+  add("slip_speed_left", vr::slip_speed_left, R, Out, Cont, "m/s", "Horizontal speed of the left sole's centre");
+  add("slip_speed_right", vr::slip_speed_right, R, Out, Cont, "m/s", "Horizontal speed of the right sole's centre");
+  add("imu_roll", vr::imu_roll, R, Out, Cont, "rad", "Trunk roll (Z-Y-X Euler angles)");
+  add("imu_pitch", vr::imu_pitch, R, Out, Cont, "rad", "Trunk pitch (+ = leaning forward)");
+  add("imu_yaw", vr::imu_yaw, R, Out, Cont, "rad", "Trunk yaw");
+  add("gyro_x", vr::gyro_x, R, Out, Cont, "rad/s", "Trunk angular velocity, trunk x axis");
+  add("gyro_y", vr::gyro_y, R, Out, Cont, "rad/s", "Trunk angular velocity, trunk y axis");
+  add("gyro_z", vr::gyro_z, R, Out, Cont, "rad/s", "Trunk angular velocity, trunk z axis");
+  add("sink_depth", vr::sink_depth, R, Out, Cont, "m", "Deepest sole-corner penetration into the ground (last ODE step)");
+  for (int s = 0; s < kLegs; ++s)
+    for (int c = 0; c < kCells; ++c)
+      add(std::string("f_") + kSideNames[s] + "_" + kCellNames[c], vr::first_cell + s * kCells + c, R, Out, Cont, "N",
+          std::string("Load cell under the ") + kCellNames[c] + " corner of the " + kSideNames[s] + " sole");
+  for (int s = 0; s < kLegs; ++s)
+    for (int k = 0; k < kLegJoints; ++k)
+      add(std::string("q_") + kSideNames[s] + "_" + joint_name(k), vr::first_joint + s * kLegJoints + k, R, Out, Cont,
+          "rad", std::string(kSideNames[s]) + " " + joint_name(k) + " joint angle");
+  add("ode_steps", vr::ode_steps, I, Out, Disc, "", "ODE steps so far");
+  add("mode_switches", vr::mode_switches, I, Out, Disc, "", "Contact mode switches so far");
+  add("contacts", vr::contacts, I, Out, Disc, "", "Sole-corner contacts in the last ODE step");
+
+  const auto& params = realParams();
+  for (size_t i = 0; i < params.size(); ++i) {
+    const RealParam& p = params[i];
+    add(p.name, vr::first_real_param + static_cast<fmi2ValueReference>(i), R, Par, Fix, p.unit.c_str(), p.description,
+        p.field(def), p.min, p.max);
+  }
+  add("servo_on", vr::servo_on, B, Par, Fix, "", "Joint servos active (false: joints passive)", def.servo_on ? 1 : 0);
+  add("seed", vr::seed, I, Par, Fix, "", "Seed of the sensor-noise generator (splitmix64)", double(def.seed), 0, 2147483647);
+  return m;
+}
+
+int clampi(std::int64_t v) { return v > 2147483647 ? 2147483647 : static_cast<int>(v); }
+
+constexpr int kInputs = 8;
+const fmi2ValueReference kInputVr[kInputs] = {vr::theta_ankle_ref,      vr::theta_hip_ref,      vr::push_force,
+                                              vr::push_force_y,         vr::theta_ankle_roll_ref, vr::theta_hip_roll_ref,
+                                              vr::theta_hip_yaw_ref,    vr::theta_knee_ref};
+const char* kInputNames[kInputs] = {"theta_ankle_ref",      "theta_hip_ref",      "push_force",
+                                    "push_force_y",         "theta_ankle_roll_ref", "theta_hip_roll_ref",
+                                    "theta_hip_yaw_ref",    "theta_knee_ref"};
+
+class Plant3DFmu : public Model {
+ public:
+  void reset(Context&) override { plant_.reset(); }
+
+  fmi2Status exit_initialization(Context& ctx) override {
+    Params p = default_params();
+    const auto& params = realParams();
+    for (size_t i = 0; i < params.size(); ++i) params[i].field(p) = ctx.real(vr::first_real_param + i);
+    p.servo_on = ctx.boolean(vr::servo_on);
+    p.seed = static_cast<std::uint64_t>(ctx.integer(vr::seed));
+    if (p.h_push <= HOAP2_ANKLE_HEIGHT + HOAP2_L1) {
+      ctx.log(kLogStatusError, fmi2Error, "h_push (%g m) must be above the hips (%g m)", p.h_push,
+              HOAP2_ANKLE_HEIGHT + HOAP2_L1);
+      return fmi2Error;
+    }
+    try {
+      plant_ = std::make_unique<Plant3D>(p);
+    } catch (const std::exception& e) {
+      ctx.log(kLogStatusError, fmi2Error, "building the ODE model failed: %s", e.what());
+      return fmi2Error;
+    }
+    attach(ctx);
+    const bool ok = plant_->initialize(ctx.start_time());
+    if (!ok) {
+      ctx.log(kLogStatusError, fmi2Error, "plant initialization failed: %s", plant_->message().c_str());
+      plant_.reset();
+      return fmi2Error;
+    }
+    for (int i = 0; i < kInputs; ++i) last_in_[i] = 0.0;
+    last_in_[0] = p.theta_ankle_init;
+    last_in_[1] = p.theta_hip_init;
+    write_outputs(ctx);
+    detach();
+    return fmi2OK;
+  }
+
+  StepResult do_step(Context& ctx, double t, double h, bool) override {
+    StepResult res;
+    if (!plant_) {
+      ctx.log(kLogStatusError, fmi2Error, "doStep without an initialized plant");
+      res.status = fmi2Error;
+      return res;
+    }
+    if (std::fabs(t - plant_->time()) > 1e-9 * std::max(1.0, std::fabs(t))) {
+      ctx.log(kLogStatusError, fmi2Error, "doStep at t=%.12g but the plant is at t=%.12g", t, plant_->time());
+      res.status = fmi2Error;
+      return res;
+    }
+    if (plant_->fallen()) {
+      res.status = fmi2Discard;
+      res.last_successful_time = plant_->fall_time();
+      res.terminated = true;
+      ctx.log(kLogStatusDiscard, fmi2Discard, "the robot has fallen at t=%g s; no further steps", plant_->fall_time());
+      return res;
+    }
+    attach(ctx);
+    double in[kInputs];
+    fmi2Status st = fmi2OK;
+    for (int i = 0; i < kInputs; ++i) {
+      in[i] = ctx.real(kInputVr[i]);
+      if (!std::isfinite(in[i])) {  // contained: hold the last finite value
+        ctx.log(kLogStatusWarning, fmi2Warning, "non-finite input %s ignored at t=%g; holding %g", kInputNames[i], t,
+                last_in_[i]);
+        in[i] = last_in_[i];
+        st = fmi2Warning;
+      }
+      last_in_[i] = in[i];
+    }
+    Inputs pin;
+    pin.ref[AnklePitch] = in[0];
+    pin.ref[HipPitch] = in[1];
+    pin.push_x = in[2];
+    pin.push_y = in[3];
+    pin.ref[AnkleRoll] = in[4];
+    pin.ref[HipRoll] = in[5];
+    pin.ref[HipYaw] = in[6];
+    pin.ref[Knee] = in[7];
+    plant_->set_inputs(pin);
+    const auto r = plant_->do_step(h);
+    write_outputs(ctx);
+    detach();
+    switch (r) {
+      case Plant3D::Result::Ok:
+        res.status = st;
+        return res;
+      case Plant3D::Result::Fallen:
+        ctx.log(kLogStatusDiscard, fmi2Discard, "%s", plant_->message().c_str());
+        res.status = fmi2Discard;
+        res.last_successful_time = plant_->fall_time();
+        res.terminated = true;
+        return res;
+      case Plant3D::Result::Error:
+        break;
+    }
+    ctx.log(kLogStatusError, fmi2Error, "plant step failed: %s", plant_->message().c_str());
+    res.status = fmi2Error;
+    return res;
+  }
+
+  void save_state(StateWriter& w) const override {
+    w.u32(plant_ ? 1u : 0u);
+    if (!plant_) return;
+    // copies into zeroed storage so padding bytes are deterministic in the serialized state
+    Params p;
+    std::memset(static_cast<void*>(&p), 0, sizeof p);
+    p = plant_->params();
+    w.pod(p);
+    w.pod(plant_->snapshot());
+    w.bytes(last_in_, sizeof last_in_);
+  }
+
+  bool load_state(StateReader& r, std::string& err) override {
+    std::uint32_t has = 0;
+    if (!r.u32(has) || has > 1) return err = "bad plant state header", false;
+    if (!has) {
+      plant_.reset();
+      return true;
+    }
+    Params p;
+    Snapshot s;
+    double li[kInputs];
+    if (!r.pod(p) || !r.pod(s) || !r.bytes(li, sizeof li)) return err = "truncated plant state", false;
+    std::unique_ptr<Plant3D> fresh;
+    try {
+      fresh = std::make_unique<Plant3D>(p);
+    } catch (const std::exception& e) {
+      return err = std::string("invalid plant parameters in the state: ") + e.what(), false;
+    }
+    if (!fresh->restore(s)) return err = "invalid plant snapshot", false;
+    plant_ = std::move(fresh);
+    std::memcpy(last_in_, li, sizeof li);
+    return true;
+  }
+
+ private:
+  void attach(Context& ctx) {
+    ctx_ = &ctx;
+    plant_->logger = [this](const std::string& s) {
+      if (!ctx_) return;
+      if (s.rfind("ODE", 0) == 0) ctx_->log(kFirstModelCategory, fmi2Warning, "%s", s.c_str());
+      else ctx_->log(kLogEvents, fmi2OK, "%s", s.c_str());
+    };
+  }
+  void detach() { ctx_ = nullptr; }
+
+  void write_outputs(Context& ctx) {
+    const Outputs& o = plant_->outputs();
+    const std::pair<fmi2ValueReference, double> reals[] = {
+        {vr::theta_ankle, o.theta_ankle}, {vr::theta_hip, o.theta_hip}, {vr::dtheta_ankle, o.dtheta_ankle},
+        {vr::dtheta_hip, o.dtheta_hip}, {vr::zmp_x, o.zmp_x}, {vr::zmp_y, o.zmp_y}, {vr::fz, o.fz}, {vr::fx, o.fx},
+        {vr::fy, o.fy}, {vr::com_x, o.com_x}, {vr::com_y, o.com_y}, {vr::com_z, o.com_z},
+        {vr::foot_pitch, o.foot_pitch}, {vr::foot_roll, o.foot_roll}, {vr::f_toe, o.f_toe}, {vr::f_heel, o.f_heel},
+        {vr::required_mu, o.required_mu}, {vr::zmp_true, o.zmp_true_x}, {vr::zmp_true_y, o.zmp_true_y},
+        {vr::fz_true, o.fz_true}, {vr::moment_ankle, o.moment_ankle}, {vr::energy, o.energy},
+        {vr::tau_ankle, o.tau_ankle}, {vr::tau_hip, o.tau_hip}, {vr::fz_left, o.fz_foot[Left]},
+        {vr::fz_right, o.fz_foot[Right]}, {vr::slip_speed_left, o.slip_speed[Left]},
+        {vr::slip_speed_right, o.slip_speed[Right]}, {vr::imu_roll, o.imu_roll}, {vr::imu_pitch, o.imu_pitch},
+        {vr::imu_yaw, o.imu_yaw}, {vr::gyro_x, o.gyro[0]}, {vr::gyro_y, o.gyro[1]}, {vr::gyro_z, o.gyro[2]},
+        {vr::sink_depth, plant_->sink_depth()}};
+    for (const auto& [ref, v] : reals) ctx.set_real(ref, v);
+    for (int s = 0; s < kLegs; ++s) {
+      for (int c = 0; c < kCells; ++c) ctx.set_real(vr::first_cell + s * kCells + c, o.cell[s][c]);
+      for (int k = 0; k < kLegJoints; ++k) ctx.set_real(vr::first_joint + s * kLegJoints + k, o.joint[s][k]);
+    }
+    ctx.set_integer(vr::contact_mode, o.contact_mode);
+    ctx.set_integer(vr::contacts, o.contacts);
+    ctx.set_boolean(vr::fallen, o.fallen);
+    ctx.set_integer(vr::ode_steps, clampi(plant_->stats().ode_steps));
+    ctx.set_integer(vr::mode_switches, clampi(plant_->stats().mode_switches));
+  }
+
+  std::unique_ptr<Plant3D> plant_;
+  Context* ctx_ = nullptr;
+  double last_in_[kInputs] = {};
+};
+
+}  // namespace
+
+const ModelInfo& fmuglue::modelInfo() {
+  static const ModelInfo info = makeInfo();
+  return info;
+}
+
+std::unique_ptr<Model> fmuglue::createModel() { return std::make_unique<Plant3DFmu>(); }

@@ -1,0 +1,192 @@
+// The HOAP-2 in 3D on the Open Dynamics Engine: trunk (torso, waist, arms, head), two legs of six
+// joints each, box feet on a plane with Coulomb friction, position servos, eight sole load cells,
+// an IMU on the trunk, push input and fall detection (docs/plant3d.md).
+//
+// World frame: x forward, y left, z up, ground plane z = 0. Joint angles use the sagittal plant's
+// sense for the pitch joints (theta_ankle: leg relative to foot, theta_hip: trunk relative to leg,
+// positive = pitching forward, i.e. about +y) and the Webots proto's sense for the others.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace hoap2plant3d {
+
+// The six joints of a leg, trunk to foot, in the proto's chain order.
+enum LegJoint : int { HipYaw = 0, HipPitch, HipRoll, Knee, AnklePitch, AnkleRoll, kLegJoints };
+enum Side : int { Left = 0, Right = 1, kLegs };
+// The four load cells under each sole, at its corners.
+enum Cell : int { FrontLeft = 0, FrontRight, RearLeft, RearRight, kCells };
+// The 13 rigid bodies: the trunk, then each leg's six (left, then right), root to tip.
+constexpr int kBodies = 1 + kLegs * kLegJoints;
+
+const char* joint_name(int j);  // "hip_yaw", "hip", "hip_roll", "knee", "ankle", "ankle_roll"
+
+// A position servo, the sagittal plant's model: velocity command wcmd = sat(kp/kd (ref - q),
+// vel_max), torque = kd (wcmd - qdot) - damping qdot, limited to tau_max. Gains are for both legs
+// together (as Hoap2Plant's), each leg's joint gets half of kp, kd, damping and tau_max.
+struct Servo {
+  double kp, kd, tau_max, vel_max, damping;
+};
+
+struct Params {
+  double g = 9.81;
+  bool servo_on = true;
+  Servo servo[kLegJoints] = {};      // per joint kind (default_params())
+  // --- contact: each sole a box on the plane z = 0, corner contacts ---
+  double mu = 1.0;                   // Coulomb friction coefficient (pyramid, axes along the foot)
+  double contact_stiffness = 2e5;    // normal stiffness of each corner contact [N/m]
+  double contact_damping = 1e3;      // normal damping of each corner contact [N s/m]
+  double internal_step = 2.5e-4;     // ODE step inside a communication step (upper bound) [s]
+  // --- push: horizontal force at a trunk point, h_push above the sole in the erect posture ---
+  double h_push = 0.335;
+  // --- fall detection ---
+  double fall_foot_pitch = 0.3;      // a sole tilted more than this [rad]
+  double fall_body_pitch = 0.6;      // the ankle -> CoM line leaning more than this [rad]
+  // --- load cells ---
+  double sensor_noise = 0.0;         // std dev of each cell's white noise [N]
+  double sensor_bias_toe = 0.0;      // bias of the toe cells together (a quarter on each) [N]
+  double sensor_bias_heel = 0.0;     // bias of the heel cells together [N]
+  double sensor_fmin = 1.0;          // below this total load the sensor ZMP reads 0 [N]
+  std::uint64_t seed = 1;
+  // --- initial posture: the set-points held while the robot settles before t0 ---
+  double theta_ankle_init = 0.0, theta_hip_init = 0.0;
+  double settle_time = 1.0;          // [s] of settling before t0 (the robot starts at rest)
+
+  double mass() const;               // whole robot [kg]
+};
+
+Params default_params();
+
+struct Inputs {
+  double ref[kLegJoints] = {};       // set points, both legs alike [rad]
+  double push_x = 0.0, push_y = 0.0; // [N], world frame
+};
+
+struct Outputs {
+  // The sagittal plant's signals (same names and meaning in the FMU).
+  double theta_ankle = 0, theta_hip = 0, dtheta_ankle = 0, dtheta_hip = 0;  // mean of both legs
+  double zmp_x = 0, zmp_y = 0;       // sensor ZMP in the feet frame (origin: mid-ankle on the ground)
+  double fz = 0;                     // sum of the eight cells [N]
+  double f_toe = 0, f_heel = 0;      // front cells, rear cells (both feet) [N]
+  double fx = 0, fy = 0;             // horizontal ground reaction, world [N]
+  double fz_true = 0, zmp_true_x = 0, zmp_true_y = 0;  // contact forces, no sensor model
+  double moment_ankle = 0;           // ground reaction moment about the mean ankle axis (foot-pitch sense)
+  double com_x = 0, com_y = 0, com_z = 0;  // whole-robot CoM, feet frame; z above the ankle axis
+  double foot_pitch = 0, foot_roll = 0;    // mean of both soles (+ pitch = toes down, + roll = left side up)
+  int contact_mode = 0;              // 0 flat, 1 on toes, 2 on heels, 3 airborne (both feet together)
+  int contacts = 0;                  // corner contacts in the last ODE step
+  bool fallen = false;
+  double required_mu = 0;            // |horizontal| / normal ground force
+  double energy = 0;                 // kinetic + potential [J]
+  double tau_ankle = 0, tau_hip = 0; // servo torques, both legs [N m]
+  double cell[kLegs][kCells] = {};   // the eight load cells [N]
+  double fz_foot[kLegs] = {};        // normal load of each foot (cells) [N]
+  double slip_speed[kLegs] = {};     // horizontal speed of each sole's centre [m/s]
+  double joint[kLegs][kLegJoints] = {};  // all twelve joint angles [rad]
+  double imu_roll = 0, imu_pitch = 0, imu_yaw = 0;  // trunk orientation (Z-Y-X Euler) [rad]
+  double gyro[3] = {};               // trunk angular velocity, trunk frame [rad/s]
+};
+
+struct Stats {
+  std::int64_t ode_steps = 0;
+  std::int64_t mode_switches = 0;
+};
+
+// One body's state: all ODE keeps of it between steps (the rotation matrix is stored too, so a
+// restore needs no renormalisation and is bit for bit).
+struct BodyState {
+  double pos[3], quat[4], rot[12], lvel[3], avel[3];
+};
+
+// Everything that determines the future, bit for bit (plain old data).
+struct Snapshot {
+  std::uint32_t magic = 0x48335053u;  // "H3PS"
+  std::uint32_t version = 1;
+  double t = 0, t_fall = 0;
+  std::int32_t fallen = 0, mode = 0;
+  BodyState body[kBodies] = {};
+  Inputs in;
+  std::uint64_t rng = 0;
+  Stats stats;
+  Outputs out;
+};
+
+// The assembled model, for inspection (tests lump it back into the sagittal numbers).
+struct BodyInfo {
+  std::string name;        // "trunk", "left_hip_yaw", ...
+  std::string proto;       // the proto bodies merged into it, comma separated
+  double mass;
+  double com[3];           // world [m]
+  double inertia[6];       // about the CoM, world axes: Ixx Iyy Izz Ixy Ixz Iyz
+};
+struct JointInfo {
+  std::string name;        // "left_hip", ...
+  std::string proto;       // the proto's motor name
+  double anchor[3], axis[3];
+  double lo, hi;           // limits, this model's sense [rad]
+};
+
+class Plant3D {
+ public:
+  explicit Plant3D(const Params& p);  // builds the robot in the zero posture, at rest on the ground
+  ~Plant3D();
+  Plant3D(const Plant3D&) = delete;
+  Plant3D& operator=(const Plant3D&) = delete;
+
+  // Move to the initial posture and settle for settle_time under it; then time is t0.
+  bool initialize(double t0);
+  void set_inputs(const Inputs& in) { in_ = in; }
+  enum class Result { Ok, Fallen, Error };
+  Result do_step(double h);           // t -> t + h in equal ODE steps of at most internal_step
+
+  const Params& params() const { return P_; }
+  const Outputs& outputs() const { return out_; }
+  const Stats& stats() const { return stats_; }
+  double time() const { return t_; }
+  bool fallen() const { return fallen_; }
+  double fall_time() const { return t_fall_; }
+  const std::string& message() const { return msg_; }
+
+  Snapshot snapshot() const;
+  bool restore(const Snapshot& s);
+
+  std::vector<BodyInfo> bodies() const;
+  std::vector<JointInfo> joints() const;
+  double sink_depth() const;          // deepest corner penetration in the last step [m]
+  void push_point(double p[3]) const; // where the push acts now, world [m]
+  void com(double c[3]) const;        // whole-robot CoM, world [m]
+
+  std::function<void(const std::string&)> logger;
+
+  struct World;                        // the ODE objects (plant3d.cpp)
+
+ private:
+  bool ode_step(double dt);           // one ODE step; false on a non-finite state
+  void evaluate_outputs();
+  bool check_fall();
+  double gauss();
+  void log(const std::string& s) {
+    if (logger) logger(s);
+  }
+
+  Params P_;
+  std::unique_ptr<World> w_;
+  double t_ = 0;
+  bool fallen_ = false;
+  double t_fall_ = 0;
+  Inputs in_;
+  std::uint64_t rng_ = 0;
+  Stats stats_;
+  Outputs out_;
+  std::string msg_;
+};
+
+// Hard limit with a smooth (C2) approach, as in the sagittal plant: identity for |u| <= 0.8 L.
+double soft_sat(double u, double L);
+
+}  // namespace hoap2plant3d

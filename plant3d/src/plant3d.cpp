@@ -1,0 +1,793 @@
+// The 3D HOAP-2 on ODE (see plant3d.hpp and docs/plant3d.md).
+//
+// Model assembly: every body of the Webots proto (hoap2/bodies.h, generated from the proto data)
+// that hangs from one of the twelve leg joints becomes an ODE body; every other proto body (waist,
+// arms, neck, head: joints held at their posture angle; the sole sensor: fixed) is merged into the
+// body it hangs from (mass, CoM and inertia combined exactly). That gives 13 bodies and 12 hinges.
+// ODE keeps a body's origin at its CoM, so each body is placed at its combined CoM.
+//
+// Servos are ODE hinge motors: the motor row drives the joint rate to a target with a force limit
+// and a constraint-force-mixing softness; with target = kd wcmd / (kd + d) and CFM = 1 / (kd + d)
+// the motor torque is kd (wcmd - qdot) - d qdot at the end of the step, i.e. the sagittal plant's
+// PD servo with its velocity loop integrated implicitly (stable whatever the link inertia; the
+// proto's hip links are point masses).
+//
+// Contacts: box-plane corner contacts, soft normal (ERP/CFM of a spring-damper per corner, ODE
+// manual "Soft constraint and constraint force mixing") and the friction pyramid (dContactApprox1)
+// with its axes along the foot.
+#include "hoap2plant3d/plant3d.hpp"
+
+#include <ode/ode.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdarg>
+#include <cstdio>
+#include <cstring>
+#include <mutex>
+#include <stdexcept>
+
+#include "hoap2/bodies.h"
+#include "hoap2/nominal.h"
+
+namespace hoap2plant3d {
+
+static_assert(sizeof(dReal) == sizeof(double), "ODE must be built in double precision");
+
+namespace {
+
+constexpr int kMaxContacts = 8;  // per foot (box-plane gives at most 4)
+
+// --- ODE's process-wide state: initialised once (thread-safe), its error hooks throw ------------
+[[noreturn]] void ode_throw(int num, const char* msg, va_list ap) {
+  char buf[512];
+  std::vsnprintf(buf, sizeof buf, msg, ap);
+  throw std::runtime_error(std::string("ODE error ") + std::to_string(num) + ": " + buf);
+}
+thread_local std::function<void(const std::string&)>* tl_logger = nullptr;
+void ode_message(int num, const char* msg, va_list ap) {
+  char buf[512];
+  std::vsnprintf(buf, sizeof buf, msg, ap);
+  if (tl_logger && *tl_logger) (*tl_logger)(std::string("ODE message ") + std::to_string(num) + ": " + buf);
+}
+void ode_init_once() {
+  static std::once_flag once;
+  std::call_once(once, [] {
+    dInitODE2(0);
+    // ODE's default error and debug handlers print and abort the process: ours throw, and the
+    // FMU turns that into fmi2Error. Never dCloseODE: other instances may still be running.
+    dSetErrorHandler(ode_throw);
+    dSetDebugHandler(ode_throw);
+    dSetMessageHandler(ode_message);
+  });
+  // per-thread data (a no-op unless ODE was built with thread-local caches); cheap when present
+  if (!dAllocateODEDataForThread(dAllocateMaskAll)) throw std::runtime_error("ODE: no per-thread data");
+}
+
+// Proto motor name -> (side, leg joint); false for joints that are not leg joints.
+bool leg_joint(const char* motor, int& side, int& kind) {
+  static const int kByNumber[7] = {-1, HipYaw, HipRoll, HipPitch, Knee, AnklePitch, AnkleRoll};
+  int n = 0;
+  if (std::sscanf(motor, "lleg_joint_%d", &n) == 1) side = Left;
+  else if (std::sscanf(motor, "rleg_joint_%d", &n) == 1) side = Right;
+  else return false;
+  if (n < 1 || n > 6) return false;
+  kind = kByNumber[n];
+  return true;
+}
+
+// The pitch joints whose sense is the sagittal plant's (trunk side relative to the foot side)
+// rather than the proto's (child relative to parent): the ODE hinge is attached (parent, child).
+bool sagittal_sense(int kind) { return kind == HipPitch || kind == AnklePitch; }
+
+int body_index(int side, int kind) { return 1 + side * kLegJoints + kind; }
+
+struct Mass {  // accumulated about the world origin
+  double m = 0, first[3] = {0, 0, 0}, second[6] = {0, 0, 0, 0, 0, 0};  // I about the origin
+  void add(const hoap2_body& b, const double off[3]) {
+    const double c[3] = {b.com[0] + off[0], b.com[1] + off[1], b.com[2] + off[2]};
+    m += b.mass;
+    for (int i = 0; i < 3; ++i) first[i] += b.mass * c[i];
+    // I_origin = I_com + m (|c|^2 E - c c^T)
+    const double cc = c[0] * c[0] + c[1] * c[1] + c[2] * c[2];
+    second[0] += b.inertia[0] + b.mass * (cc - c[0] * c[0]);
+    second[1] += b.inertia[1] + b.mass * (cc - c[1] * c[1]);
+    second[2] += b.inertia[2] + b.mass * (cc - c[2] * c[2]);
+    second[3] += b.inertia[3] - b.mass * c[0] * c[1];
+    second[4] += b.inertia[4] - b.mass * c[0] * c[2];
+    second[5] += b.inertia[5] - b.mass * c[1] * c[2];
+  }
+  void com(double c[3]) const {
+    for (int i = 0; i < 3; ++i) c[i] = first[i] / m;
+  }
+  void inertia_about_com(double I[6]) const {
+    double c[3];
+    com(c);
+    const double cc = c[0] * c[0] + c[1] * c[1] + c[2] * c[2];
+    I[0] = second[0] - m * (cc - c[0] * c[0]);
+    I[1] = second[1] - m * (cc - c[1] * c[1]);
+    I[2] = second[2] - m * (cc - c[2] * c[2]);
+    I[3] = second[3] + m * c[0] * c[1];
+    I[4] = second[4] + m * c[0] * c[2];
+    I[5] = second[5] + m * c[1] * c[2];
+  }
+};
+
+std::string body_name(int i) {
+  if (i == 0) return "trunk";
+  const int side = (i - 1) / kLegJoints, kind = (i - 1) % kLegJoints;
+  return std::string(side == Left ? "left_" : "right_") + joint_name(kind);
+}
+
+void rot_y(double a, double R[9]) {
+  const double c = std::cos(a), s = std::sin(a);
+  const double r[9] = {c, 0, s, 0, 1, 0, -s, 0, c};
+  std::memcpy(R, r, sizeof r);
+}
+
+}  // namespace
+
+const char* joint_name(int j) {
+  static const char* kNames[kLegJoints] = {"hip_yaw", "hip", "hip_roll", "knee", "ankle", "ankle_roll"};
+  return j >= 0 && j < kLegJoints ? kNames[j] : "?";
+}
+
+double soft_sat(double u, double L) {
+  if (!(L > 0)) return u;
+  const double a = 0.8 * L, au = std::fabs(u);
+  if (au <= a) return u;
+  const double w = L - a;
+  const double v = a + w * std::tanh((au - a) / w);
+  return u < 0 ? -v : v;
+}
+
+double Params::mass() const {
+  double m = 0;
+  for (int i = 0; i < HOAP2_NUM_BODIES; ++i) m += HOAP2_BODIES[i].mass;
+  return m;
+}
+
+Params default_params() {
+  Params p;
+  p.g = HOAP2_G;
+  // pitch joints: Hoap2Plant's defaults (both legs together); the others as stiff as the ankle
+  p.servo[AnklePitch] = {400.0, 20.0, 18.0, 5.0, 0.0};
+  p.servo[HipPitch] = {150.0, 5.0, 18.0, 5.0, 0.0};
+  p.servo[Knee] = {400.0, 20.0, 18.0, 5.0, 0.0};
+  p.servo[AnkleRoll] = {400.0, 20.0, 18.0, 5.0, 0.0};
+  p.servo[HipRoll] = {400.0, 20.0, 18.0, 5.0, 0.0};
+  p.servo[HipYaw] = {400.0, 20.0, 18.0, 5.0, 0.0};
+  return p;
+}
+
+struct Plant3D::World {
+  dWorldID world = nullptr;
+  dGeomID ground = nullptr;
+  dGeomID foot_geom[kLegs] = {};
+  dJointGroupID contact_group = nullptr;
+  dBodyID body[kBodies] = {};
+  dJointID hinge[kLegs][kLegJoints] = {};
+  BodyInfo info[kBodies];
+  JointInfo jinfo[kLegs][kLegJoints];
+  double sole_corner[kLegs][kCells][3] = {};  // foot body frame, on the sole
+  double sole_center[kLegs][3] = {};          // foot body frame
+  double sole_len = 0, sole_width = 0, heel_x = 0;  // sole rectangle, x from the ankle axis
+  double push_point[3] = {};                  // trunk body frame
+  // last ODE step
+  int ncontact[kLegs] = {};
+  dContactGeom cg[kLegs][kMaxContacts];
+  dJointFeedback fb[kLegs][kMaxContacts];
+  double tau[kLegs][kLegJoints] = {};
+  double max_depth = 0;
+
+  ~World() {
+    if (contact_group) dJointGroupDestroy(contact_group);
+    for (dGeomID g : foot_geom)
+      if (g) dGeomDestroy(g);
+    if (ground) dGeomDestroy(ground);
+    if (world) dWorldDestroy(world);  // destroys bodies and joints
+  }
+};
+
+Plant3D::Plant3D(const Params& p) : P_(p), w_(std::make_unique<World>()) {
+  ode_init_once();
+  World& w = *w_;
+  w.world = dWorldCreate();
+  dWorldSetGravity(w.world, 0, 0, -P_.g);
+  dWorldSetERP(w.world, 0.2);
+  dWorldSetCFM(w.world, 1e-10);            // joints practically rigid
+  dWorldSetContactSurfaceLayer(w.world, 0);
+  dWorldSetAutoDisableFlag(w.world, 0);
+
+  // 1. Which ODE body each proto body belongs to, and the combined mass of each.
+  const double off[3] = {0, 0, HOAP2_ROBOT_ORIGIN_HEIGHT};  // Robot frame -> world (sole on z = 0)
+  int owner[HOAP2_NUM_BODIES];
+  Mass mass[kBodies];
+  const hoap2_body* joint_of[kLegs][kLegJoints] = {};
+  int parent_owner[kLegs][kLegJoints] = {};
+  for (int i = 0; i < HOAP2_NUM_BODIES; ++i) {
+    const hoap2_body& b = HOAP2_BODIES[i];
+    int parent = -1;
+    for (int k = 0; k < i; ++k)
+      if (std::strcmp(HOAP2_BODIES[k].name, b.parent) == 0) parent = k;
+    int side = 0, kind = 0;
+    if (parent < 0) {
+      owner[i] = 0;
+    } else if (leg_joint(b.joint, side, kind)) {
+      if (b.angle != 0.0) throw std::logic_error("leg joints must be at 0 in the posture");
+      owner[i] = body_index(side, kind);
+      joint_of[side][kind] = &b;
+      parent_owner[side][kind] = owner[parent];
+    } else {
+      owner[i] = owner[parent];
+    }
+    mass[owner[i]].add(b, off);
+    BodyInfo& info = w.info[owner[i]];
+    info.proto += (info.proto.empty() ? "" : ",") + std::string(b.name);
+  }
+
+  // 2. The bodies, at their CoM, unrotated (all leg joints at zero).
+  for (int i = 0; i < kBodies; ++i) {
+    BodyInfo& info = w.info[i];
+    info.name = body_name(i);
+    info.mass = mass[i].m;
+    mass[i].com(info.com);
+    mass[i].inertia_about_com(info.inertia);
+    dMass m;
+    dMassSetParameters(&m, info.mass, 0, 0, 0, info.inertia[0], info.inertia[1], info.inertia[2], info.inertia[3],
+                       info.inertia[4], info.inertia[5]);
+    w.body[i] = dBodyCreate(w.world);
+    dBodySetMass(w.body[i], &m);
+    dBodySetPosition(w.body[i], info.com[0], info.com[1], info.com[2]);
+  }
+
+  // 3. The twelve hinges with their limits.
+  for (int s = 0; s < kLegs; ++s) {
+    for (int k = 0; k < kLegJoints; ++k) {
+      const hoap2_body* b = joint_of[s][k];
+      if (!b) throw std::logic_error("a leg joint is missing from hoap2/bodies.h");
+      dJointID j = dJointCreateHinge(w.world, nullptr);
+      const dBodyID child = w.body[body_index(s, k)], parent = w.body[parent_owner[s][k]];
+      const bool sag = sagittal_sense(k);
+      if (sag) dJointAttach(j, parent, child);
+      else dJointAttach(j, child, parent);
+      dJointSetHingeAnchor(j, b->anchor[0] + off[0], b->anchor[1] + off[1], b->anchor[2] + off[2]);
+      dJointSetHingeAxis(j, b->axis[0], b->axis[1], b->axis[2]);
+      const double lo = sag ? -b->max : b->min, hi = sag ? -b->min : b->max;
+      dJointSetHingeParam(j, dParamLoStop, lo);
+      dJointSetHingeParam(j, dParamHiStop, hi);
+      w.hinge[s][k] = j;
+      JointInfo& ji = w.jinfo[s][k];
+      ji.name = std::string(s == Left ? "left_" : "right_") + joint_name(k);
+      ji.proto = b->joint;
+      dVector3 a;
+      dJointGetHingeAnchor(j, a);
+      std::copy(a, a + 3, ji.anchor);
+      dJointGetHingeAxis(j, a);
+      std::copy(a, a + 3, ji.axis);
+      ji.lo = lo;
+      ji.hi = hi;
+    }
+  }
+
+  // 4. Soles: a box under each foot, its bottom ankle_height below the ankle axis, toe_x / heel_x
+  //    from it (the sagittal plant's numbers); the load cells at the corners.
+  const double thick = 0.02;
+  w.heel_x = HOAP2_HEEL_X;
+  w.sole_len = HOAP2_TOE_X - HOAP2_HEEL_X;
+  w.sole_width = HOAP2_SOLE_WIDTH;
+  w.ground = dCreatePlane(nullptr, 0, 0, 1, 0);
+  for (int s = 0; s < kLegs; ++s) {
+    const dBodyID foot = w.body[body_index(s, AnkleRoll)];
+    const double* ankle = w.jinfo[s][AnklePitch].anchor;
+    const double* fp = dBodyGetPosition(foot);
+    const double cx = ankle[0] + 0.5 * (HOAP2_TOE_X + HOAP2_HEEL_X), cy = ankle[1],
+                 sole_z = ankle[2] - HOAP2_ANKLE_HEIGHT;
+    w.foot_geom[s] = dCreateBox(nullptr, w.sole_len, w.sole_width, thick);
+    dGeomSetBody(w.foot_geom[s], foot);
+    dGeomSetOffsetWorldPosition(w.foot_geom[s], cx, cy, sole_z + 0.5 * thick);
+    const double xs[kCells] = {HOAP2_TOE_X, HOAP2_TOE_X, HOAP2_HEEL_X, HOAP2_HEEL_X};
+    const double ys[kCells] = {0.5 * w.sole_width, -0.5 * w.sole_width, 0.5 * w.sole_width, -0.5 * w.sole_width};
+    for (int c = 0; c < kCells; ++c) {
+      w.sole_corner[s][c][0] = ankle[0] + xs[c] - fp[0];
+      w.sole_corner[s][c][1] = cy + ys[c] - fp[1];
+      w.sole_corner[s][c][2] = sole_z - fp[2];
+    }
+    w.sole_center[s][0] = cx - fp[0];
+    w.sole_center[s][1] = cy - fp[1];
+    w.sole_center[s][2] = sole_z - fp[2];
+  }
+  w.contact_group = dJointGroupCreate(0);
+
+  // 5. The push point: on the trunk, h_push above the sole, above the middle of the hip axes.
+  const double* trunk = dBodyGetPosition(w.body[0]);
+  const double* hl = w.jinfo[Left][HipPitch].anchor;
+  const double* hr = w.jinfo[Right][HipPitch].anchor;
+  w.push_point[0] = 0.5 * (hl[0] + hr[0]) - trunk[0];
+  w.push_point[1] = 0.5 * (hl[1] + hr[1]) - trunk[1];
+  w.push_point[2] = P_.h_push - trunk[2];
+
+  rng_ = P_.seed;
+  evaluate_outputs();
+}
+
+Plant3D::~Plant3D() = default;
+
+bool Plant3D::initialize(double t0) {
+  World& w = *w_;
+  // Posture: everything above the ankles turns about the ankle axis by theta_ankle_init, then
+  // everything above the hips about the hip axis by theta_hip_init (both about +y).
+  auto turn = [&](bool (*moves)(int), const double pivot[3], double angle) {
+    double R[9];
+    rot_y(angle, R);
+    for (int i = 0; i < kBodies; ++i) {
+      if (!moves(i)) continue;
+      const double* p = dBodyGetPosition(w.body[i]);
+      const double* Rb = dBodyGetRotation(w.body[i]);  // 3x4, row-major
+      const double d[3] = {p[0] - pivot[0], p[1] - pivot[1], p[2] - pivot[2]};
+      dMatrix3 Rn;
+      for (int r = 0; r < 3; ++r) {
+        for (int c = 0; c < 3; ++c) Rn[r * 4 + c] = R[r * 3] * Rb[c] + R[r * 3 + 1] * Rb[4 + c] + R[r * 3 + 2] * Rb[8 + c];
+        Rn[r * 4 + 3] = 0;
+      }
+      const double np[3] = {pivot[0] + R[0] * d[0] + R[1] * d[1] + R[2] * d[2],
+                            pivot[1] + R[3] * d[0] + R[4] * d[1] + R[5] * d[2],
+                            pivot[2] + R[6] * d[0] + R[7] * d[1] + R[8] * d[2]};
+      dBodySetRotation(w.body[i], Rn);
+      dBodySetPosition(w.body[i], np[0], np[1], np[2]);
+    }
+  };
+  auto above_ankle = [](int i) {
+    const int k = (i - 1) % kLegJoints;
+    return i == 0 || (k != AnklePitch && k != AnkleRoll);
+  };
+  auto above_hip = [](int i) { return i == 0 || (i - 1) % kLegJoints == HipYaw; };
+  dVector3 a;
+  dJointGetHingeAnchor(w.hinge[Left][AnklePitch], a);
+  turn(above_ankle, a, P_.theta_ankle_init);
+  dJointGetHingeAnchor(w.hinge[Left][HipPitch], a);
+  turn(above_hip, a, P_.theta_hip_init);
+
+  // Settle under the initial set points, then start the clock.
+  Inputs hold;
+  hold.ref[AnklePitch] = P_.theta_ankle_init;
+  hold.ref[HipPitch] = P_.theta_hip_init;
+  in_ = hold;
+  const int n = static_cast<int>(std::ceil(P_.settle_time / P_.internal_step - 1e-9));
+  try {
+    for (int i = 0; i < n; ++i) {
+      if (!ode_step(P_.settle_time / n)) return false;
+      if (check_fall()) {
+        msg_ = "the robot falls while settling into the initial posture: " + msg_;
+        return false;
+      }
+    }
+  } catch (const std::exception& e) {
+    msg_ = e.what();
+    return false;
+  }
+  t_ = t0;
+  fallen_ = false;
+  stats_ = Stats();
+  evaluate_outputs();
+  return true;
+}
+
+bool Plant3D::ode_step(double dt) {
+  World& w = *w_;
+  tl_logger = &logger;
+  // servos: the velocity loop is the ODE motor (implicit), the position loop sets its target
+  for (int s = 0; s < kLegs; ++s) {
+    for (int k = 0; k < kLegJoints; ++k) {
+      const Servo& sv = P_.servo[k];
+      const dJointID j = w.hinge[s][k];
+      const double q = dJointGetHingeAngle(j);
+      const double kd = P_.servo_on ? 0.5 * sv.kd : 0.0, d = 0.5 * sv.damping;
+      const double wcmd = P_.servo_on ? soft_sat(sv.kp / sv.kd * (in_.ref[k] - q), sv.vel_max) : 0.0;
+      const double gain = kd + d;
+      if (gain > 0) {
+        dJointSetHingeParam(j, dParamVel, kd * wcmd / gain);
+        dJointSetHingeParam(j, dParamFMax, P_.servo_on ? 0.5 * sv.tau_max : dInfinity);
+        dJointSetHingeParam(j, dParamCFM, 1.0 / gain);
+      } else {
+        dJointSetHingeParam(j, dParamFMax, 0.0);
+      }
+    }
+  }
+  if (in_.push_x != 0.0 || in_.push_y != 0.0)
+    dBodyAddForceAtRelPos(w.body[0], in_.push_x, in_.push_y, 0.0, w.push_point[0], w.push_point[1], w.push_point[2]);
+
+  // contacts: ERP and CFM of a spring k and damper c per corner (ODE manual, section 3.8.2)
+  dJointGroupEmpty(w.contact_group);
+  const double k = P_.contact_stiffness, c = P_.contact_damping;
+  const double erp = dt * k / (dt * k + c), cfm = 1.0 / (dt * k + c);
+  w.max_depth = 0;
+  for (int s = 0; s < kLegs; ++s) {
+    const dBodyID foot = w.body[body_index(s, AnkleRoll)];
+    const int n = dCollide(w.foot_geom[s], w.ground, kMaxContacts, w.cg[s], sizeof(dContactGeom));
+    w.ncontact[s] = n;
+    const double* R = dBodyGetRotation(foot);
+    double fx = R[0], fy = R[4];  // the foot's x axis, horizontal part: first friction direction
+    const double nrm = std::hypot(fx, fy);
+    fx = nrm > 1e-9 ? fx / nrm : 1.0;
+    fy = nrm > 1e-9 ? fy / nrm : 0.0;
+    for (int i = 0; i < n; ++i) {
+      dContact ct;
+      std::memset(&ct, 0, sizeof ct);
+      ct.geom = w.cg[s][i];
+      ct.surface.mode = dContactApprox1 | dContactSoftERP | dContactSoftCFM | dContactFDir1;
+      ct.surface.mu = P_.mu;
+      ct.surface.soft_erp = erp;
+      ct.surface.soft_cfm = cfm;
+      ct.fdir1[0] = fx;
+      ct.fdir1[1] = fy;
+      ct.fdir1[2] = 0;
+      w.max_depth = std::max(w.max_depth, static_cast<double>(ct.geom.depth));
+      dJointID cj = dJointCreateContact(w.world, w.contact_group, &ct);
+      dJointAttach(cj, foot, nullptr);
+      dJointSetFeedback(cj, &w.fb[s][i]);
+    }
+  }
+
+  dWorldStep(w.world, dt);
+  ++stats_.ode_steps;
+
+  // servo torques as the motor applied them (implicit law at the new rate, clamped)
+  for (int s = 0; s < kLegs; ++s) {
+    for (int k = 0; k < kLegJoints; ++k) {
+      const dJointID j = w.hinge[s][k];
+      const double cfm_j = dJointGetHingeParam(j, dParamCFM), fmax = dJointGetHingeParam(j, dParamFMax);
+      const double v = dJointGetHingeParam(j, dParamVel), rate = dJointGetHingeAngleRate(j);
+      w.tau[s][k] = fmax > 0 ? std::clamp((v - rate) / cfm_j, -fmax, fmax) : 0.0;
+    }
+  }
+  for (int i = 0; i < kBodies; ++i) {
+    const double* p = dBodyGetPosition(w.body[i]);
+    const double* v = dBodyGetLinearVel(w.body[i]);
+    const double* om = dBodyGetAngularVel(w.body[i]);
+    for (int c = 0; c < 3; ++c) {
+      if (!std::isfinite(p[c]) || !std::isfinite(v[c]) || !std::isfinite(om[c])) {
+        msg_ = "non-finite state of body " + w.info[i].name + " after an ODE step";
+        return false;
+      }
+    }
+  }
+  return true;
+}
+
+namespace {
+void mat_vec(const double* R, const double* v, double* out) {  // R 3x4 row-major
+  for (int r = 0; r < 3; ++r) out[r] = R[r * 4] * v[0] + R[r * 4 + 1] * v[1] + R[r * 4 + 2] * v[2];
+}
+void mat_t_vec(const double* R, const double* v, double* out) {
+  for (int c = 0; c < 3; ++c) out[c] = R[c] * v[0] + R[4 + c] * v[1] + R[8 + c] * v[2];
+}
+}  // namespace
+
+bool Plant3D::check_fall() {
+  World& w = *w_;
+  double ankle[3] = {0, 0, 0}, com[3] = {0, 0, 0}, m = 0;
+  for (int s = 0; s < kLegs; ++s) {
+    const double* R = dBodyGetRotation(w.body[body_index(s, AnkleRoll)]);
+    const double tilt = std::acos(std::clamp(static_cast<double>(R[10]), -1.0, 1.0));
+    if (tilt > P_.fall_foot_pitch) {
+      char buf[160];
+      std::snprintf(buf, sizeof buf, "%s sole tilted %.4f rad (limit %.3f)", s == Left ? "left" : "right", tilt,
+                    P_.fall_foot_pitch);
+      msg_ = buf;
+      return true;
+    }
+    dVector3 a;
+    dJointGetHingeAnchor(w.hinge[s][AnklePitch], a);
+    for (int c = 0; c < 3; ++c) ankle[c] += 0.5 * a[c];
+  }
+  for (int i = 0; i < kBodies; ++i) {
+    const double* p = dBodyGetPosition(w.body[i]);
+    for (int c = 0; c < 3; ++c) com[c] += w.info[i].mass * p[c];
+    m += w.info[i].mass;
+  }
+  const double lean = std::atan2(std::hypot(com[0] / m - ankle[0], com[1] / m - ankle[1]), com[2] / m - ankle[2]);
+  if (lean > P_.fall_body_pitch) {
+    char buf[160];
+    std::snprintf(buf, sizeof buf, "body leans %.4f rad from the ankles (limit %.3f)", lean, P_.fall_body_pitch);
+    msg_ = buf;
+    return true;
+  }
+  return false;
+}
+
+Plant3D::Result Plant3D::do_step(double h) {
+  if (fallen_) return Result::Fallen;
+  if (!(h > 0) || !std::isfinite(h)) {
+    msg_ = "communication step must be positive and finite";
+    return Result::Error;
+  }
+  const int n = std::max(1, static_cast<int>(std::ceil(h / P_.internal_step - 1e-9)));
+  const double dt = h / n, t0 = t_;
+  const int mode_before = out_.contact_mode;
+  try {
+    for (int i = 0; i < n; ++i) {
+      if (!ode_step(dt)) return Result::Error;
+      t_ = t0 + (i + 1) * dt;
+      if (check_fall()) {
+        fallen_ = true;
+        t_fall_ = t_;
+        char buf[64];
+        std::snprintf(buf, sizeof buf, "t=%.6f s: FALLEN: ", t_);
+        msg_ = buf + msg_;
+        evaluate_outputs();
+        log(msg_);
+        return Result::Fallen;
+      }
+    }
+  } catch (const std::exception& e) {
+    msg_ = e.what();
+    return Result::Error;
+  }
+  t_ = t0 + h;
+  evaluate_outputs();
+  if (out_.contact_mode != mode_before) ++stats_.mode_switches;
+  return Result::Ok;
+}
+
+double Plant3D::gauss() {  // splitmix64 + Box-Muller, as the sagittal plant
+  auto next = [this] {
+    std::uint64_t z = (rng_ += 0x9e3779b97f4a7c15ull);
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
+    z ^= z >> 31;
+    return (static_cast<double>(z >> 11) + 0.5) * (1.0 / 9007199254740992.0);
+  };
+  const double u1 = next(), u2 = next();
+  return std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * M_PI * u2);
+}
+
+void Plant3D::evaluate_outputs() {
+  World& w = *w_;
+  Outputs o;
+  std::memset(static_cast<void*>(&o), 0, sizeof o);  // deterministic padding (snapshots compare bytes)
+  // feet frame: origin at the middle of the ankle axes (on the ground for x, y), x along the feet
+  double ankle[3] = {0, 0, 0}, heading[2] = {0, 0};
+  for (int s = 0; s < kLegs; ++s) {
+    dVector3 a;
+    dJointGetHingeAnchor(w.hinge[s][AnklePitch], a);
+    for (int c = 0; c < 3; ++c) ankle[c] += 0.5 * a[c];
+    const double* R = dBodyGetRotation(w.body[body_index(s, AnkleRoll)]);
+    heading[0] += R[0];
+    heading[1] += R[4];
+    o.foot_pitch += 0.5 * std::atan2(-R[8], std::hypot(R[0], R[4]));
+    o.foot_roll += 0.5 * std::atan2(R[9], R[10]);
+  }
+  const double hn = std::hypot(heading[0], heading[1]);
+  const double ex[2] = {heading[0] / hn, heading[1] / hn}, ey[2] = {-ex[1], ex[0]};
+  auto feet_x = [&](const double* p) { return (p[0] - ankle[0]) * ex[0] + (p[1] - ankle[1]) * ex[1]; };
+  auto feet_y = [&](const double* p) { return (p[0] - ankle[0]) * ey[0] + (p[1] - ankle[1]) * ey[1]; };
+
+  // ground reaction from the contact joints; the cells share each contact force bilinearly by
+  // where it acts on the sole (exact for corner contacts; reproduces the centre of pressure)
+  double F[3] = {0, 0, 0}, cop[2] = {0, 0}, true_cells[kLegs][kCells] = {};
+  double moment = 0;
+  o.contacts = 0;
+  for (int s = 0; s < kLegs; ++s) {
+    const dBodyID foot = w.body[body_index(s, AnkleRoll)];
+    const double* R = dBodyGetRotation(foot);
+    const double* fp = dBodyGetPosition(foot);
+    const double nz[3] = {R[2], R[6], R[10]};  // the sole's normal
+    for (int i = 0; i < w.ncontact[s]; ++i) {
+      const double* f = w.fb[s][i].f1;
+      const double* p = w.cg[s][i].pos;
+      for (int c = 0; c < 3; ++c) F[c] += f[c];
+      cop[0] += f[2] * p[0];
+      cop[1] += f[2] * p[1];
+      moment += (p[2] - ankle[2]) * (f[0] * ex[0] + f[1] * ex[1]) - feet_x(p) * f[2];
+      const double d[3] = {p[0] - fp[0], p[1] - fp[1], p[2] - fp[2]};
+      double local[3];
+      mat_t_vec(R, d, local);
+      const double u = std::clamp((local[0] - w.sole_corner[s][RearLeft][0]) / w.sole_len, 0.0, 1.0);
+      const double v = std::clamp((local[1] - w.sole_corner[s][FrontRight][1]) / w.sole_width, 0.0, 1.0);
+      const double fn = f[0] * nz[0] + f[1] * nz[1] + f[2] * nz[2];
+      true_cells[s][FrontLeft] += fn * u * v;
+      true_cells[s][FrontRight] += fn * u * (1 - v);
+      true_cells[s][RearLeft] += fn * (1 - u) * v;
+      true_cells[s][RearRight] += fn * (1 - u) * (1 - v);
+      ++o.contacts;
+    }
+  }
+  o.fx = F[0];
+  o.fy = F[1];
+  o.fz_true = F[2];
+  o.moment_ankle = moment;
+  o.required_mu = F[2] > 0 ? std::hypot(F[0], F[1]) / F[2] : 0.0;
+  if (F[2] > 0) {
+    const double z[3] = {cop[0] / F[2], cop[1] / F[2], 0};
+    o.zmp_true_x = feet_x(z);
+    o.zmp_true_y = feet_y(z);
+  }
+
+  // the cells as the robot reads them (noise, bias), and the ZMP from them
+  double sx = 0, sy = 0, toe_true = 0, heel_true = 0;
+  for (int s = 0; s < kLegs; ++s) {
+    const dBodyID foot = w.body[body_index(s, AnkleRoll)];
+    for (int c = 0; c < kCells; ++c) {
+      const bool front = c == FrontLeft || c == FrontRight;
+      (front ? toe_true : heel_true) += true_cells[s][c];
+      double f = true_cells[s][c] + 0.25 * (front ? P_.sensor_bias_toe : P_.sensor_bias_heel);
+      if (P_.sensor_noise > 0) f += P_.sensor_noise * gauss();
+      o.cell[s][c] = f;
+      o.fz_foot[s] += f;
+      (front ? o.f_toe : o.f_heel) += f;
+      dVector3 p;
+      dBodyGetRelPointPos(foot, w.sole_corner[s][c][0], w.sole_corner[s][c][1], w.sole_corner[s][c][2], p);
+      sx += f * feet_x(p);
+      sy += f * feet_y(p);
+    }
+    dVector3 v;
+    dBodyGetRelPointVel(foot, w.sole_center[s][0], w.sole_center[s][1], w.sole_center[s][2], v);
+    o.slip_speed[s] = std::hypot(v[0], v[1]);
+  }
+  o.fz = o.f_toe + o.f_heel;
+  if (o.fz > P_.sensor_fmin) {
+    o.zmp_x = sx / o.fz;
+    o.zmp_y = sy / o.fz;
+  }
+  const double mg = P_.mass() * P_.g, eps = 1e-3 * mg;
+  o.contact_mode = toe_true + heel_true < eps ? 3 : heel_true < eps ? 1 : toe_true < eps ? 2 : 0;
+
+  // CoM, energy
+  double com[3] = {0, 0, 0}, m = 0, ke = 0, pe = 0;
+  for (int i = 0; i < kBodies; ++i) {
+    const dBodyID b = w.body[i];
+    const double* p = dBodyGetPosition(b);
+    const double* v = dBodyGetLinearVel(b);
+    const double mi = w.info[i].mass;
+    for (int c = 0; c < 3; ++c) com[c] += mi * p[c];
+    m += mi;
+    dMass dm;
+    dBodyGetMass(b, &dm);
+    double wb[3], Iw[3];
+    mat_t_vec(dBodyGetRotation(b), dBodyGetAngularVel(b), wb);
+    mat_vec(dm.I, wb, Iw);
+    ke += 0.5 * mi * (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]) + 0.5 * (wb[0] * Iw[0] + wb[1] * Iw[1] + wb[2] * Iw[2]);
+    pe += mi * P_.g * p[2];
+  }
+  for (double& c : com) c /= m;
+  o.com_x = feet_x(com);
+  o.com_y = feet_y(com);
+  o.com_z = com[2] - ankle[2];
+  o.energy = ke + pe;
+
+  // joints
+  for (int s = 0; s < kLegs; ++s)
+    for (int k = 0; k < kLegJoints; ++k) o.joint[s][k] = dJointGetHingeAngle(w.hinge[s][k]);
+  for (int s = 0; s < kLegs; ++s) {
+    o.theta_ankle += 0.5 * o.joint[s][AnklePitch];
+    o.theta_hip += 0.5 * o.joint[s][HipPitch];
+    o.dtheta_ankle += 0.5 * dJointGetHingeAngleRate(w.hinge[s][AnklePitch]);
+    o.dtheta_hip += 0.5 * dJointGetHingeAngleRate(w.hinge[s][HipPitch]);
+    o.tau_ankle += w.tau[s][AnklePitch];
+    o.tau_hip += w.tau[s][HipPitch];
+  }
+
+  // IMU on the trunk: Z-Y-X Euler angles, body-frame rates
+  const double* R = dBodyGetRotation(w.body[0]);
+  o.imu_yaw = std::atan2(R[4], R[0]);
+  o.imu_pitch = std::asin(std::clamp(-static_cast<double>(R[8]), -1.0, 1.0));
+  o.imu_roll = std::atan2(R[9], R[10]);
+  mat_t_vec(R, dBodyGetAngularVel(w.body[0]), o.gyro);
+
+  o.fallen = fallen_;
+  std::memcpy(static_cast<void*>(&out_), &o, sizeof o);
+}
+
+double Plant3D::sink_depth() const { return w_->max_depth; }
+
+void Plant3D::push_point(double p[3]) const {
+  dVector3 v;
+  dBodyGetRelPointPos(w_->body[0], w_->push_point[0], w_->push_point[1], w_->push_point[2], v);
+  std::copy(v, v + 3, p);
+}
+
+void Plant3D::com(double c[3]) const {
+  double m = 0;
+  c[0] = c[1] = c[2] = 0;
+  for (int i = 0; i < kBodies; ++i) {
+    const double* p = dBodyGetPosition(w_->body[i]);
+    for (int k = 0; k < 3; ++k) c[k] += w_->info[i].mass * p[k];
+    m += w_->info[i].mass;
+  }
+  for (int k = 0; k < 3; ++k) c[k] /= m;
+}
+
+std::vector<BodyInfo> Plant3D::bodies() const {
+  std::vector<BodyInfo> v(w_->info, w_->info + kBodies);
+  for (int i = 0; i < kBodies; ++i) {  // where they are now: CoM and inertia in world axes
+    const dBodyID b = w_->body[i];
+    std::copy(dBodyGetPosition(b), dBodyGetPosition(b) + 3, v[i].com);
+    dMass m;
+    dBodyGetMass(b, &m);
+    const double* R = dBodyGetRotation(b);
+    double Iw[3][3];
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c) {
+        double x = 0;
+        for (int a = 0; a < 3; ++a)
+          for (int d = 0; d < 3; ++d) x += R[r * 4 + a] * m.I[a * 4 + d] * R[c * 4 + d];
+        Iw[r][c] = x;
+      }
+    const double I6[6] = {Iw[0][0], Iw[1][1], Iw[2][2], Iw[0][1], Iw[0][2], Iw[1][2]};
+    std::copy(I6, I6 + 6, v[i].inertia);
+  }
+  return v;
+}
+
+std::vector<JointInfo> Plant3D::joints() const {
+  std::vector<JointInfo> v;
+  for (int s = 0; s < kLegs; ++s)
+    for (int k = 0; k < kLegJoints; ++k) {
+      JointInfo j = w_->jinfo[s][k];
+      dVector3 a;
+      dJointGetHingeAnchor(w_->hinge[s][k], a);
+      std::copy(a, a + 3, j.anchor);
+      dJointGetHingeAxis(w_->hinge[s][k], a);
+      std::copy(a, a + 3, j.axis);
+      v.push_back(j);
+    }
+  return v;
+}
+
+Snapshot Plant3D::snapshot() const {
+  Snapshot s;
+  std::memset(static_cast<void*>(&s), 0, sizeof s);  // deterministic padding
+  s.magic = Snapshot().magic;
+  s.version = Snapshot().version;
+  s.t = t_;
+  s.t_fall = t_fall_;
+  s.fallen = fallen_;
+  s.mode = out_.contact_mode;
+  for (int i = 0; i < kBodies; ++i) {
+    const dBodyID b = w_->body[i];
+    BodyState& st = s.body[i];
+    std::memcpy(st.pos, dBodyGetPosition(b), sizeof st.pos);
+    std::memcpy(st.quat, dBodyGetQuaternion(b), sizeof st.quat);
+    std::memcpy(st.rot, dBodyGetRotation(b), sizeof st.rot);
+    std::memcpy(st.lvel, dBodyGetLinearVel(b), sizeof st.lvel);
+    std::memcpy(st.avel, dBodyGetAngularVel(b), sizeof st.avel);
+  }
+  std::memcpy(static_cast<void*>(&s.in), &in_, sizeof in_);
+  s.rng = rng_;
+  std::memcpy(static_cast<void*>(&s.stats), &stats_, sizeof stats_);
+  std::memcpy(static_cast<void*>(&s.out), &out_, sizeof out_);
+  return s;
+}
+
+bool Plant3D::restore(const Snapshot& s) {
+  if (s.magic != Snapshot().magic || s.version != Snapshot().version) return false;
+  for (const BodyState& st : s.body) {
+    for (double x : st.pos) if (!std::isfinite(x)) return false;
+    for (double x : st.quat) if (!std::isfinite(x)) return false;
+    for (double x : st.lvel) if (!std::isfinite(x)) return false;
+    for (double x : st.avel) if (!std::isfinite(x)) return false;
+  }
+  for (int i = 0; i < kBodies; ++i) {
+    const dBodyID b = w_->body[i];
+    const BodyState& st = s.body[i];
+    // ODE's setters renormalise the quaternion (not bit-exact); write its storage directly (the
+    // getters return pointers into the body, ODE manual "Rigid body functions"), then move the
+    // body by the setter so the attached geoms are updated.
+    std::memcpy(const_cast<dReal*>(dBodyGetQuaternion(b)), st.quat, sizeof st.quat);
+    std::memcpy(const_cast<dReal*>(dBodyGetRotation(b)), st.rot, sizeof st.rot);
+    dBodySetPosition(b, st.pos[0], st.pos[1], st.pos[2]);
+    dBodySetLinearVel(b, st.lvel[0], st.lvel[1], st.lvel[2]);
+    dBodySetAngularVel(b, st.avel[0], st.avel[1], st.avel[2]);
+  }
+  t_ = s.t;
+  t_fall_ = s.t_fall;
+  fallen_ = s.fallen != 0;
+  in_ = s.in;
+  rng_ = s.rng;
+  stats_ = s.stats;
+  out_ = s.out;
+  return true;
+}
+
+}  // namespace hoap2plant3d
