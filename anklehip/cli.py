@@ -124,7 +124,7 @@ def cmd_list(a) -> int:
         if e.phases_reached:
             exp += f", phases {''.join(map(str, e.phases_reached))}"
         ref = "ref" if sc.reference and sc.reference.file.is_file() else ("ref missing" if sc.reference else "")
-        print(f"{sc.name:<28} {sc.stop_time:6.1f} s  peak push {sc.push.peak():+6.1f} N  {exp:<24} {ref:<11} "
+        print(f"{sc.name:<28} {sc.plant_model:<8} {sc.stop_time:6.1f} s  peak push {sc.push.peak():+6.1f} N  {exp:<24} {ref:<11} "
               f"{sc.description.splitlines()[0] if sc.description else ''}")
     return rc
 
@@ -135,12 +135,16 @@ def _scenario_and_models(a):
     the file, key or variable."""
     from .master import Models, check_overrides
     from .paths import find_scenario
-    from .scenario import load_scenario, parse_set
+    from .scenario import ScenarioError, load_scenario, parse_set
     sc = load_scenario(find_scenario(a.scenario))
     c_set, p_set = parse_set(a.set or [])
     sc.controller.update(c_set)
     sc.plant.update(p_set)
-    models = Models.load(a.fmu_dir)
+    if getattr(a, "plant", None):
+        sc.plant_model = a.plant
+    if sc.push_y.peak() != 0 and sc.plant_model == "sagittal":
+        raise ScenarioError(f"{_rel(sc.path)}: push_y: a sideways push needs the 3D plant (--plant 3d)")
+    models = Models.load(a.fmu_dir, plant_model=sc.plant_model)
     if getattr(a, "controller_config", None):
         sc.controller_config = a.controller_config
         models.controller.configuration(sc.controller_config, "--controller-config")
@@ -375,7 +379,7 @@ def cmd_sweep(a) -> int:
         sc = load_scenario(path)
         forces = parse_grid(a.forces, "--forces")
         variants = [parse_variant(v) for v in (a.variant or ["default"])]
-        models = Models.load(a.fmu_dir)
+        models = Models.load(a.fmu_dir, plant_model=sc.plant_model)
         for v in variants:    # a bad variant is an error here, not a traceback in every worker
             models.controller.configuration(v.config or sc.controller_config, f"--variant {v.name}")
             check_overrides(models, v.controller, v.plant, f"--variant {v.name}")
@@ -414,7 +418,7 @@ def cmd_regen(a) -> int:
     try:
         files = sorted(scenarios_dir().glob("*.toml"))
         scs = [load_scenario(f) for f in files]
-        models = Models.load(a.fmu_dir)
+        models = {m: Models.load(a.fmu_dir, plant_model=m) for m in sorted({s.plant_model for s in scs})}
     except (ScenarioError, MissingFileError, FMUError) as e:
         return _err(str(e))
     if a.names:
@@ -427,7 +431,7 @@ def cmd_regen(a) -> int:
         if sc.reference is None:
             print(f"{sc.name}: no [reference] table, skipped")
             continue
-        res = simulate(sc, models, progress=None)
+        res = simulate(sc, models[sc.plant_model], progress=None)
         checks = check_expect(res, sc.expect)
         bad = [c for c in checks if not c.ok]
         if bad and not a.force:
@@ -442,7 +446,7 @@ def cmd_regen(a) -> int:
         print(f"{sc.name}: wrote {_rel(sc.reference.file)} ({len(ref)} rows, {len(cols)} columns, "
               f"{size / 1024:.0f} kB; {res.message or res.outcome})")
     if not a.no_steptests and not a.names:
-        rc = max(rc, regen_steptests(models))
+        rc = max(rc, regen_steptests(a.fmu_dir))
     return rc
 
 
@@ -451,9 +455,9 @@ def steptests_dir() -> Path:
     return repo_root() / "tests" / "steptests"
 
 
-def regen_steptests(models) -> int:
+def regen_steptests(fmu_dir) -> int:
     """Re-record every committed step-test case from the scenario named in its steptest.toml."""
-    from .master import simulate
+    from .master import Models, simulate
     from .paths import find_scenario
     from .scenario import load_scenario
     from .steptest import read_meta, record_case
@@ -464,7 +468,8 @@ def regen_steptests(models) -> int:
             print(f"{_rel(case)}: no [source] scenario/stop_time in steptest.toml, skipped")
             continue
         sc = load_scenario(find_scenario(src["scenario"]))
-        res = simulate(sc, models, stop_time=float(src["stop_time"]), progress=False)
+        res = simulate(sc, Models.load(fmu_dir, plant_model=sc.plant_model), stop_time=float(src["stop_time"]),
+                       progress=False)
         if res.outcome in ("error", "interrupted"):
             print(f"{_rel(case)}: run failed: {res.message}")
             rc = EXIT_FAIL
@@ -499,6 +504,8 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--set", action="append", metavar="FMU.NAME=VALUE",
                    help="parameter override, e.g. controller.Ka=30 (repeatable)")
     s.add_argument("--controller-config", metavar="NAME", help=CONTROLLER_CONFIG_HELP)
+    s.add_argument("--plant", choices=("sagittal", "3d"),
+                   help="the plant model (default: the scenario's plant_model, else sagittal)")
     s.add_argument("--stop-time", type=float, help="stop earlier than the scenario (no outcome checks)")
     s.add_argument("--no-progress", action="store_true")
     s.add_argument("--no-compare", action="store_true", help="skip the comparison with the reference CSV")

@@ -24,12 +24,13 @@ from typing import Any, Callable
 import numpy as np
 
 from .fmu import DISCARD, STATUS_NAMES, FMUError, FMUInfo, Slave, vr_array
-from .paths import CONTROLLER_FMU, PLANT_FMU, find_fmu
+from .paths import CONTROLLER_FMU, PLANT_FMUS, find_fmu
 from .scenario import PushProfile, Scenario
 
 CONTROLLER_INPUTS = ("theta_ankle", "theta_hip", "zmp_x", "fz")
 CONTROLLER_REFS = ("theta_ankle_ref", "theta_hip_ref")
 PUSH = "push_force"
+PUSH_Y = "push_force_y"     # the 3D plant's sideways push (scenario key push_y)
 CLASH_PREFIX = "controller."
 
 
@@ -76,9 +77,13 @@ class Models:
 
     @classmethod
     def load(cls, fmu_dir=None, controller: str | Path | None = None,
-             plant: str | Path | None = None) -> "Models":
+             plant: str | Path | None = None, plant_model: str = "sagittal") -> "Models":
+        """The controller FMU and the plant FMU: `plant` (a path) or the FMU of `plant_model`
+        (a key of paths.PLANT_FMUS: "sagittal" or "3d")."""
+        if plant_model not in PLANT_FMUS:
+            raise FMUError(f"unknown plant model {plant_model!r} (known: {', '.join(PLANT_FMUS)})")
         c = Path(controller) if controller else find_fmu(CONTROLLER_FMU, fmu_dir)
-        p = Path(plant) if plant else find_fmu(PLANT_FMU, fmu_dir)
+        p = Path(plant) if plant else find_fmu(PLANT_FMUS[plant_model], fmu_dir)
         return cls(FMUInfo.load(c), FMUInfo.load(p))
 
 
@@ -104,23 +109,26 @@ class _Layout:
             if v.type != "Real":
                 raise FMUError(f"{ci.name} input {v.name!r}: only Real inputs are supported")
         cnames = {v.name for v in c_out}
+        pushes = [PUSH, PUSH_Y]
         for v in p_in:
-            if v.name != PUSH and v.name not in cnames:
-                raise FMUError(f"{pi.name} input {v.name!r} has no matching {ci.name} output")
             if v.type != "Real":
                 raise FMUError(f"{pi.name} input {v.name!r}: only Real inputs are supported")
         if PUSH not in {v.name for v in p_in}:
             raise FMUError(f"{pi.name} has no input {PUSH!r}")
+        # plant inputs no controller output feeds (the 3D plant's roll/yaw/knee set points) stay at
+        # their start values; every controller output the plant has as an input is connected
+        self.unconnected = [v.name for v in p_in if v.name not in pushes and v.name not in cnames]
         # plant reals: controller inputs first (same order), so that the controller's setReal
         # reads them straight from the plant's output row
         cin_names = [v.name for v in c_in]
         p_real = [pi.vars[n] for n in cin_names] + [v for v in p_out if v.type == "Real" and v.name not in cin_names]
         # plant inputs fed by the controller, then the push: contiguous in the row
-        p_in_ctrl = [v for v in p_in if v.name != PUSH]
+        p_in_ctrl = [v for v in p_in if v.name not in pushes and v.name in cnames]
         c_feed = [ci.vars[v.name] for v in p_in_ctrl]
+        self.push_cols = [n for n in pushes if n in {v.name for v in p_in}]
         c_other = [v for v in c_out if v.type == "Real" and v.name not in {x.name for x in c_feed}]
         self.p_real, self.c_feed, self.c_other = p_real, c_feed, c_other
-        self.p_in = p_in_ctrl + [pi.vars[PUSH]]
+        self.p_in = p_in_ctrl + [pi.vars[n] for n in self.push_cols]
         self.c_in = c_in
         self.p_int = [v for v in p_out if v.type in ("Integer", "Enumeration")]
         self.p_bool = [v for v in p_out if v.type == "Boolean"]
@@ -129,7 +137,7 @@ class _Layout:
 
         def cname(v):
             return CLASH_PREFIX + v.name if v.name in pnames else v.name
-        self.real_cols = ([v.name for v in p_real] + [cname(v) for v in c_feed] + [PUSH]
+        self.real_cols = ([v.name for v in p_real] + [cname(v) for v in c_feed] + self.push_cols
                           + [cname(v) for v in c_other])
         self.int_cols = ([v.name for v in self.p_int] + [v.name for v in self.p_bool]
                          + [cname(v) for v in self.c_int] + [cname(v) for v in self.c_bool])
@@ -139,10 +147,11 @@ class _Layout:
             self.units[v.name] = v.unit or ""
         for v in c_feed + c_other:
             self.units[cname(v)] = v.unit or ""
-        self.units[PUSH] = pi.vars[PUSH].unit or "N"
-        self.off_feed = len(p_real)                   # controller refs + push start here
+        for n in self.push_cols:
+            self.units[n] = pi.vars[n].unit or "N"
+        self.off_feed = len(p_real)                   # controller refs + push(es) start here
         self.off_push = self.off_feed + len(c_feed)
-        self.off_cother = self.off_push + 1
+        self.off_cother = self.off_push + len(self.push_cols)
         self.n_real = len(self.real_cols)
         self.off_pbool = len(self.p_int)
         self.off_cint = self.off_pbool + len(self.p_bool)
@@ -173,7 +182,11 @@ def simulate(scenario: Scenario, models: Models | None = None, *, fmu_dir=None,
     R = np.zeros((N + 1, max(1, L.n_real)), dtype=np.float64)
     I = np.zeros((N + 1, max(1, L.n_int)), dtype=np.int32)
     R[:N, L.off_push] = push.step_averages(t0, h, N)
-    R[N, L.off_push] = R[N - 1, L.off_push] if N else 0.0
+    if PUSH_Y in L.push_cols:
+        R[:N, L.off_push + 1] = scenario.push_y.step_averages(t0, h, N)
+    elif scenario.push_y.peak() != 0:
+        raise FMUError(f"{origin}: push_y needs a plant with the input {PUSH_Y!r} ({models.plant.name} has none)")
+    R[N, L.off_push:L.off_cother] = R[N - 1, L.off_push:L.off_cother] if N else 0.0
 
     ctrl = plant = None
     outcome, message, fell_at = "completed", "", None

@@ -12,6 +12,9 @@ from pathlib import Path
 
 CONTROLLER_FMU = "AnkleHipController.fmu"
 PLANT_FMU = "Hoap2Plant.fmu"
+# The plant models a scenario may name (key plant_model, CLI --plant): the sagittal plant (CVODE)
+# and the 3D plant on the Open Dynamics Engine (docs/plant3d.md).
+PLANT_FMUS = {"sagittal": PLANT_FMU, "3d": "Hoap2Plant3D.fmu"}
 RT_RUNNER = "anklehip_rt_step"
 
 

@@ -198,6 +198,8 @@ class Scenario:
     stop_time: float = 10.0
     step: float = 1e-3
     push: PushProfile = field(default_factory=PushProfile.zero)
+    push_y: PushProfile = field(default_factory=PushProfile.zero)   # sideways (+ left); 3D plant only
+    plant_model: str = "sagittal"         # a key of paths.PLANT_FMUS
     controller_config: str = "default"    # a named configuration of the controller FMU
     controller: dict[str, Any] = field(default_factory=dict)
     plant: dict[str, Any] = field(default_factory=dict)
@@ -275,7 +277,8 @@ def _tname(v: Any) -> str:
             dict: "table"}.get(type(v), type(v).__name__)
 
 
-TOP_KEYS = {"name", "description", "stop_time", "step", "push", "controller_config", "controller", "plant",
+TOP_KEYS = {"name", "description", "stop_time", "step", "push", "push_y", "plant_model", "controller_config",
+            "controller", "plant",
             "expect", "reference", "tags"}
 PUSH_KEYS = {
     "step": ({"kind", "t", "to"}, {"to"}),
@@ -290,12 +293,12 @@ REF_KEYS = {"file", "columns", "num", "dx", "dy", "abs_tol", "rel_tol", "interva
 REF_SIGNAL_KEYS = {"dy", "abs_tol", "rel_tol", "band_floor"}
 
 
-def _parse_push(v: _V, items: Any, stop_time: float) -> PushProfile:
-    items = v.list_(items, "push")
+def _parse_push(v: _V, items: Any, stop_time: float, key: str = "push") -> PushProfile:
+    items = v.list_(items, key)
     segs: list[PushSegment] = []
     now = 0.0
     for i, it in enumerate(items):
-        p = f"push[{i}]"
+        p = f"{key}[{i}]"
         it = v.table(it, p)
         if "kind" not in it:
             v.fail(f"{p}.kind", f"required key missing (one of {', '.join(PUSH_KINDS)})")
@@ -442,6 +445,15 @@ def parse_scenario(data: dict, where: str = "<scenario>", path: Path | None = No
         v.fail("step", f"stop_time {sc.stop_time:g} is not a whole number of steps of {sc.step:g}")
     if "push" in data:
         sc.push = _parse_push(v, data["push"], sc.stop_time)
+    if "push_y" in data:
+        sc.push_y = _parse_push(v, data["push_y"], sc.stop_time, "push_y")
+    if "plant_model" in data:
+        from .paths import PLANT_FMUS
+        sc.plant_model = v.str_(data["plant_model"], "plant_model")
+        if sc.plant_model not in PLANT_FMUS:
+            v.fail("plant_model", f"unknown plant model {sc.plant_model!r} (known: {', '.join(PLANT_FMUS)})")
+    if sc.push_y.peak() != 0 and sc.plant_model == "sagittal":
+        v.fail("push_y", "a sideways push needs plant_model = \"3d\" (the sagittal plant has no y)")
     if "controller_config" in data:
         sc.controller_config = v.str_(data["controller_config"], "controller_config")
         if not sc.controller_config:

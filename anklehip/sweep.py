@@ -53,7 +53,7 @@ def _one(scenario_path: str, fmu_dir: str | None, peak: float, variant: Variant)
     base = sc.push.peak()
     if base == 0:
         raise ValueError(f"{scenario_path}: the scenario has no push to scale")
-    res = simulate(sc, Models.load(fmu_dir), controller_overrides=variant.controller,
+    res = simulate(sc, Models.load(fmu_dir, plant_model=sc.plant_model), controller_overrides=variant.controller,
                    plant_overrides=variant.plant, push=sc.push.scaled(peak / base), progress=False)
     d = res.data
     return {"variant": variant.name, "peak_force": peak, "outcome": res.outcome,
