@@ -22,7 +22,6 @@ set(ANKLEHIP_ODE_SOURCE_DIR "" CACHE PATH
 
 set(_ode_deps "${CMAKE_BINARY_DIR}/_deps")
 set(_ode_install "${_ode_deps}/ode-install")
-set(_ode_extra_deps "")
 
 if(ANKLEHIP_ODE_SOURCE_DIR)
   if(NOT EXISTS "${ANKLEHIP_ODE_SOURCE_DIR}/CMakeLists.txt"
@@ -35,7 +34,7 @@ if(ANKLEHIP_ODE_SOURCE_DIR)
 else()
   set(_ode_debdir "${_ode_deps}/ode-deb")
   set(_ode_src "${_ode_deps}/ode-src")
-  set(_ode_stamp "${_ode_deps}/ode-src.stamp")  # holds the extracted version ("any" if unpinned)
+  set(_ode_stamp "${_ode_deps}/ode-src.stamp")  # the version asked for when extracted ("any": unpinned)
 
   # Same upstream version and Debian patches as the installed headers/library, when there are any.
   set(_ode_version "")
@@ -87,7 +86,8 @@ else()
       if(_out MATCHES "deb-src")
         set(_why "no deb-src entry: run scripts/setup.sh (as root), which adds one for deb.debian.org")
       elseif(_out MATCHES "find a source package|no longer downloadable|Can not find version")
-        set(_why "apt knows no source package ${_ode_pkg}: run `apt-get update` (scripts/setup.sh does it)")
+        string(CONCAT _why "apt has no source package ${_ode_pkg}: run `apt-get update` (scripts/"
+               "setup.sh does it when the source index is missing), or upgrade libode-dev")
       else()
         set(_why "`apt-get source --download-only ${_ode_pkg}` failed (network? apt lists?)")
       endif()
@@ -106,11 +106,24 @@ else()
     endif()
     file(RENAME "${_ode_src}.tmp" "${_ode_src}")
     file(WRITE "${_ode_stamp}" "${_ode_want}\n")
-    set(_ode_have "${_ode_want}")
   endif()
-  # A re-extracted tree (libode-dev upgraded) re-runs ODE's configure and build.
-  set(_ode_extra_deps "${_ode_stamp}")
-  set(_ode_origin "Debian source package ode ${_ode_have}")
+  file(STRINGS "${_ode_src}/debian/changelog" _ode_cl LIMIT_COUNT 1)
+  string(REGEX REPLACE "^[^(]*\\(([^)]*)\\).*" "\\1" _ode_cl "${_ode_cl}")
+  file(TIMESTAMP "${_ode_stamp}" _ode_when UTC)
+  set(_ode_origin "Debian source package ode ${_ode_cl} (extracted ${_ode_when})")
+endif()
+
+# Another source (tree or version) gets a fresh ODE build: re-extracted files keep their tarball
+# times, older than the objects of the previous build, so an incremental build would miss them.
+set(_ode_key "${_ode_origin}")
+set(_ode_key_file "${_ode_deps}/ode-build.source")
+set(_ode_key_old "")
+if(EXISTS "${_ode_key_file}")
+  file(READ "${_ode_key_file}" _ode_key_old)
+endif()
+if(NOT _ode_key_old STREQUAL _ode_key)
+  file(REMOVE_RECURSE "${_ode_deps}/ode-build" "${_ode_deps}/ode-ep" "${_ode_install}")
+  file(WRITE "${_ode_key_file}" "${_ode_key}")
 endif()
 
 set(_ode_lib "${_ode_install}/lib/${CMAKE_STATIC_LIBRARY_PREFIX}ode${CMAKE_STATIC_LIBRARY_SUFFIX}")
@@ -146,9 +159,6 @@ ExternalProject_Add(ode_pic_ext
     -DCMAKE_DISABLE_FIND_PACKAGE_OpenGL=ON
   BUILD_BYPRODUCTS "${_ode_lib}"
   LOG_CONFIGURE ON LOG_BUILD ON LOG_INSTALL ON LOG_OUTPUT_ON_FAILURE ON)
-if(_ode_extra_deps)
-  ExternalProject_Add_StepDependencies(ode_pic_ext configure ${_ode_extra_deps})
-endif()
 
 # The include directory must exist at configure time for INTERFACE_INCLUDE_DIRECTORIES.
 file(MAKE_DIRECTORY "${_ode_install}/include")
