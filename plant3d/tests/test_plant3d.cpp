@@ -1,7 +1,6 @@
 // Physics and engineering tests of the 3D plant (CTest: `plant3d_tests <name>`; `all` runs every
 // one). Each test states what it establishes; the figures it prints are quoted in docs/plant3d.md.
 #include <algorithm>
-#include <atomic>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
