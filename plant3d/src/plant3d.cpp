@@ -1,16 +1,24 @@
 // The 3D HOAP-2 on ODE (see plant3d.hpp and docs/plant3d.md).
 //
-// Model assembly: every body of the Webots proto (hoap2/bodies.h, generated from the proto data)
-// that hangs from one of the twelve leg joints becomes an ODE body; every other proto body (waist,
-// arms, neck, head: joints held at their posture angle; the sole sensor: fixed) is merged into the
-// body it hangs from (mass, CoM and inertia combined exactly). That gives 13 bodies and 12 hinges.
+// Model assembly: the proto bodies (hoap2/bodies.h, generated from the proto data) are merged into
+// 7 ODE bodies (mass, CoM and inertia combined exactly): the trunk (torso, waist, arms, neck, head:
+// joints held at their posture angle) and per leg the thigh (the two hip links, point masses at the
+// hip's centre, and the thigh link), the shank, and the foot (ankle link, foot link, sole sensor).
+// The joints are a ball at the hip (the yaw, pitch and roll axes meet), a hinge at the knee and a
+// universal joint at the ankle (pitch and roll axes meet): 12 joint coordinates, 24 constraint rows
+// instead of 60 for twelve hinges between 13 bodies. ODE's dWorldStep factorises a dense matrix
+// of all rows, so that is the plant's cost (docs/plant3d.md, "Speed").
 // ODE keeps a body's origin at its CoM, so each body is placed at its combined CoM.
 //
-// Servos are ODE hinge motors: the motor row drives the joint rate to a target with a force limit
-// and a constraint-force-mixing softness; with target = kd wcmd / (kd + d) and CFM = 1 / (kd + d)
-// the motor torque is kd (wcmd - qdot) - d qdot at the end of the step, i.e. the sagittal plant's
-// PD servo with its velocity loop integrated implicitly (stable whatever the link inertia; the
-// proto's hip links are point masses).
+// Joint coordinates are computed here from the bodies' rotations (Z-Y-X at the hip, Y-X at the
+// ankle, the proto's chain order), and so are their rates: qdot_i = n_i . (w_child - w_parent)
+// with n_i the dual basis of the joint axes.
+//
+// Servos: one angular motor row per joint coordinate (an AMotor in user mode along n_i, rescaled
+// to ODE's unit axis). The row drives qdot to a target with a force limit and a constraint-force-
+// mixing softness; with target = kd wcmd / (kd + d) and CFM = 1 / (kd + d) the motor torque is
+// kd (wcmd - qdot) - d qdot at the end of the step, i.e. the sagittal plant's PD servo with its
+// velocity loop integrated implicitly (stable whatever the link inertia).
 //
 // Contacts: box-plane corner contacts, soft normal (ERP/CFM of a spring-damper per corner, ODE
 // manual "Soft constraint and constraint force mixing") and the friction pyramid (dContactApprox1)
@@ -77,10 +85,29 @@ bool leg_joint(const char* motor, int& side, int& kind) {
 }
 
 // The pitch joints whose sense is the sagittal plant's (trunk side relative to the foot side)
-// rather than the proto's (child relative to parent): the ODE hinge is attached (parent, child).
+// rather than the proto's (child relative to parent).
 bool sagittal_sense(int kind) { return kind == HipPitch || kind == AnklePitch; }
 
-int body_index(int side, int kind) { return 1 + side * kLegJoints + kind; }
+int body_index(int side, int leg_body) { return 1 + side * kLegBodies + leg_body; }
+// The ODE body a leg joint's proto body belongs to.
+int leg_body_of(int kind) { return kind <= HipRoll ? Thigh : kind == Knee ? Shank : Foot; }
+
+// The joints of a leg grouped by where their axes meet: hip (ball), knee (hinge), ankle (universal).
+enum Group : int { HipGroup = 0, KneeGroup, AnkleGroup, kGroups };
+constexpr int kGroupFirst[kGroups] = {HipYaw, Knee, AnklePitch};
+constexpr int kGroupCount[kGroups] = {3, 1, 2};
+// The axis of each joint in the zero posture, in chain order: hip z, y, x; knee y; ankle y, x.
+constexpr int kCanonicalAxis[kLegJoints] = {2, 1, 0, 1, 1, 0};
+int group_of(int kind) { return kind <= HipRoll ? HipGroup : kind == Knee ? KneeGroup : AnkleGroup; }
+int group_parent(int side, int g) { return g == HipGroup ? 0 : body_index(side, g == KneeGroup ? Thigh : Shank); }
+int group_child(int side, int g) { return body_index(side, g == HipGroup ? Thigh : g == KneeGroup ? Shank : Foot); }
+
+void cross(const double a[3], const double b[3], double c[3]) {
+  c[0] = a[1] * b[2] - a[2] * b[1];
+  c[1] = a[2] * b[0] - a[0] * b[2];
+  c[2] = a[0] * b[1] - a[1] * b[0];
+}
+double dot(const double a[3], const double b[3]) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
 
 struct Mass {  // accumulated about the world origin
   double m = 0, first[3] = {0, 0, 0}, second[6] = {0, 0, 0, 0, 0, 0};  // I about the origin
@@ -115,8 +142,9 @@ struct Mass {  // accumulated about the world origin
 
 std::string body_name(int i) {
   if (i == 0) return "trunk";
-  const int side = (i - 1) / kLegJoints, kind = (i - 1) % kLegJoints;
-  return std::string(side == Left ? "left_" : "right_") + joint_name(kind);
+  static const char* kLegBodyNames[kLegBodies] = {"thigh", "shank", "foot"};
+  const int side = (i - 1) / kLegBodies;
+  return std::string(side == Left ? "left_" : "right_") + kLegBodyNames[(i - 1) % kLegBodies];
 }
 
 void rot_y(double a, double R[9]) {
@@ -167,9 +195,17 @@ struct Plant3D::World {
   dGeomID foot_geom[kLegs] = {};
   dJointGroupID contact_group = nullptr;
   dBodyID body[kBodies] = {};
-  dJointID hinge[kLegs][kLegJoints] = {};
+  dJointID link[kLegs][kGroups] = {};   // ball (hip), hinge (knee), universal (ankle)
+  dJointID motor[kLegs][kGroups] = {};  // the servos: an AMotor in user mode, a row per joint
+  double sense[kLegs][kLegJoints] = {}; // this model's joint coordinate = sense * canonical angle
   BodyInfo info[kBodies];
   JointInfo jinfo[kLegs][kLegJoints];
+  // joint kinematics (refresh_kinematics): coordinates, rates, world axes (proto's sense) and the
+  // dual vectors n (qdot = n . (w_child - w_parent)), all in this model's sense
+  double q[kLegs][kLegJoints] = {}, qd[kLegs][kLegJoints] = {};
+  double axis[kLegs][kLegJoints][3] = {}, dual[kLegs][kLegJoints][3] = {};
+  // the servo law of the last step, in joint coordinates (tau read-back)
+  double servo_vel[kLegs][kLegJoints] = {}, servo_gain[kLegs][kLegJoints] = {}, servo_fmax[kLegs][kLegJoints] = {};
   double sole_corner[kLegs][kCells][3] = {};  // foot body frame, on the sole
   double sole_center[kLegs][3] = {};          // foot body frame
   double sole_len = 0, sole_width = 0, heel_x = 0;  // sole rectangle, x from the ankle axis
@@ -191,6 +227,79 @@ struct Plant3D::World {
   }
 };
 
+namespace {
+// Joint coordinates, rates, world axes and dual vectors of both legs from the bodies' state.
+void refresh_kinematics(Plant3D::World& w) {
+  auto column = [](const double* Rb, int c, double out[3]) {  // ODE rotations: 3x4, row-major
+    for (int r = 0; r < 3; ++r) out[r] = Rb[r * 4 + c];
+  };
+  for (int s = 0; s < kLegs; ++s) {
+    for (int g = 0; g < kGroups; ++g) {
+      const dBodyID bp = w.body[group_parent(s, g)], bc = w.body[group_child(s, g)];
+      const double* Rp = dBodyGetRotation(bp);
+      const double* Rc = dBodyGetRotation(bc);
+      double R[3][3];  // the child's rotation relative to the parent: Rp^T Rc
+      for (int r = 0; r < 3; ++r)
+        for (int c = 0; c < 3; ++c) R[r][c] = Rp[r] * Rc[c] + Rp[4 + r] * Rc[4 + c] + Rp[8 + r] * Rc[8 + c];
+      double angle[3] = {}, e[3][3] = {};  // chain-order angles about the canonical axes; world axes
+      if (g == HipGroup) {  // R = Rz(yaw) Ry(pitch) Rx(roll)
+        angle[0] = std::atan2(R[1][0], R[0][0]);
+        angle[1] = std::asin(std::clamp(-R[2][0], -1.0, 1.0));
+        angle[2] = std::atan2(R[2][1], R[2][2]);
+        column(Rp, 2, e[0]);
+        const double c = std::cos(angle[0]), sn = std::sin(angle[0]);
+        for (int r = 0; r < 3; ++r) e[1][r] = -sn * Rp[r * 4] + c * Rp[r * 4 + 1];  // Rp Rz(yaw) y
+        column(Rc, 0, e[2]);
+      } else if (g == KneeGroup) {  // R = Ry(q)
+        angle[0] = std::atan2(R[0][2], R[0][0]);
+        column(Rp, 1, e[0]);
+      } else {  // R = Ry(pitch) Rx(roll)
+        angle[0] = std::atan2(-R[2][0], R[0][0]);
+        angle[1] = std::atan2(-R[1][2], R[1][1]);
+        column(Rp, 1, e[0]);
+        column(Rc, 0, e[1]);
+      }
+      // w_child - w_parent = sum_i qdot_i e_i; the dual basis n_i (n_i . e_j = delta_ij) reads
+      // the rates. A knee has one axis; the ankle's two stay perpendicular (universal joint).
+      double n[3][3];
+      const int count = kGroupCount[g];
+      if (count == 3) {
+        cross(e[1], e[2], n[0]);
+        cross(e[2], e[0], n[1]);
+        cross(e[0], e[1], n[2]);
+        const double det = dot(e[0], n[0]);  // cos(hip pitch): the ball's Euler singularity at 90 deg
+        for (auto& v : n)
+          for (double& x : v) x /= det;
+      } else {
+        std::memcpy(n, e, sizeof n);
+      }
+      const double* wp = dBodyGetAngularVel(bp);
+      const double* wc = dBodyGetAngularVel(bc);
+      const double wrel[3] = {wc[0] - wp[0], wc[1] - wp[1], wc[2] - wp[2]};
+      for (int i = 0; i < count; ++i) {
+        const int k = kGroupFirst[g] + i;
+        const double sg = w.sense[s][k], proto_sign = sagittal_sense(k) ? -sg : sg;
+        w.q[s][k] = sg * angle[i];
+        for (int r = 0; r < 3; ++r) {
+          w.dual[s][k][r] = sg * n[i][r];
+          w.axis[s][k][r] = proto_sign * e[i][r];
+        }
+        w.qd[s][k] = dot(w.dual[s][k], wrel);
+      }
+    }
+  }
+}
+
+void group_anchor(const Plant3D::World& w, int s, int g, double a[3]) {
+  dVector3 v;
+  const dJointID j = w.link[s][g];
+  if (g == HipGroup) dJointGetBallAnchor(j, v);
+  else if (g == KneeGroup) dJointGetHingeAnchor(j, v);
+  else dJointGetUniversalAnchor(j, v);
+  std::copy(v, v + 3, a);
+}
+}  // namespace
+
 Plant3D::Plant3D(const Params& p) : P_(p), w_(std::make_unique<World>()) {
   ode_init_once();
   World& w = *w_;
@@ -210,7 +319,6 @@ Plant3D::Plant3D(const Params& p) : P_(p), w_(std::make_unique<World>()) {
   int owner[HOAP2_NUM_BODIES];
   Mass mass[kBodies];
   const hoap2_body* joint_of[kLegs][kLegJoints] = {};
-  int parent_owner[kLegs][kLegJoints] = {};
   for (int i = 0; i < HOAP2_NUM_BODIES; ++i) {
     const hoap2_body& b = HOAP2_BODIES[i];
     int parent = -1;
@@ -221,9 +329,8 @@ Plant3D::Plant3D(const Params& p) : P_(p), w_(std::make_unique<World>()) {
       owner[i] = 0;
     } else if (leg_joint(b.joint, side, kind)) {
       if (b.angle != 0.0) throw std::logic_error("leg joints must be at 0 in the posture");
-      owner[i] = body_index(side, kind);
+      owner[i] = body_index(side, leg_body_of(kind));
       joint_of[side][kind] = &b;
-      parent_owner[side][kind] = owner[parent];
     } else {
       owner[i] = owner[parent];
     }
@@ -247,32 +354,66 @@ Plant3D::Plant3D(const Params& p) : P_(p), w_(std::make_unique<World>()) {
     dBodySetPosition(w.body[i], info.com[0], info.com[1], info.com[2]);
   }
 
-  // 3. The twelve hinges with their limits.
+  // 3. Per leg the ball, hinge and universal joints at the proto's anchors, and the servo motors.
   for (int s = 0; s < kLegs; ++s) {
     for (int k = 0; k < kLegJoints; ++k) {
       const hoap2_body* b = joint_of[s][k];
       if (!b) throw std::logic_error("a leg joint is missing from hoap2/bodies.h");
-      dJointID j = dJointCreateHinge(w.world, nullptr);
-      const dBodyID child = w.body[body_index(s, k)], parent = w.body[parent_owner[s][k]];
-      const bool sag = sagittal_sense(k);
-      if (sag) dJointAttach(j, parent, child);
-      else dJointAttach(j, child, parent);
-      dJointSetHingeAnchor(j, b->anchor[0] + off[0], b->anchor[1] + off[1], b->anchor[2] + off[2]);
-      dJointSetHingeAxis(j, b->axis[0], b->axis[1], b->axis[2]);
-      const double lo = sag ? -b->max : b->min, hi = sag ? -b->min : b->max;
-      dJointSetHingeParam(j, dParamLoStop, lo);
-      dJointSetHingeParam(j, dParamHiStop, hi);
-      w.hinge[s][k] = j;
-      JointInfo& ji = w.jinfo[s][k];
-      ji.name = std::string(s == Left ? "left_" : "right_") + joint_name(k);
-      ji.proto = b->joint;
-      dVector3 a;
-      dJointGetHingeAnchor(j, a);
-      std::copy(a, a + 3, ji.anchor);
-      dJointGetHingeAxis(j, a);
-      std::copy(a, a + 3, ji.axis);
-      ji.lo = lo;
-      ji.hi = hi;
+      const int ca = kCanonicalAxis[k];
+      const double sign = b->axis[ca];
+      if (std::fabs(std::fabs(sign) - 1.0) > 1e-12 || std::fabs(b->axis[(ca + 1) % 3]) > 1e-12 ||
+          std::fabs(b->axis[(ca + 2) % 3]) > 1e-12)
+        throw std::logic_error(std::string("unexpected axis of ") + b->joint);
+      w.sense[s][k] = (sagittal_sense(k) ? -1.0 : 1.0) * sign;
+      const hoap2_body* first = joint_of[s][kGroupFirst[group_of(k)]];
+      for (int c = 0; c < 3; ++c)
+        if (std::fabs(b->anchor[c] - first->anchor[c]) > 1e-12)
+          throw std::logic_error(std::string("the axes of ") + first->joint + " and " + b->joint + " do not meet");
+    }
+    for (int g = 0; g < kGroups; ++g) {
+      const hoap2_body* b = joint_of[s][kGroupFirst[g]];
+      const double a[3] = {b->anchor[0] + off[0], b->anchor[1] + off[1], b->anchor[2] + off[2]};
+      const dBodyID parent = w.body[group_parent(s, g)], child = w.body[group_child(s, g)];
+      dJointID j = nullptr;
+      if (g == HipGroup) {
+        j = dJointCreateBall(w.world, nullptr);
+        dJointAttach(j, parent, child);
+        dJointSetBallAnchor(j, a[0], a[1], a[2]);
+      } else if (g == KneeGroup) {
+        j = dJointCreateHinge(w.world, nullptr);
+        dJointAttach(j, parent, child);
+        dJointSetHingeAnchor(j, a[0], a[1], a[2]);
+        dJointSetHingeAxis(j, 0, 1, 0);
+      } else {
+        j = dJointCreateUniversal(w.world, nullptr);
+        dJointAttach(j, parent, child);
+        dJointSetUniversalAnchor(j, a[0], a[1], a[2]);
+        dJointSetUniversalAxis1(j, 0, 1, 0);  // pitch, on the shank
+        dJointSetUniversalAxis2(j, 1, 0, 0);  // roll, on the foot
+      }
+      w.link[s][g] = j;
+      // The servos: a separate motor joint rather than the joints' own motors keeps the joints'
+      // rows unbounded, which ODE's LCP factorises at once (ODE step.cpp, Stage0_Joints).
+      const dJointID m = dJointCreateAMotor(w.world, nullptr);
+      dJointAttach(m, parent, child);
+      dJointSetAMotorMode(m, dAMotorUser);
+      dJointSetAMotorNumAxes(m, kGroupCount[g]);
+      w.motor[s][g] = m;
+      for (int i = 0; i < kGroupCount[g]; ++i) {
+        const int k = kGroupFirst[g] + i;
+        const hoap2_body* jb = joint_of[s][k];
+        JointInfo& ji = w.jinfo[s][k];
+        ji.name = std::string(s == Left ? "left_" : "right_") + joint_name(k);
+        ji.proto = jb->joint;
+        std::copy(a, a + 3, ji.anchor);
+        std::copy(jb->axis, jb->axis + 3, ji.axis);
+        const bool sag = sagittal_sense(k);
+        ji.lo = sag ? -jb->max : jb->min;
+        ji.hi = sag ? -jb->min : jb->max;
+        dJointSetAMotorAxis(m, i, 0, ji.axis[0], ji.axis[1], ji.axis[2]);  // set each step
+        dJointSetAMotorParam(m, dParamLoStop + dParamGroup * i, ji.lo);
+        dJointSetAMotorParam(m, dParamHiStop + dParamGroup * i, ji.hi);
+      }
     }
   }
 
@@ -284,7 +425,7 @@ Plant3D::Plant3D(const Params& p) : P_(p), w_(std::make_unique<World>()) {
   w.sole_width = HOAP2_SOLE_WIDTH;
   w.ground = dCreatePlane(nullptr, 0, 0, 1, 0);
   for (int s = 0; s < kLegs; ++s) {
-    const dBodyID foot = w.body[body_index(s, AnkleRoll)];
+    const dBodyID foot = w.body[body_index(s, Foot)];
     const double* ankle = w.jinfo[s][AnklePitch].anchor;
     const double* fp = dBodyGetPosition(foot);
     const double cx = ankle[0] + 0.5 * (HOAP2_TOE_X + HOAP2_HEEL_X), cy = ankle[1],
@@ -343,15 +484,12 @@ bool Plant3D::initialize(double t0) {
       dBodySetPosition(w.body[i], np[0], np[1], np[2]);
     }
   };
-  auto above_ankle = [](int i) {
-    const int k = (i - 1) % kLegJoints;
-    return i == 0 || (k != AnklePitch && k != AnkleRoll);
-  };
-  auto above_hip = [](int i) { return i == 0 || (i - 1) % kLegJoints == HipYaw; };
-  dVector3 a;
-  dJointGetHingeAnchor(w.hinge[Left][AnklePitch], a);
+  auto above_ankle = [](int i) { return i == 0 || (i - 1) % kLegBodies != Foot; };
+  auto above_hip = [](int i) { return i == 0; };
+  double a[3];
+  group_anchor(w, Left, AnkleGroup, a);
   turn(above_ankle, a, P_.theta_ankle_init);
-  dJointGetHingeAnchor(w.hinge[Left][HipPitch], a);
+  group_anchor(w, Left, HipGroup, a);
   turn(above_hip, a, P_.theta_hip_init);
 
   // Settle under the initial set points, then start the clock.
@@ -382,21 +520,33 @@ bool Plant3D::initialize(double t0) {
 bool Plant3D::ode_step(double dt) {
   World& w = *w_;
   tl_logger = &logger;
-  // servos: the velocity loop is the ODE motor (implicit), the position loop sets its target
+  // servos: the velocity loop is the ODE motor row (implicit), the position loop sets its target.
+  // The row's unit axis u = -n/|n| (motor attached parent, child) measures u . (w_p - w_c) =
+  // qdot/|n|; target, CFM and force limit are rescaled so the law holds in qdot and joint torque.
+  refresh_kinematics(w);
   for (int s = 0; s < kLegs; ++s) {
-    for (int k = 0; k < kLegJoints; ++k) {
-      const Servo& sv = P_.servo[k];
-      const dJointID j = w.hinge[s][k];
-      const double q = dJointGetHingeAngle(j);
-      const double kd = P_.servo_on ? 0.5 * sv.kd : 0.0, d = 0.5 * sv.damping;
-      const double wcmd = P_.servo_on ? soft_sat(sv.kp / sv.kd * (in_.ref[k] - q), sv.vel_max) : 0.0;
-      const double gain = kd + d;
-      if (gain > 0) {
-        dJointSetHingeParam(j, dParamVel, kd * wcmd / gain);
-        dJointSetHingeParam(j, dParamFMax, P_.servo_on ? 0.5 * sv.tau_max : dInfinity);
-        dJointSetHingeParam(j, dParamCFM, 1.0 / gain);
-      } else {
-        dJointSetHingeParam(j, dParamFMax, 0.0);
+    for (int g = 0; g < kGroups; ++g) {
+      const dJointID m = w.motor[s][g];
+      for (int i = 0; i < kGroupCount[g]; ++i) {
+        const int k = kGroupFirst[g] + i, grp = dParamGroup * i;
+        const Servo& sv = P_.servo[k];
+        const double* n = w.dual[s][k];
+        const double len = std::sqrt(dot(n, n));
+        dJointSetAMotorAxis(m, i, 0, -n[0], -n[1], -n[2]);
+        dJointSetAMotorAngle(m, i, w.q[s][k]);  // for the limit rows
+        const double kd = P_.servo_on ? 0.5 * sv.kd : 0.0, d = 0.5 * sv.damping;
+        const double wcmd = P_.servo_on ? soft_sat(sv.kp / sv.kd * (in_.ref[k] - w.q[s][k]), sv.vel_max) : 0.0;
+        const double gain = kd + d;
+        const double vel = gain > 0 ? kd * wcmd / gain : 0.0;
+        const double fmax = gain > 0 ? (P_.servo_on ? 0.5 * sv.tau_max : dInfinity) : 0.0;
+        w.servo_vel[s][k] = vel;
+        w.servo_gain[s][k] = gain;
+        w.servo_fmax[s][k] = fmax;
+        dJointSetAMotorParam(m, dParamFMax + grp, fmax * len);
+        if (gain > 0) {
+          dJointSetAMotorParam(m, dParamVel + grp, vel / len);
+          dJointSetAMotorParam(m, dParamCFM + grp, 1.0 / (gain * len * len));
+        }
       }
     }
   }
@@ -409,7 +559,7 @@ bool Plant3D::ode_step(double dt) {
   const double erp = dt * k / (dt * k + c), cfm = 1.0 / (dt * k + c);
   w.max_depth = 0;
   for (int s = 0; s < kLegs; ++s) {
-    const dBodyID foot = w.body[body_index(s, AnkleRoll)];
+    const dBodyID foot = w.body[body_index(s, Foot)];
     const int n = dCollide(w.foot_geom[s], w.ground, kMaxContacts, w.cg[s], sizeof(dContactGeom));
     w.ncontact[s] = n;
     const double* R = dBodyGetRotation(foot);
@@ -439,14 +589,12 @@ bool Plant3D::ode_step(double dt) {
   ++stats_.ode_steps;
 
   // servo torques as the motor applied them (implicit law at the new rate, clamped)
-  for (int s = 0; s < kLegs; ++s) {
+  refresh_kinematics(w);
+  for (int s = 0; s < kLegs; ++s)
     for (int k = 0; k < kLegJoints; ++k) {
-      const dJointID j = w.hinge[s][k];
-      const double cfm_j = dJointGetHingeParam(j, dParamCFM), fmax = dJointGetHingeParam(j, dParamFMax);
-      const double v = dJointGetHingeParam(j, dParamVel), rate = dJointGetHingeAngleRate(j);
-      w.tau[s][k] = fmax > 0 ? std::clamp((v - rate) / cfm_j, -fmax, fmax) : 0.0;
+      const double fmax = w.servo_fmax[s][k];
+      w.tau[s][k] = fmax > 0 ? std::clamp(w.servo_gain[s][k] * (w.servo_vel[s][k] - w.qd[s][k]), -fmax, fmax) : 0.0;
     }
-  }
   for (int i = 0; i < kBodies; ++i) {
     const double* p = dBodyGetPosition(w.body[i]);
     const double* v = dBodyGetLinearVel(w.body[i]);
@@ -474,7 +622,7 @@ bool Plant3D::check_fall() {
   World& w = *w_;
   double ankle[3] = {0, 0, 0}, com[3] = {0, 0, 0}, m = 0;
   for (int s = 0; s < kLegs; ++s) {
-    const double* R = dBodyGetRotation(w.body[body_index(s, AnkleRoll)]);
+    const double* R = dBodyGetRotation(w.body[body_index(s, Foot)]);
     const double tilt = std::acos(std::clamp(static_cast<double>(R[10]), -1.0, 1.0));
     if (tilt > P_.fall_foot_pitch) {
       char buf[160];
@@ -483,8 +631,8 @@ bool Plant3D::check_fall() {
       msg_ = buf;
       return true;
     }
-    dVector3 a;
-    dJointGetHingeAnchor(w.hinge[s][AnklePitch], a);
+    double a[3];
+    group_anchor(w, s, AnkleGroup, a);
     for (int c = 0; c < 3; ++c) ankle[c] += 0.5 * a[c];
   }
   for (int i = 0; i < kBodies; ++i) {
@@ -553,12 +701,13 @@ void Plant3D::evaluate_outputs() {
   Outputs o;
   std::memset(static_cast<void*>(&o), 0, sizeof o);  // deterministic padding (snapshots compare bytes)
   // feet frame: origin at the middle of the ankle axes (on the ground for x, y), x along the feet
+  refresh_kinematics(w);
   double ankle[3] = {0, 0, 0}, heading[2] = {0, 0};
   for (int s = 0; s < kLegs; ++s) {
-    dVector3 a;
-    dJointGetHingeAnchor(w.hinge[s][AnklePitch], a);
+    double a[3];
+    group_anchor(w, s, AnkleGroup, a);
     for (int c = 0; c < 3; ++c) ankle[c] += 0.5 * a[c];
-    const double* R = dBodyGetRotation(w.body[body_index(s, AnkleRoll)]);
+    const double* R = dBodyGetRotation(w.body[body_index(s, Foot)]);
     heading[0] += R[0];
     heading[1] += R[4];
     o.foot_pitch += 0.5 * std::atan2(-R[8], std::hypot(R[0], R[4]));
@@ -575,7 +724,7 @@ void Plant3D::evaluate_outputs() {
   double moment = 0;
   o.contacts = 0;
   for (int s = 0; s < kLegs; ++s) {
-    const dBodyID foot = w.body[body_index(s, AnkleRoll)];
+    const dBodyID foot = w.body[body_index(s, Foot)];
     const double* R = dBodyGetRotation(foot);
     const double* fp = dBodyGetPosition(foot);
     const double nz[3] = {R[2], R[6], R[10]};  // the sole's normal
@@ -613,7 +762,7 @@ void Plant3D::evaluate_outputs() {
   // the cells as the robot reads them (noise, bias), and the ZMP from them
   double sx = 0, sy = 0, toe_true = 0, heel_true = 0;
   for (int s = 0; s < kLegs; ++s) {
-    const dBodyID foot = w.body[body_index(s, AnkleRoll)];
+    const dBodyID foot = w.body[body_index(s, Foot)];
     for (int c = 0; c < kCells; ++c) {
       const bool front = c == FrontLeft || c == FrontRight;
       (front ? toe_true : heel_true) += true_cells[s][c];
@@ -664,12 +813,12 @@ void Plant3D::evaluate_outputs() {
 
   // joints
   for (int s = 0; s < kLegs; ++s)
-    for (int k = 0; k < kLegJoints; ++k) o.joint[s][k] = dJointGetHingeAngle(w.hinge[s][k]);
+    for (int k = 0; k < kLegJoints; ++k) o.joint[s][k] = w.q[s][k];
   for (int s = 0; s < kLegs; ++s) {
     o.theta_ankle += 0.5 * o.joint[s][AnklePitch];
     o.theta_hip += 0.5 * o.joint[s][HipPitch];
-    o.dtheta_ankle += 0.5 * dJointGetHingeAngleRate(w.hinge[s][AnklePitch]);
-    o.dtheta_hip += 0.5 * dJointGetHingeAngleRate(w.hinge[s][HipPitch]);
+    o.dtheta_ankle += 0.5 * w.qd[s][AnklePitch];
+    o.dtheta_hip += 0.5 * w.qd[s][HipPitch];
     o.tau_ankle += w.tau[s][AnklePitch];
     o.tau_hip += w.tau[s][HipPitch];
   }
@@ -691,6 +840,12 @@ void Plant3D::push_point(double p[3]) const {
   dVector3 v;
   dBodyGetRelPointPos(w_->body[0], w_->push_point[0], w_->push_point[1], w_->push_point[2], v);
   std::copy(v, v + 3, p);
+}
+
+void Plant3D::body_rotation(int i, double R[9]) const {
+  const double* Rb = dBodyGetRotation(w_->body[i]);
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) R[r * 3 + c] = Rb[r * 4 + c];
 }
 
 void Plant3D::com(double c[3]) const {
@@ -731,11 +886,8 @@ std::vector<JointInfo> Plant3D::joints() const {
   for (int s = 0; s < kLegs; ++s)
     for (int k = 0; k < kLegJoints; ++k) {
       JointInfo j = w_->jinfo[s][k];
-      dVector3 a;
-      dJointGetHingeAnchor(w_->hinge[s][k], a);
-      std::copy(a, a + 3, j.anchor);
-      dJointGetHingeAxis(w_->hinge[s][k], a);
-      std::copy(a, a + 3, j.axis);
+      group_anchor(*w_, s, group_of(k), j.anchor);
+      std::copy(w_->axis[s][k], w_->axis[s][k] + 3, j.axis);
       v.push_back(j);
     }
   return v;

@@ -249,8 +249,10 @@ static void test_joint_statics() {
       if (above(b.name)) M += b.mass * P.g * (b.com[0] - x_axis);
     return M;
   };
-  auto above_hip = [](const std::string& n) { return n == "trunk" || n.find("hip_yaw") != std::string::npos; };
-  auto above_ankle = [](const std::string& n) { return n.find("ankle") == std::string::npos; };
+  // the hip links are point masses on the hip axes (they belong to the thigh), the ankle link rides
+  // with the foot while the ankle roll is held
+  auto above_hip = [](const std::string& n) { return n == "trunk"; };
+  auto above_ankle = [](const std::string& n) { return n.find("foot") == std::string::npos; };
   const double x_hip = joints[HipPitch].anchor[0], x_ankle = joints[AnklePitch].anchor[0];
   const Outputs& o = p.outputs();
   const double M_hip = moment(x_hip, above_hip), M_ankle = moment(x_ankle, above_ankle);
@@ -264,6 +266,55 @@ static void test_joint_statics() {
               "hip kp e %.5f N m\n", o.tau_hip, -M_hip, o.tau_ankle, -M_ankle, pd_hip);
 }
 
+// Establishes: the joint coordinates read from the ball, hinge and universal joints are the
+// proto's: with gravity off and every joint of both legs driven to a different angle, each
+// converges to its set point, and the foot's orientation relative to the trunk equals the product
+// of the proto's six joint rotations (its axes, its senses, its chain order) at those angles.
+static void test_kinematics() {
+  Params P = default_params();
+  P.g = 0.0;
+  P.mu = 0.0;  // no load from the ground either: the feet slide where the legs put them
+  Plant3D p(P);
+  CHECK(p.initialize(0.0), "%s", p.message().c_str());
+  const double ref[kLegJoints] = {0.12, 0.2, 0.07, 0.4, -0.15, -0.06};  // this model's sense
+  run(p, 2000, [&](double, Inputs& u) { std::copy(ref, ref + kLegJoints, u.ref); });
+  const Outputs& o = p.outputs();
+  auto rot = [](const double a[3], double q, double R[9]) {  // Rodrigues
+    const double c = std::cos(q), s = std::sin(q), v = 1 - c;
+    const double r[9] = {c + a[0] * a[0] * v,        a[0] * a[1] * v - a[2] * s, a[0] * a[2] * v + a[1] * s,
+                         a[1] * a[0] * v + a[2] * s, c + a[1] * a[1] * v,        a[1] * a[2] * v - a[0] * s,
+                         a[2] * a[0] * v - a[1] * s, a[2] * a[1] * v + a[0] * s, c + a[2] * a[2] * v};
+    std::copy(r, r + 9, R);
+  };
+  auto mul = [](const double A[9], const double B[9], double C[9]) {
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c) C[r * 3 + c] = A[r * 3] * B[c] + A[r * 3 + 1] * B[3 + c] + A[r * 3 + 2] * B[6 + c];
+  };
+  double Rt[9], worst_q = 0, worst_R = 0;
+  p.body_rotation(0, Rt);
+  for (int s = 0; s < kLegs; ++s) {
+    double chain[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1}, tmp[9], Rj[9];
+    for (int k = 0; k < kLegJoints; ++k) {
+      worst_q = std::max(worst_q, std::fabs(o.joint[s][k] - ref[k]));
+      // the proto's zero-posture axes (world axes of the unrotated robot) and its sense
+      const bool sag = k == HipPitch || k == AnklePitch;
+      const double axis0[kLegJoints][3] = {{0, 0, 1}, {0, 1, 0}, {1, 0, 0}, {0, 1, 0}, {0, 1, 0}, {1, 0, 0}};
+      rot(axis0[k], sag ? -o.joint[s][k] : o.joint[s][k], Rj);
+      mul(chain, Rj, tmp);
+      std::copy(tmp, tmp + 9, chain);
+    }
+    double Rf[9], rel[9];
+    p.body_rotation(1 + s * kLegBodies + Foot, Rf);
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c) rel[r * 3 + c] = Rt[r] * Rf[c] + Rt[3 + r] * Rf[3 + c] + Rt[6 + r] * Rf[6 + c];
+    for (int i = 0; i < 9; ++i) worst_R = std::max(worst_R, std::fabs(rel[i] - chain[i]));
+  }
+  CHECK(worst_q < 1e-4, "a joint is %g rad from its set point", worst_q);
+  CHECK(worst_R < 1e-9, "foot orientation differs from the proto chain by %g", worst_R);
+  std::printf("  12 joints at their set points within %.2g rad; foot orientation = proto chain within %.2g\n",
+              worst_q, worst_R);
+}
+
 int main(int argc, char** argv) {
   const std::string which = argc > 1 ? argv[1] : "all";
   struct T {
@@ -272,7 +323,8 @@ int main(int argc, char** argv) {
   } tests[] = {{"standing_still", test_standing_still}, {"sinkage", test_sinkage},
                {"tipping_toe", test_tipping_toe},       {"tipping_heel", test_tipping_heel},
                {"convergence", test_convergence},       {"snapshot", test_snapshot},
-               {"instances", test_instances},           {"joint_statics", test_joint_statics}};
+               {"instances", test_instances},           {"joint_statics", test_joint_statics},
+               {"kinematics", test_kinematics}};
   bool ran = false;
   for (auto& t : tests)
     if (which == "all" || which == t.name) {

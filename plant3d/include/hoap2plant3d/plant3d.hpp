@@ -21,8 +21,13 @@ enum LegJoint : int { HipYaw = 0, HipPitch, HipRoll, Knee, AnklePitch, AnkleRoll
 enum Side : int { Left = 0, Right = 1, kLegs };
 // The four load cells under each sole, at its corners.
 enum Cell : int { FrontLeft = 0, FrontRight, RearLeft, RearRight, kCells };
-// The 13 rigid bodies: the trunk, then each leg's six (left, then right), root to tip.
-constexpr int kBodies = 1 + kLegs * kLegJoints;
+// The rigid bodies of a leg. The three hip axes meet in one point and the proto's two hip links
+// between them are point masses at that point, so the hip is a ball joint and those links belong
+// to the thigh exactly; the two ankle axes meet too (a universal joint), the ankle link between
+// them goes with the foot (docs/plant3d.md, "Model").
+enum LegBody : int { Thigh = 0, Shank, Foot, kLegBodies };
+// The 7 rigid bodies: the trunk, then each leg's thigh, shank and foot (left, then right).
+constexpr int kBodies = 1 + kLegs * kLegBodies;
 
 const char* joint_name(int j);  // "hip_yaw", "hip", "hip_roll", "knee", "ankle", "ankle_roll"
 
@@ -106,7 +111,7 @@ struct BodyState {
 // Everything that determines the future, bit for bit (plain old data).
 struct Snapshot {
   std::uint32_t magic = 0x48335053u;  // "H3PS"
-  std::uint32_t version = 1;
+  std::uint32_t version = 2;
   double t = 0, t_fall = 0;
   std::int32_t fallen = 0, mode = 0;
   BodyState body[kBodies] = {};
@@ -160,6 +165,7 @@ class Plant3D {
   double sink_depth() const;          // deepest corner penetration in the last step [m]
   void push_point(double p[3]) const; // where the push acts now, world [m]
   void com(double c[3]) const;        // whole-robot CoM, world [m]
+  void body_rotation(int i, double R[9]) const;  // body i's rotation, world, row-major
 
   std::function<void(const std::string&)> logger;
 
