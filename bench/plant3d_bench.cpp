@@ -42,7 +42,7 @@ int main() {
     }
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     std::sort(us.begin(), us.end());
-    std::printf("%12.3g %14.1f %14.2f %12.1f %12.1f\n", 1e3 * step,
+    std::printf("%12.3g %14.2f %14.2f %12.1f %12.1f\n", 1e3 * step,
                 double(p.stats().ode_steps) / n, n * dt / wall, us[n / 2], us[n * 99 / 100]);
   }
   return 0;

@@ -8,6 +8,7 @@ import ctypes
 import json
 import shutil
 import subprocess
+import tomllib
 import zipfile
 from pathlib import Path
 
@@ -17,7 +18,7 @@ from fmpy import read_model_description
 from fmpy.fmi2 import FMU2Slave
 from fmpy.validation import validate_fmu
 
-from conftest import NOMINAL
+from conftest import NOMINAL, REPO_ROOT
 
 PLANT3D = "Hoap2Plant3D"
 
@@ -94,19 +95,26 @@ def _lump(bodies):
 
 
 def test_3d_model_lumps_to_the_sagittal_nominal_numbers(native_tool):
-    """Establishes: the ODE model as assembled (13 bodies merged from the proto's 28, placed at their
-    CoM, hinges at the proto's anchors) lumped into the sagittal plane -- both legs together, arms
+    """Establishes: the ODE model as assembled (7 bodies merged from the proto's 28, placed at their
+    CoM, joints at the proto's anchors) lumped into the sagittal plane -- both legs together, arms
     and head into the upper body -- gives m1, m2, l1, lg1, lg2, I1, I2 and the foot numbers of
-    hoap2/nominal.h (which the sagittal plant and the controller use), to the header's precision."""
+    hoap2/nominal.h (which the sagittal plant and the controller use), to the header's precision.
+    The sagittal model counts the hip-yaw link (a point mass on the hip axes, part of the 3D thigh)
+    in the upper body: it is moved across by its proto mass."""
     out = subprocess.run([str(native_tool("plant3d_tool")), "describe"], capture_output=True, text=True, check=True)
     model = json.loads(out.stdout)
     bodies = {b["name"]: b for b in model["bodies"]}
     joints = {j["name"]: j for j in model["joints"]}
-    assert len(bodies) == 13 and len(joints) == 12
+    assert len(bodies) == 7 and len(joints) == 12
     side = ("left", "right")
-    feet = _lump([bodies[f"{s}_{k}"] for s in side for k in ("ankle", "ankle_roll")])
-    link1 = _lump([bodies[f"{s}_{k}"] for s in side for k in ("hip", "hip_roll", "knee")])
-    link2 = _lump([bodies["trunk"]] + [bodies[f"{s}_hip_yaw"] for s in side])
+    proto = {b["name"]: b for b in tomllib.loads((REPO_ROOT / "hoap2" / "webots_hoap2.toml").read_text())["body"]}
+    yaw = {s: {"mass": proto[f"{s[0]}leg_hip_yaw"]["mass"], "com": joints[f"{s}_hip"]["anchor"], "inertia": [0] * 6}
+           for s in side}
+    assert all(f"{s[0]}leg_hip_yaw" in bodies[f"{s}_thigh"]["proto"].split(",") for s in side)
+    minus = {s: dict(yaw[s], mass=-yaw[s]["mass"]) for s in side}
+    feet = _lump([bodies[f"{s}_foot"] for s in side])
+    link1 = _lump([bodies[f"{s}_{k}"] for s in side for k in ("thigh", "shank")] + [minus[s] for s in side])
+    link2 = _lump([bodies["trunk"]] + [yaw[s] for s in side])
     ankle = np.mean([joints[f"{s}_ankle"]["anchor"] for s in side], axis=0)
     hip = np.mean([joints[f"{s}_hip"]["anchor"] for s in side], axis=0)
     got = {
@@ -118,7 +126,7 @@ def test_3d_model_lumps_to_the_sagittal_nominal_numbers(native_tool):
     }
     for k, v in got.items():
         assert v == pytest.approx(NOMINAL[k], rel=2e-5, abs=1e-8), k
-    # both legs' hinges: pitch axes along y, roll along x, yaw along z
+    # both legs' joint axes: pitch along y, roll along x, yaw along z
     for s in side:
         assert joints[f"{s}_ankle"]["axis"] == [0, 1, 0] and joints[f"{s}_hip"]["axis"] == [0, 1, 0]
         assert joints[f"{s}_ankle_roll"]["axis"] == [1, 0, 0] and joints[f"{s}_hip_yaw"]["axis"] == [0, 0, 1]

@@ -214,6 +214,7 @@ struct Plant3D::World {
   int ncontact[kLegs] = {};
   dContactGeom cg[kLegs][kMaxContacts];
   dJointFeedback fb[kLegs][kMaxContacts];
+  double fdir[kLegs][2] = {};                 // first friction direction of each foot's contacts
   double tau[kLegs][kLegJoints] = {};
   double max_depth = 0;
 
@@ -517,6 +518,93 @@ bool Plant3D::initialize(double t0) {
   return true;
 }
 
+namespace {
+// The servo rows and the contact joints of one attempt at an ODE step. `bounded`: the motor rows
+// carry their torque limit and the friction rows their pyramid (the LCP); otherwise both are
+// unbounded equality rows, which ODE's LCP factorises in one go instead of pivoting row by row.
+void set_motor_limits(Plant3D::World& w, bool bounded) {
+  for (int s = 0; s < kLegs; ++s)
+    for (int g = 0; g < kGroups; ++g)
+      for (int i = 0; i < kGroupCount[g]; ++i) {
+        const int k = kGroupFirst[g] + i;
+        const double fmax = w.servo_fmax[s][k];
+        const double len = std::sqrt(dot(w.dual[s][k], w.dual[s][k]));
+        dJointSetAMotorParam(w.motor[s][g], dParamFMax + dParamGroup * i, bounded || fmax == 0 ? fmax * len : dInfinity);
+      }
+}
+}  // namespace
+
+void Plant3D::make_contacts(double dt, bool bounded) {
+  World& w = *w_;
+  // ERP and CFM of a spring k and damper c per corner (ODE manual, "Soft constraint and constraint
+  // force mixing"), with the damper reduced by h k: ODE's soft row is implicit Euler of the
+  // spring-damper, whose spring at x(t+h) adds h k of numerical damping (first-order error, 20 %
+  // of c at h = 1 ms); with c - h k the step applies k x(t) + c v(t+h), the intended law.
+  const double k = P_.contact_stiffness, c = P_.contact_damping;
+  const double ce = std::max(c - dt * k, 0.1 * c);
+  const double erp = dt * k / (dt * k + ce), cfm = 1.0 / (dt * k + ce);
+  dJointGroupEmpty(w.contact_group);
+  w.max_depth = 0;
+  for (int s = 0; s < kLegs; ++s) {
+    const dBodyID foot = w.body[body_index(s, Foot)];
+    const int n = dCollide(w.foot_geom[s], w.ground, kMaxContacts, w.cg[s], sizeof(dContactGeom));
+    w.ncontact[s] = n;
+    const double* R = dBodyGetRotation(foot);
+    double fx = R[0], fy = R[4];  // the foot's x axis, horizontal part: first friction direction
+    const double nrm = std::hypot(fx, fy);
+    fx = nrm > 1e-9 ? fx / nrm : 1.0;
+    fy = nrm > 1e-9 ? fy / nrm : 0.0;
+    w.fdir[s][0] = fx;
+    w.fdir[s][1] = fy;
+    for (int i = 0; i < n; ++i) {
+      dContact ct;
+      std::memset(&ct, 0, sizeof ct);
+      ct.geom = w.cg[s][i];
+      // the friction pyramid: |f1|, |f2| <= mu fn along the foot and across it
+      ct.surface.mode = (bounded ? dContactApprox1 : 0) | dContactSoftERP | dContactSoftCFM | dContactFDir1;
+      ct.surface.mu = bounded ? P_.mu : dInfinity;
+      ct.surface.soft_erp = erp;
+      ct.surface.soft_cfm = cfm;
+      ct.fdir1[0] = fx;
+      ct.fdir1[1] = fy;
+      ct.fdir1[2] = 0;
+      w.max_depth = std::max(w.max_depth, static_cast<double>(ct.geom.depth));
+      dJointID cj = dJointCreateContact(w.world, w.contact_group, &ct);
+      dJointAttach(cj, foot, nullptr);
+      dJointSetFeedback(cj, &w.fb[s][i]);
+    }
+  }
+}
+
+// Whether the last step's motor torques and friction forces lie within their limits, and whether
+// any is within 1 % of its limit (then the next step starts bounded).
+bool Plant3D::within_limits(bool& near) const {
+  const World& w = *w_;
+  bool ok = true;
+  near = false;
+  for (int s = 0; s < kLegs; ++s) {
+    for (int k = 0; k < kLegJoints; ++k) {
+      const double fmax = w.servo_fmax[s][k];
+      if (!(fmax > 0) || fmax == dInfinity) continue;
+      const double tau = std::fabs(w.servo_gain[s][k] * (w.servo_vel[s][k] - w.qd[s][k]));
+      ok = ok && tau <= fmax * (1 + 1e-9);
+      near = near || tau > 0.99 * fmax;
+    }
+    const double t1[3] = {w.fdir[s][0], w.fdir[s][1], 0.0};
+    for (int i = 0; i < w.ncontact[s]; ++i) {
+      const double* f = w.fb[s][i].f1;
+      const double* nz = w.cg[s][i].normal;
+      double t2[3];
+      cross(nz, t1, t2);
+      const double fn = std::fabs(dot(f, nz)), lim = P_.mu * fn;
+      const double f1 = std::fabs(dot(f, t1)), f2 = std::fabs(dot(f, t2));
+      ok = ok && f1 <= lim * (1 + 1e-9) + 1e-12 && f2 <= lim * (1 + 1e-9) + 1e-12;
+      near = near || f1 > 0.99 * lim || f2 > 0.99 * lim;
+    }
+  }
+  return ok;
+}
+
 bool Plant3D::ode_step(double dt) {
   World& w = *w_;
   tl_logger = &logger;
@@ -538,11 +626,9 @@ bool Plant3D::ode_step(double dt) {
         const double wcmd = P_.servo_on ? soft_sat(sv.kp / sv.kd * (in_.ref[k] - w.q[s][k]), sv.vel_max) : 0.0;
         const double gain = kd + d;
         const double vel = gain > 0 ? kd * wcmd / gain : 0.0;
-        const double fmax = gain > 0 ? (P_.servo_on ? 0.5 * sv.tau_max : dInfinity) : 0.0;
         w.servo_vel[s][k] = vel;
         w.servo_gain[s][k] = gain;
-        w.servo_fmax[s][k] = fmax;
-        dJointSetAMotorParam(m, dParamFMax + grp, fmax * len);
+        w.servo_fmax[s][k] = gain > 0 ? (P_.servo_on ? 0.5 * sv.tau_max : dInfinity) : 0.0;
         if (gain > 0) {
           dJointSetAMotorParam(m, dParamVel + grp, vel / len);
           dJointSetAMotorParam(m, dParamCFM + grp, 1.0 / (gain * len * len));
@@ -550,46 +636,37 @@ bool Plant3D::ode_step(double dt) {
       }
     }
   }
-  if (in_.push_x != 0.0 || in_.push_y != 0.0)
-    dBodyAddForceAtRelPos(w.body[0], in_.push_x, in_.push_y, 0.0, w.push_point[0], w.push_point[1], w.push_point[2]);
 
-  // contacts: ERP and CFM of a spring k and damper c per corner (ODE manual, section 3.8.2)
-  dJointGroupEmpty(w.contact_group);
-  const double k = P_.contact_stiffness, c = P_.contact_damping;
-  const double erp = dt * k / (dt * k + c), cfm = 1.0 / (dt * k + c);
-  w.max_depth = 0;
-  for (int s = 0; s < kLegs; ++s) {
-    const dBodyID foot = w.body[body_index(s, Foot)];
-    const int n = dCollide(w.foot_geom[s], w.ground, kMaxContacts, w.cg[s], sizeof(dContactGeom));
-    w.ncontact[s] = n;
-    const double* R = dBodyGetRotation(foot);
-    double fx = R[0], fy = R[4];  // the foot's x axis, horizontal part: first friction direction
-    const double nrm = std::hypot(fx, fy);
-    fx = nrm > 1e-9 ? fx / nrm : 1.0;
-    fy = nrm > 1e-9 ? fy / nrm : 0.0;
-    for (int i = 0; i < n; ++i) {
-      dContact ct;
-      std::memset(&ct, 0, sizeof ct);
-      ct.geom = w.cg[s][i];
-      ct.surface.mode = dContactApprox1 | dContactSoftERP | dContactSoftCFM | dContactFDir1;
-      ct.surface.mu = P_.mu;
-      ct.surface.soft_erp = erp;
-      ct.surface.soft_cfm = cfm;
-      ct.fdir1[0] = fx;
-      ct.fdir1[1] = fy;
-      ct.fdir1[2] = 0;
-      w.max_depth = std::max(w.max_depth, static_cast<double>(ct.geom.depth));
-      dJointID cj = dJointCreateContact(w.world, w.contact_group, &ct);
-      dJointAttach(cj, foot, nullptr);
-      dJointSetFeedback(cj, &w.fb[s][i]);
+  // Active-set guess: unless the last step had a torque or friction force near its limit, solve
+  // with those rows unbounded; if the result breaks a limit, restore the bodies and solve again
+  // bounded. A solution within the limits solves the bounded problem too, so this only saves work.
+  auto push = [&] {
+    if (in_.push_x != 0.0 || in_.push_y != 0.0)
+      dBodyAddForceAtRelPos(w.body[0], in_.push_x, in_.push_y, 0.0, w.push_point[0], w.push_point[1], w.push_point[2]);
+  };
+  BodyState saved[kBodies];
+  bool bounded = limits_near_;
+  if (!bounded) save_bodies(saved);
+  for (;;) {
+    set_motor_limits(w, bounded);
+    push();
+    make_contacts(dt, bounded);
+    dWorldStep(w.world, dt);
+    ++stats_.ode_steps;
+    refresh_kinematics(w);
+    bool near = false;
+    const bool ok = within_limits(near);
+    if (ok || bounded) {
+      limits_near_ = near || !ok;
+      break;
     }
+    restore_bodies(saved);
+    refresh_kinematics(w);
+    ++stats_.resolves;
+    bounded = true;
   }
 
-  dWorldStep(w.world, dt);
-  ++stats_.ode_steps;
-
   // servo torques as the motor applied them (implicit law at the new rate, clamped)
-  refresh_kinematics(w);
   for (int s = 0; s < kLegs; ++s)
     for (int k = 0; k < kLegJoints; ++k) {
       const double fmax = w.servo_fmax[s][k];
@@ -893,6 +970,33 @@ std::vector<JointInfo> Plant3D::joints() const {
   return v;
 }
 
+void Plant3D::save_bodies(BodyState* out) const {
+  for (int i = 0; i < kBodies; ++i) {
+    const dBodyID b = w_->body[i];
+    BodyState& st = out[i];
+    std::memcpy(st.pos, dBodyGetPosition(b), sizeof st.pos);
+    std::memcpy(st.quat, dBodyGetQuaternion(b), sizeof st.quat);
+    std::memcpy(st.rot, dBodyGetRotation(b), sizeof st.rot);
+    std::memcpy(st.lvel, dBodyGetLinearVel(b), sizeof st.lvel);
+    std::memcpy(st.avel, dBodyGetAngularVel(b), sizeof st.avel);
+  }
+}
+
+void Plant3D::restore_bodies(const BodyState* in) {
+  for (int i = 0; i < kBodies; ++i) {
+    const dBodyID b = w_->body[i];
+    const BodyState& st = in[i];
+    // ODE's setters renormalise the quaternion (not bit-exact); write its storage directly (the
+    // getters return pointers into the body, ODE manual "Rigid body functions"), then move the
+    // body by the setter so the attached geoms are updated.
+    std::memcpy(const_cast<dReal*>(dBodyGetQuaternion(b)), st.quat, sizeof st.quat);
+    std::memcpy(const_cast<dReal*>(dBodyGetRotation(b)), st.rot, sizeof st.rot);
+    dBodySetPosition(b, st.pos[0], st.pos[1], st.pos[2]);
+    dBodySetLinearVel(b, st.lvel[0], st.lvel[1], st.lvel[2]);
+    dBodySetAngularVel(b, st.avel[0], st.avel[1], st.avel[2]);
+  }
+}
+
 Snapshot Plant3D::snapshot() const {
   Snapshot s;
   std::memset(static_cast<void*>(&s), 0, sizeof s);  // deterministic padding
@@ -902,15 +1006,8 @@ Snapshot Plant3D::snapshot() const {
   s.t_fall = t_fall_;
   s.fallen = fallen_;
   s.mode = out_.contact_mode;
-  for (int i = 0; i < kBodies; ++i) {
-    const dBodyID b = w_->body[i];
-    BodyState& st = s.body[i];
-    std::memcpy(st.pos, dBodyGetPosition(b), sizeof st.pos);
-    std::memcpy(st.quat, dBodyGetQuaternion(b), sizeof st.quat);
-    std::memcpy(st.rot, dBodyGetRotation(b), sizeof st.rot);
-    std::memcpy(st.lvel, dBodyGetLinearVel(b), sizeof st.lvel);
-    std::memcpy(st.avel, dBodyGetAngularVel(b), sizeof st.avel);
-  }
+  save_bodies(s.body);
+  s.limits_near = limits_near_;
   std::memcpy(static_cast<void*>(&s.in), &in_, sizeof in_);
   s.rng = rng_;
   std::memcpy(static_cast<void*>(&s.stats), &stats_, sizeof stats_);
@@ -926,18 +1023,8 @@ bool Plant3D::restore(const Snapshot& s) {
     for (double x : st.lvel) if (!std::isfinite(x)) return false;
     for (double x : st.avel) if (!std::isfinite(x)) return false;
   }
-  for (int i = 0; i < kBodies; ++i) {
-    const dBodyID b = w_->body[i];
-    const BodyState& st = s.body[i];
-    // ODE's setters renormalise the quaternion (not bit-exact); write its storage directly (the
-    // getters return pointers into the body, ODE manual "Rigid body functions"), then move the
-    // body by the setter so the attached geoms are updated.
-    std::memcpy(const_cast<dReal*>(dBodyGetQuaternion(b)), st.quat, sizeof st.quat);
-    std::memcpy(const_cast<dReal*>(dBodyGetRotation(b)), st.rot, sizeof st.rot);
-    dBodySetPosition(b, st.pos[0], st.pos[1], st.pos[2]);
-    dBodySetLinearVel(b, st.lvel[0], st.lvel[1], st.lvel[2]);
-    dBodySetAngularVel(b, st.avel[0], st.avel[1], st.avel[2]);
-  }
+  restore_bodies(s.body);
+  limits_near_ = s.limits_near != 0;
   t_ = s.t;
   t_fall_ = s.t_fall;
   fallen_ = s.fallen != 0;

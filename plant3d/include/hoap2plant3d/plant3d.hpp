@@ -98,7 +98,8 @@ struct Outputs {
 };
 
 struct Stats {
-  std::int64_t ode_steps = 0;
+  std::int64_t ode_steps = 0;      // ODE steps taken, re-solved ones included
+  std::int64_t resolves = 0;       // steps solved again with torque / friction limits (see ode_step)
   std::int64_t mode_switches = 0;
 };
 
@@ -114,6 +115,7 @@ struct Snapshot {
   std::uint32_t version = 2;
   double t = 0, t_fall = 0;
   std::int32_t fallen = 0, mode = 0;
+  std::int32_t limits_near = 0, pad = 0;
   BodyState body[kBodies] = {};
   Inputs in;
   std::uint64_t rng = 0;
@@ -173,6 +175,10 @@ class Plant3D {
 
  private:
   bool ode_step(double dt);           // one ODE step; false on a non-finite state
+  void make_contacts(double dt, bool bounded);
+  bool within_limits(bool& near) const;
+  void save_bodies(BodyState* out) const;
+  void restore_bodies(const BodyState* in);
   void evaluate_outputs();
   bool check_fall();
   double gauss();
@@ -184,6 +190,7 @@ class Plant3D {
   std::unique_ptr<World> w_;
   double t_ = 0;
   bool fallen_ = false;
+  bool limits_near_ = false;          // the last step had a torque or friction force near its limit
   double t_fall_ = 0;
   Inputs in_;
   std::uint64_t rng_ = 0;
