@@ -206,6 +206,7 @@ struct Plant3D::World {
   double axis[kLegs][kLegJoints][3] = {}, dual[kLegs][kLegJoints][3] = {};
   // the servo law of the last step, in joint coordinates (tau read-back)
   double servo_vel[kLegs][kLegJoints] = {}, servo_gain[kLegs][kLegJoints] = {}, servo_fmax[kLegs][kLegJoints] = {};
+  bool kinematics_fresh = false;  // q, qd, axis, dual are those of the bodies' current state
   double sole_corner[kLegs][kCells][3] = {};  // foot body frame, on the sole
   double sole_center[kLegs][3] = {};          // foot body frame
   double sole_len = 0, sole_width = 0, heel_x = 0;  // sole rectangle, x from the ankle axis
@@ -289,6 +290,7 @@ void refresh_kinematics(Plant3D::World& w) {
       }
     }
   }
+  w.kinematics_fresh = true;
 }
 
 void group_anchor(const Plant3D::World& w, int s, int g, double a[3]) {
@@ -483,6 +485,7 @@ bool Plant3D::initialize(double t0) {
                             pivot[2] + R[6] * d[0] + R[7] * d[1] + R[8] * d[2]};
       dBodySetRotation(w.body[i], Rn);
       dBodySetPosition(w.body[i], np[0], np[1], np[2]);
+      w.kinematics_fresh = false;
     }
   };
   auto above_ankle = [](int i) { return i == 0 || (i - 1) % kLegBodies != Foot; };
@@ -611,7 +614,7 @@ bool Plant3D::ode_step(double dt) {
   // servos: the velocity loop is the ODE motor row (implicit), the position loop sets its target.
   // The row's unit axis u = -n/|n| (motor attached parent, child) measures u . (w_p - w_c) =
   // qdot/|n|; target, CFM and force limit are rescaled so the law holds in qdot and joint torque.
-  refresh_kinematics(w);
+  if (!w.kinematics_fresh) refresh_kinematics(w);
   for (int s = 0; s < kLegs; ++s) {
     for (int g = 0; g < kGroups; ++g) {
       const dJointID m = w.motor[s][g];
@@ -778,7 +781,7 @@ void Plant3D::evaluate_outputs() {
   Outputs o;
   std::memset(static_cast<void*>(&o), 0, sizeof o);  // deterministic padding (snapshots compare bytes)
   // feet frame: origin at the middle of the ankle axes (on the ground for x, y), x along the feet
-  refresh_kinematics(w);
+  if (!w.kinematics_fresh) refresh_kinematics(w);
   double ankle[3] = {0, 0, 0}, heading[2] = {0, 0};
   for (int s = 0; s < kLegs; ++s) {
     double a[3];
@@ -983,6 +986,7 @@ void Plant3D::save_bodies(BodyState* out) const {
 }
 
 void Plant3D::restore_bodies(const BodyState* in) {
+  w_->kinematics_fresh = false;
   for (int i = 0; i < kBodies; ++i) {
     const dBodyID b = w_->body[i];
     const BodyState& st = in[i];

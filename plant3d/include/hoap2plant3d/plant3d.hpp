@@ -46,7 +46,8 @@ struct Params {
   double mu = 1.0;                   // Coulomb friction coefficient (pyramid, axes along the foot)
   double contact_stiffness = 2e5;    // normal stiffness of each corner contact [N/m]
   double contact_damping = 1e3;      // normal damping of each corner contact [N s/m]
-  double internal_step = 2.5e-4;     // ODE step inside a communication step (upper bound) [s]
+  double internal_step = 5e-4;       // ODE step inside a communication step (upper bound) [s]:
+                                     // chosen by the convergence study (test plant3d.convergence)
   // --- push: horizontal force at a trunk point, h_push above the sole in the erect posture ---
   double h_push = 0.335;
   // --- fall detection ---
