@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from fmpy import read_model_description
-from fmpy.fmi2 import FMU2Slave
+from fmpy.fmi2 import FMU2Slave, fmi2LastSuccessfulTime
 from fmpy.validation import validate_fmu
 
 from conftest import NOMINAL, REPO_ROOT
@@ -267,6 +267,34 @@ def test_tipping_force_equals_the_sagittal_plants(unzipped3d, plant_unzipped, si
     slow push ramp lifts the heels (a pull the toes) at the same force as in Hoap2Plant, within 2 %.
     The sagittal model's knees are rigid, so the 3D knee servos are made stiff for this comparison
     (with the default knee servo the pull lifts the toes 3 % earlier: the knees give 1 mm)."""
+    lean = _lean_onto_the_sagittal_com(unzipped3d, plant_unzipped)
+    # the sagittal model's knees are rigid: make the 3D knees stiff as well
+    f3, cx3, mode3 = _tipping_force(unzipped3d, {"theta_ankle_init": lean, "kp_knee": 1e4, "kd_knee": 200.0}, sign=sign)
+    f2, cx2, mode2 = _tipping_force(plant_unzipped, {}, sign=sign)
+    assert mode3 == mode2 == (1 if sign > 0 else 2)
+    assert f3 == pytest.approx(f2, rel=0.02), (f3, f2, cx3, cx2)
+
+
+def _step_push(unzipped: Path, params: dict, force: float, t_push: float = 0.2, t_end: float = 3.0):
+    """A push of `force` from t_push on, held until the robot falls: times, foot pitch, fall time."""
+    s = Slave(unzipped, params)
+    s.set("theta_ankle_ref", params.get("theta_ankle_init", 0.0))
+    t, pitch, t_fall = [], [], None
+    while s.t < t_end:
+        s.set("push_force", force if s.t >= t_push - 1e-9 else 0.0)
+        try:
+            s.step()
+        except Exception:   # fmi2Discard: fallen
+            t_fall = s.fmu.getRealStatus(fmi2LastSuccessfulTime)
+            break
+        t.append(s.t)
+        pitch.append(s.get("foot_pitch"))
+    s.free()
+    return np.array(t), np.array(pitch), t_fall
+
+
+def _lean_onto_the_sagittal_com(unzipped3d, plant_unzipped) -> float:
+    """The ankle angle that puts the 3D robot's CoM where the sagittal plant's is."""
     s = Slave(unzipped3d)
     s.step()
     com_x3, com_z3 = s.get("com_x"), s.get("com_z")
@@ -275,9 +303,29 @@ def test_tipping_force_equals_the_sagittal_plants(unzipped3d, plant_unzipped, si
     sag.step()
     com_x2 = sag.get("com_x")
     sag.free()
-    lean = -np.arcsin((com_x3 - com_x2) / com_z3)
-    # the sagittal model's knees are rigid: make the 3D knees stiff as well
-    f3, cx3, mode3 = _tipping_force(unzipped3d, {"theta_ankle_init": lean, "kp_knee": 1e4, "kd_knee": 200.0}, sign=sign)
-    f2, cx2, mode2 = _tipping_force(plant_unzipped, {}, sign=sign)
-    assert mode3 == mode2 == (1 if sign > 0 else 2)
-    assert f3 == pytest.approx(f2, rel=0.02), (f3, f2, cx3, cx2)
+    return float(-np.arcsin((com_x3 - com_x2) / com_z3))
+
+
+def test_step_push_above_tipping_falls_like_the_sagittal_plant(unzipped3d, plant_unzipped):
+    """Establishes (cross-check 3): a step push 50 % above the tipping force, held, tips both plants
+    over their toes the same way: the foot pitch of the 3D plant follows the sagittal plant's until
+    the fall (the times at which the foot reaches 0.05, 0.1 and 0.2 rad, and the fall, agree within
+    3 %; the largest pitch difference before the fall is below 0.02 rad). Same set-up as the
+    tipping comparison: CoM placed alike, stiff 3D knees."""
+    lean = _lean_onto_the_sagittal_com(unzipped3d, plant_unzipped)
+    f2, _, _ = _tipping_force(plant_unzipped, {}, sign=1.0)
+    force = 1.5 * f2
+    t3, p3, fall3 = _step_push(unzipped3d, {"theta_ankle_init": lean, "kp_knee": 1e4, "kd_knee": 200.0}, force)
+    t2, p2, fall2 = _step_push(plant_unzipped, {}, force)
+    assert fall2 is not None and fall3 is not None, (fall2, fall3)
+    crossings = []
+    for level in (0.05, 0.1, 0.2):
+        c2, c3 = t2[np.argmax(p2 >= level)], t3[np.argmax(p3 >= level)]
+        assert c3 - 0.2 == pytest.approx(c2 - 0.2, rel=0.03), (level, c2, c3)
+        crossings.append(f"{level} rad at {c3:.3f}/{c2:.3f} s")
+    assert fall3 - 0.2 == pytest.approx(fall2 - 0.2, rel=0.03), (fall2, fall3)
+    n = min(len(t2), len(t3))
+    worst = float(np.max(np.abs(p3[:n] - p2[:n])))
+    assert worst < 0.02, worst
+    print(f"step push {force:.2f} N: fall at {fall3:.4f} s (3D) vs {fall2:.4f} s (sagittal); "
+          f"largest foot-pitch difference {worst:.4f} rad; " + ", ".join(crossings))
