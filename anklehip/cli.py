@@ -124,7 +124,10 @@ def cmd_list(a) -> int:
         if e.phases_reached:
             exp += f", phases {''.join(map(str, e.phases_reached))}"
         ref = "ref" if sc.reference and sc.reference.file.is_file() else ("ref missing" if sc.reference else "")
-        print(f"{sc.name:<28} {sc.plant_model:<8} {sc.stop_time:6.1f} s  peak push {sc.push.peak():+6.1f} N  {exp:<24} {ref:<11} "
+        peak = f"{sc.push.peak():+6.1f} N" if sc.push_y.peak() == 0 else f"y {sc.push_y.peak():+4.1f} N"
+        if sc.push.peak() != 0 and sc.push_y.peak() != 0:
+            peak = f"{sc.push.peak():+.1f}/y{sc.push_y.peak():+.1f}"
+        print(f"{sc.name:<28} {sc.plant_model:<8} {sc.stop_time:6.1f} s  peak push {peak:<8}  {exp:<24} {ref:<11} "
               f"{sc.description.splitlines()[0] if sc.description else ''}")
     return rc
 

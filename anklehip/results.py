@@ -231,6 +231,19 @@ def check_expect(res: RunResult, e: Expect) -> list[Check]:
         k = int(np.argmax(z))
         out.append(Check("max_abs_zmp", bool(z[k] <= e.max_abs_zmp),
                          f"max |zmp_x| {1000 * z[k]:.1f} mm at t={t[k]:.3f} s (limit {1000 * e.max_abs_zmp:.1f} mm)"))
+    for col, limit in e.max_abs.items():
+        if col not in names:
+            out.append(Check(f"max_abs {col}", False, f"expect.max_abs.{col}: no column {col!r} in the results"))
+            continue
+        a = np.abs(d[col])
+        k = int(np.argmax(a))
+        out.append(Check(f"max_abs {col}", bool(a[k] <= limit), f"max |{col}| {a[k]:.4g} at t={t[k]:.3f} s (limit {limit:g})"))
+    for col, least in e.min_range.items():
+        if col not in names:
+            out.append(Check(f"min_range {col}", False, f"expect.min_range.{col}: no column {col!r} in the results"))
+            continue
+        rng = float(np.max(d[col]) - np.min(d[col]))
+        out.append(Check(f"min_range {col}", rng >= least, f"{col} spans {rng:.4g} (need {least:g})"))
     if e.no_fault and "fault" in names:
         f = d["fault"]
         bad = np.flatnonzero(f != 0)

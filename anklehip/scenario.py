@@ -174,6 +174,8 @@ class Expect:
     erect_tol: float = 0.02                  # [rad] on |theta_ankle| and |theta_hip|
     max_abs_zmp: float | None = None         # [m]
     no_fault: bool = True
+    max_abs: dict[str, float] = field(default_factory=dict)    # result column -> largest |value| allowed
+    min_range: dict[str, float] = field(default_factory=dict)  # result column -> least max - min (e.g. a slide)
 
 
 @dataclass
@@ -288,7 +290,7 @@ PUSH_KEYS = {
     "pulse": ({"kind", "t", "duration", "force", "rise"}, {"duration", "force"}),
 }
 EXPECT_KEYS = {"must_fall", "fall_after", "fall_before", "phases_reached", "phases_not_reached",
-               "min_cycles", "erect_by", "erect_tol", "max_abs_zmp", "no_fault"}
+               "min_cycles", "erect_by", "erect_tol", "max_abs_zmp", "no_fault", "max_abs", "min_range"}
 REF_KEYS = {"file", "columns", "num", "dx", "dy", "abs_tol", "rel_tol", "interval", "band_floor", "signals"}
 REF_SIGNAL_KEYS = {"dy", "abs_tol", "rel_tol", "band_floor"}
 
@@ -386,6 +388,10 @@ def _parse_expect(v: _V, d: Any, stop_time: float) -> Expect:
         e.erect_tol = v.num(d["erect_tol"], "expect.erect_tol", gt=0.0)
     if "max_abs_zmp" in d:
         e.max_abs_zmp = v.num(d["max_abs_zmp"], "expect.max_abs_zmp", gt=0.0)
+    for k in ("max_abs", "min_range"):   # tables: result column = value (the column is checked in the run)
+        if k in d:
+            tab = v.table(d[k], f"expect.{k}")
+            setattr(e, k, {str(c): v.num(x, f"expect.{k}.{c}", gt=0.0) for c, x in tab.items()})
     if "no_fault" in d:
         e.no_fault = v.bool_(d["no_fault"], "expect.no_fault")
     return e

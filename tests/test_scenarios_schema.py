@@ -59,6 +59,8 @@ def test_minimal(tmp_path):
     ("stop_time = 5\n[expect]\nerect_by = 9\n", "x.toml: expect.erect_by: must be <= 5, got 9"),
     ("stop_time = 5\n[expect]\nfall_before = 3\n", "expect.fall_before: only meaningful with must_fall = true"),
     ("stop_time = 5\n[expect]\nwhatever = 3\n", "x.toml: expect.whatever: unknown key"),
+    ("stop_time = 5\n[expect]\nmax_abs = { zmp_y = -1 }\n", "x.toml: expect.max_abs.zmp_y: must be > 0, got -1"),
+    ("stop_time = 5\n[expect]\nmin_range = 3\n", "x.toml: expect.min_range: must be a table"),
     ("stop_time = 5\n[reference]\ncolumns = ['a']\n", "x.toml: reference.file: required key missing"),
     ("stop_time = 5\nname = 'y'\n", "x.toml: name: 'y' differs from the file name 'x'"),
     ("stop_time = [\n", "x.toml: invalid TOML"),
@@ -108,3 +110,20 @@ def test_parse_scenario_from_dict():
     sc = parse_scenario({"stop_time": 3.0, "push": [{"kind": "pulse", "t": 1, "force": 5, "duration": 0.5}],
                          "expect": {"must_fall": False, "phases_reached": [0]}}, "mem")
     assert sc.expect.must_fall is False and sc.push.peak() == 5
+
+
+def test_generic_expectations_check_named_columns():
+    """max_abs and min_range check any result column; a column the run does not have fails the
+    check with a message naming the key and the column."""
+    import numpy as np
+    from anklehip.results import check_expect
+    from anklehip.scenario import Expect
+
+    class Res:
+        outcome, fell, message = "completed", False, ""
+        data = np.array([(0.0, 0.0, 1.0), (0.1, 0.02, 1.3)], dtype=[("time", float), ("zmp_y", float), ("feet_x", float)])
+    checks = {c.name: c for c in check_expect(Res(), Expect(max_abs={"zmp_y": 0.01, "nope": 1.0},
+                                                           min_range={"feet_x": 0.2}))}
+    assert not checks["max_abs zmp_y"].ok and "0.02" in checks["max_abs zmp_y"].detail
+    assert not checks["max_abs nope"].ok and "expect.max_abs.nope" in checks["max_abs nope"].detail
+    assert checks["min_range feet_x"].ok and "0.3" in checks["min_range feet_x"].detail

@@ -32,7 +32,7 @@ enum : fmi2ValueReference {
   // 3D outputs
   zmp_y = 50, fy = 51, com_y = 52, foot_roll = 53, zmp_true_y = 54, fz_left = 55, fz_right = 56,
   slip_speed_left = 57, slip_speed_right = 58, imu_roll = 59, imu_pitch = 60, imu_yaw = 61,
-  gyro_x = 62, gyro_y = 63, gyro_z = 64, sink_depth = 65,
+  gyro_x = 62, gyro_y = 63, gyro_z = 64, sink_depth = 65, feet_x = 66, feet_y = 67,
   first_cell = 70,         // 8 load cells
   first_joint = 80,        // 12 joint angles
   ode_steps = 95, mode_switches = 96, contacts = 97,
@@ -171,6 +171,8 @@ ModelInfo makeInfo() {
   add("fz_right", vr::fz_right, R, Out, Cont, "N", "Right sole load (its four cells)");
   add("slip_speed_left", vr::slip_speed_left, R, Out, Cont, "m/s", "Horizontal speed of the left sole's centre");
   add("slip_speed_right", vr::slip_speed_right, R, Out, Cont, "m/s", "Horizontal speed of the right sole's centre");
+  add("feet_x", vr::feet_x, R, Out, Cont, "m", "Where the feet stand: x of the middle of the ankles on the ground, world");
+  add("feet_y", vr::feet_y, R, Out, Cont, "m", "Where the feet stand: y of the middle of the ankles on the ground, world");
   add("imu_roll", vr::imu_roll, R, Out, Cont, "rad", "Trunk roll (Z-Y-X Euler angles)");
   add("imu_pitch", vr::imu_pitch, R, Out, Cont, "rad", "Trunk pitch (+ = leaning forward)");
   add("imu_yaw", vr::imu_yaw, R, Out, Cont, "rad", "Trunk yaw");
@@ -369,7 +371,7 @@ class Plant3DFmu : public Model {
         {vr::fz_right, o.fz_foot[Right]}, {vr::slip_speed_left, o.slip_speed[Left]},
         {vr::slip_speed_right, o.slip_speed[Right]}, {vr::imu_roll, o.imu_roll}, {vr::imu_pitch, o.imu_pitch},
         {vr::imu_yaw, o.imu_yaw}, {vr::gyro_x, o.gyro[0]}, {vr::gyro_y, o.gyro[1]}, {vr::gyro_z, o.gyro[2]},
-        {vr::sink_depth, plant_->sink_depth()}};
+        {vr::sink_depth, plant_->sink_depth()}, {vr::feet_x, o.feet_x}, {vr::feet_y, o.feet_y}};
     for (const auto& [ref, v] : reals) ctx.set_real(ref, v);
     for (int s = 0; s < kLegs; ++s) {
       for (int c = 0; c < kCells; ++c) ctx.set_real(vr::first_cell + s * kCells + c, o.cell[s][c]);

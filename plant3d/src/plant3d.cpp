@@ -793,6 +793,8 @@ void Plant3D::evaluate_outputs() {
     o.foot_pitch += 0.5 * std::atan2(-R[8], std::hypot(R[0], R[4]));
     o.foot_roll += 0.5 * std::atan2(R[9], R[10]);
   }
+  o.feet_x = ankle[0];
+  o.feet_y = ankle[1];
   const double hn = std::hypot(heading[0], heading[1]);
   const double ex[2] = {heading[0] / hn, heading[1] / hn}, ey[2] = {-ex[1], ex[0]};
   auto feet_x = [&](const double* p) { return (p[0] - ankle[0]) * ex[0] + (p[1] - ankle[1]) * ex[1]; };

@@ -93,6 +93,7 @@ struct Outputs {
   double cell[kLegs][kCells] = {};   // the eight load cells [N]
   double fz_foot[kLegs] = {};        // normal load of each foot (cells) [N]
   double slip_speed[kLegs] = {};     // horizontal speed of each sole's centre [m/s]
+  double feet_x = 0, feet_y = 0;     // the feet frame's origin (mid-ankle, on the ground), world [m]
   double joint[kLegs][kLegJoints] = {};  // all twelve joint angles [rad]
   double imu_roll = 0, imu_pitch = 0, imu_yaw = 0;  // trunk orientation (Z-Y-X Euler) [rad]
   double gyro[3] = {};               // trunk angular velocity, trunk frame [rad/s]
