@@ -89,15 +89,19 @@ def zmp_limits(params: dict[str, Any]) -> tuple[float, ...] | None:
 
 
 def make_figures(sc_name: str, data: np.ndarray, out: Path, res=None, animate: bool = False,
-                 anim_args: dict | None = None, figures: bool = True) -> list[Path]:
+                 anim_args: dict | None = None, figures: bool = True, params: dict | None = None) -> list[Path]:
+    """The standard figures of a result (and the 3D plant's frontal one), the animation if asked;
+    geometry from the run's plant parameters, or `params` for a CSV read back."""
     from . import plots
     files = [] if not figures else [plots.overview(data, out / f"{sc_name}_overview.png", title=sc_name),
              plots.fig4(data, out / f"{sc_name}_fig4_joint_angles.png", title=f"{sc_name}: joint angles (cf. paper Fig. 4)"),
              plots.fig5(data, out / f"{sc_name}_fig5_first_cycle.png",
                         zmp_limits=zmp_limits(res.controller_parameters) if res else None,
                         title=f"{sc_name}: first push cycle (cf. paper Fig. 5)")]
+    if figures and plots._has(data, "zmp_y", "com_y", "foot_roll"):   # the 3D plant's results
+        files.append(plots.frontal(data, out / f"{sc_name}_frontal.png", title=f"{sc_name}: frontal plane and feet"))
     if animate:
-        files.append(plots.animate(data, out / f"{sc_name}.gif", geometry_for(res), title=sc_name,
+        files.append(plots.animate(data, out / f"{sc_name}.gif", geometry_for(res, params), title=sc_name,
                                    **(anim_args or {})))
     return files
 
@@ -252,13 +256,8 @@ def cmd_plot(a) -> int:
             params = None
     std = all(c in data.dtype.names for c in ("theta_ankle", "theta_hip", "zmp_x", "com_x"))
     if std:
-        from . import plots
-        files = [plots.overview(data, out / f"{name}_overview.png", title=name),
-                 plots.fig4(data, out / f"{name}_fig4_joint_angles.png", title=f"{name}: joint angles"),
-                 plots.fig5(data, out / f"{name}_fig5_first_cycle.png", title=f"{name}: first push cycle")]
-        if a.animate:
-            files.append(plots.animate(data, out / f"{name}.gif", geometry_for(params=params), fps=a.fps,
-                                       speed=a.speed, t_start=a.anim_start, t_stop=a.anim_stop, title=name))
+        files = make_figures(name, data, out, animate=a.animate, params=params,
+                             anim_args=dict(fps=a.fps, speed=a.speed, t_start=a.anim_start, t_stop=a.anim_stop))
     else:
         from . import plots
         files = [plots.overview(data, out / f"{name}_overview.png", title=name)]

@@ -176,6 +176,46 @@ def overview(d: np.ndarray, out: Path, title: str = "") -> Path:
     return _save(fig, out)
 
 
+def frontal(d: np.ndarray, out: Path, title: str = "") -> Path:
+    """Results of the 3D plant: the frontal plane and the feet over time -- lateral ZMP and CoM,
+    sole and trunk roll, both pushes, and where the feet are (sliding) with their slip speed."""
+    t = d["time"]
+    names = d.dtype.names
+    fig, ax = plt.subplots(4, 1, figsize=(10, 9), sharex=True, gridspec_kw={"height_ratios": [3, 2, 1.5, 2]})
+    ax[0].plot(t, 1000 * d["zmp_y"], color="tab:purple", label="ZMP y")
+    ax[0].plot(t, 1000 * d["com_y"], color="tab:green", label="CoM y")
+    ax[0].set_ylabel("y [mm] (+ = left)")
+    ax[0].legend(fontsize=7, loc="upper right")
+    ax[0].set_title(title)
+    for col, lab in (("foot_roll", "soles (mean)"), ("imu_roll", "trunk (IMU)"),
+                     ("q_left_ankle_roll", "left ankle roll"), ("q_left_hip_roll", "left hip roll")):
+        if col in names:
+            ax[1].plot(t, np.degrees(d[col]), lw=0.9, label=lab)
+    ax[1].set_ylabel("roll [deg]")
+    ax[1].legend(fontsize=7, ncol=4, loc="upper right")
+    for col, lab in (("push_force", "push x"), ("push_force_y", "push y")):
+        if col in names:
+            ax[2].plot(t, d[col], lw=0.9, label=lab)
+    ax[2].set_ylabel("push [N]")
+    ax[2].legend(fontsize=7, loc="upper right")
+    if _has(d, "feet_x", "feet_y"):
+        ax[3].plot(t, 1000 * (d["feet_x"] - d["feet_x"][0]), label="feet moved, x")
+        ax[3].plot(t, 1000 * (d["feet_y"] - d["feet_y"][0]), label="feet moved, y")
+        ax[3].set_ylabel("[mm]")
+    if _has(d, "slip_speed_left", "slip_speed_right"):
+        tw = ax[3].twinx()
+        tw.plot(t, 1000 * np.maximum(d["slip_speed_left"], d["slip_speed_right"]), color="0.5", lw=0.7,
+                label="slip speed (max of both soles)")
+        tw.set_ylabel("slip [mm/s]")
+        tw.legend(fontsize=7, loc="lower right")
+    ax[3].legend(fontsize=7, loc="upper left")
+    ax[3].set_xlabel("time [s]")
+    for x in ax:
+        x.grid(alpha=0.3)
+    fig.tight_layout()
+    return _save(fig, out)
+
+
 # ----------------------------------------------------------------------------------------------
 # stick-figure animation
 
@@ -189,6 +229,8 @@ class Geometry:
     heel: float = -0.0375
     ankle_height: float = 0.035
     push_height: float = 0.335   # above the sole
+    hip_half_width: float = 0.039   # frontal view (3D plant): ankle and hip axes from the middle
+    sole_width: float = 0.065
 
     _names = {
         "l1": ("l1",),
@@ -222,11 +264,44 @@ def _rot(phi: float, x: float, z: float) -> tuple[float, float]:
     return x * c + z * s, -x * s + z * c
 
 
+def _frontal_pose(d: np.ndarray, k: int, g: Geometry, y0: float) -> dict:
+    """Frontal (y-z) stick figure of the 3D plant at row k: both soles rolled by foot_roll about the
+    outer edge they stand on, each leg at foot roll - ankle roll, the trunk at the IMU's roll."""
+    names = d.dtype.names
+    phi = float(d["foot_roll"][k])                       # + = left edge up (rotation about +x)
+    yc = float(d["feet_y"][k]) - y0 if "feet_y" in names else 0.0
+    w, hw = 0.5 * g.sole_width, g.hip_half_width
+    ya = {"left": yc + hw, "right": yc - hw}
+    pivot = ya["right"] - w if phi > 1e-6 else (ya["left"] + w if phi < -1e-6 else yc)
+    c, s_ = math.cos(phi), math.sin(phi)
+
+    def turn(y, z):                                      # about +x through (pivot, 0)
+        return pivot + (y - pivot) * c - z * s_, (y - pivot) * s_ + z * c
+
+    pose = {}
+    for side in ("left", "right"):
+        edge_a, edge_b = turn(ya[side] - w, 0.0), turn(ya[side] + w, 0.0)
+        ank = turn(ya[side], g.ankle_height)
+        q_ar = float(d[f"q_{side}_ankle_roll"][k]) if f"q_{side}_ankle_roll" in names else 0.0
+        psi = phi - q_ar                                 # the leg's roll (leg relative to foot = -q)
+        hip = (ank[0] - g.l1 * math.sin(psi), ank[1] + g.l1 * math.cos(psi))
+        pose[side] = (edge_a, edge_b, ank, hip)
+    mid = tuple(0.5 * (a + b) for a, b in zip(pose["left"][3], pose["right"][3]))
+    roll = float(d["imu_roll"][k]) if "imu_roll" in names else phi
+    top = (mid[0] - g.trunk * math.sin(roll), mid[1] + g.trunk * math.cos(roll))
+    pose["trunk"] = (mid, top, roll)
+    pose["zmp"] = yc + float(d["zmp_y"][k])
+    pose["com"] = (yc + float(d["com_y"][k]), g.ankle_height + float(d["com_z"][k]) if "com_z" in names else 0.3)
+    return pose
+
+
 def animate(d: np.ndarray, out: Path, geom: Geometry | None = None, fps: float = 20.0,
             speed: float = 1.0, t_start: float | None = None, t_stop: float | None = None,
             title: str = "") -> Path:
     """Stick-figure GIF: foot (rocking on toe/heel), legs, trunk, push arrow, ZMP and CoM
-    projection on the sole, phase and time in the corner."""
+    projection on the sole, phase and time in the corner. Results of the 3D plant (columns
+    foot_roll, zmp_y, com_y) get a frontal view beside the sagittal one, with the sideways push;
+    where the feet slide (feet_x, feet_y) the figure moves with them over the ground."""
     from matplotlib.animation import PillowWriter
 
     g = geom or Geometry()
@@ -237,15 +312,20 @@ def animate(d: np.ndarray, out: Path, geom: Geometry | None = None, fps: float =
     idx = np.clip(np.searchsorted(t, frames), 0, len(t) - 1)
     names = d.dtype.names
     fmax = max(1.0, float(np.max(np.abs(d["push_force"])))) if "push_force" in names else 1.0
+    frontal = _has(d, "foot_roll", "zmp_y", "com_y")
+    x0 = float(d["feet_x"][0]) if "feet_x" in names else 0.0
+    y0 = float(d["feet_y"][0]) if "feet_y" in names else 0.0
+    slide_x = d["feet_x"] - x0 if "feet_x" in names else np.zeros(len(t))
 
-    fig, ax = plt.subplots(figsize=(4.2, 5.0))
+    fig, axes = plt.subplots(1, 2 if frontal else 1, figsize=(8.0 if frontal else 4.2, 5.0), squeeze=False)
+    ax = axes[0, 0]
     ax.set_aspect("equal")
-    ax.set_xlim(-0.25, 0.25)
+    ax.set_xlim(min(-0.25, float(slide_x.min()) - 0.25), max(0.25, float(slide_x.max()) + 0.25))
     ax.set_ylim(-0.02, 0.62)
     ax.axhline(0, color="k", lw=1)
     ax.set_xticks([])
     ax.set_yticks([])
-    ax.set_title(title, fontsize=9)
+    ax.set_title(title + (" (sagittal: side view)" if frontal else ""), fontsize=9)
     foot, = ax.plot([], [], color="0.3", lw=3, solid_capstyle="butt")
     legs, = ax.plot([], [], color="tab:blue", lw=4, solid_capstyle="round")
     trunk, = ax.plot([], [], color="tab:red", lw=6, solid_capstyle="round")
@@ -257,21 +337,67 @@ def animate(d: np.ndarray, out: Path, geom: Geometry | None = None, fps: float =
     txt = ax.text(0.02, 0.97, "", transform=ax.transAxes, va="top", fontsize=8, family="monospace")
     ax.legend(loc="upper right", fontsize=7)
 
+    if frontal:
+        fy = max(1.0, float(np.max(np.abs(d["push_force_y"])))) if "push_force_y" in names else 1.0
+        ax2 = axes[0, 1]
+        slide_y = d["feet_y"] - y0 if "feet_y" in names else np.zeros(len(t))
+        ax2.set_aspect("equal")
+        ax2.set_xlim(max(0.25, float(slide_y.max()) + 0.25), min(-0.25, float(slide_y.min()) - 0.25))  # +y (left) on the left
+        ax2.set_ylim(-0.02, 0.62)
+        ax2.axhline(0, color="k", lw=1)
+        ax2.set_xticks([])
+        ax2.set_yticks([])
+        ax2.set_title("frontal plane, from behind (robot's left on the left)", fontsize=9)
+        f_soles = [ax2.plot([], [], color="0.3", lw=3, solid_capstyle="butt")[0] for _ in range(2)]
+        f_legs = [ax2.plot([], [], color="tab:blue", lw=4, solid_capstyle="round")[0] for _ in range(2)]
+        f_pelvis, = ax2.plot([], [], color="tab:blue", lw=4, solid_capstyle="round")
+        f_trunk, = ax2.plot([], [], color="tab:red", lw=6, solid_capstyle="round")
+        f_head, = ax2.plot([], [], "o", color="tab:red", ms=11)
+        f_com, = ax2.plot([], [], "o", color="k", ms=5, mfc="w")
+        f_zmp, = ax2.plot([], [], "^", color="tab:purple", ms=8)
+        f_comp, = ax2.plot([], [], "v", color="tab:green", ms=8)
+        f_arrow = ax2.annotate("", xy=(0, 0), xytext=(0, 0),
+                               arrowprops=dict(arrowstyle="-|>", color="tab:orange", lw=2))
+
     def pose(k):
         phi = float(d["foot_pitch"][k]) if "foot_pitch" in names else 0.0
         mode = int(d["contact_mode"][k]) if "contact_mode" in names else 0
         pivot = g.toe if (mode == 1 or phi > 1e-6 and mode != 2) else (g.heel if (mode == 2 or phi < -1e-6) else 0.0)
+        pivot += float(slide_x[k])
         # ankle above the sole at the foot's pivot point
         px, pz = pivot, 0.0
-        ax_, az_ = _rot(phi, -pivot, g.ankle_height)
+        off = float(slide_x[k])
+        ax_, az_ = _rot(phi, off - pivot, g.ankle_height)
         ank = (px + ax_, pz + az_)
-        toe = (px + _rot(phi, g.toe - pivot, 0)[0], pz + _rot(phi, g.toe - pivot, 0)[1])
-        heel = (px + _rot(phi, g.heel - pivot, 0)[0], pz + _rot(phi, g.heel - pivot, 0)[1])
+        toe = (px + _rot(phi, off + g.toe - pivot, 0)[0], pz + _rot(phi, off + g.toe - pivot, 0)[1])
+        heel = (px + _rot(phi, off + g.heel - pivot, 0)[0], pz + _rot(phi, off + g.heel - pivot, 0)[1])
         a1 = phi + float(d["theta_ankle"][k])
         a12 = a1 + float(d["theta_hip"][k])
         hip = (ank[0] + g.l1 * math.sin(a1), ank[1] + g.l1 * math.cos(a1))
         top = (hip[0] + g.trunk * math.sin(a12), hip[1] + g.trunk * math.cos(a12))
         return ank, toe, heel, hip, top, a12
+
+    def update_frontal(k):
+        p = _frontal_pose(d, k, g, y0)
+        for i, side in enumerate(("left", "right")):
+            ea, eb, ank, hip = p[side]
+            f_soles[i].set_data([ea[0], eb[0]], [ea[1], eb[1]])
+            f_legs[i].set_data([ank[0], hip[0]], [ank[1], hip[1]])
+        f_pelvis.set_data([p["left"][3][0], p["right"][3][0]], [p["left"][3][1], p["right"][3][1]])
+        mid, top, roll = p["trunk"]
+        f_trunk.set_data([mid[0], top[0]], [mid[1], top[1]])
+        f_head.set_data([top[0] - 0.03 * math.sin(roll)], [top[1] + 0.03 * math.cos(roll)])
+        f_com.set_data([p["com"][0]], [p["com"][1]])
+        f_zmp.set_data([p["zmp"]], [0.0])
+        f_comp.set_data([p["com"][0]], [0.0])
+        f = float(d["push_force_y"][k]) if "push_force_y" in names else 0.0
+        s = (g.push_height - mid[1]) / max(1e-6, math.cos(roll))
+        py = mid[0] - s * math.sin(roll) + (-0.03 if f >= 0 else 0.03)   # on the right side for a push to the left
+        L = 0.12 * f / fy
+        f_arrow.xy = (py, g.push_height)
+        f_arrow.set_position((py - L, g.push_height))
+        f_arrow.set_visible(abs(f) > 1e-9)
+        return (*f_soles, *f_legs, f_pelvis, f_trunk, f_head, f_com, f_zmp, f_comp, f_arrow)
 
     def update(i):
         k = idx[i]
@@ -280,10 +406,10 @@ def animate(d: np.ndarray, out: Path, geom: Geometry | None = None, fps: float =
         legs.set_data([ank[0], hip[0]], [ank[1], hip[1]])
         trunk.set_data([hip[0], top[0]], [hip[1], top[1]])
         head.set_data([top[0] + 0.03 * math.sin(a12)], [top[1] + 0.03 * math.cos(a12)])
-        cx = float(d["com_x"][k]) if "com_x" in names else 0.0
+        cx = float(d["com_x"][k]) + float(slide_x[k]) if "com_x" in names else 0.0
         cz = float(d["com_z"][k]) if "com_z" in names else 0.0
         com.set_data([cx], [g.ankle_height + cz])
-        zmp_m.set_data([float(d["zmp_x"][k])], [0.0])
+        zmp_m.set_data([float(d["zmp_x"][k]) + float(slide_x[k])], [0.0])
         comp_m.set_data([cx], [0.0])
         f = float(d["push_force"][k]) if "push_force" in names else 0.0
         # point on the trunk at the push height, on the back (push +x) or the chest (push -x)
@@ -294,8 +420,10 @@ def animate(d: np.ndarray, out: Path, geom: Geometry | None = None, fps: float =
         arrow.set_position((px - L, g.push_height))
         arrow.set_visible(abs(f) > 1e-9)
         ph = int(d["phase"][k]) if "phase" in names else -1
-        txt.set_text(f"t = {t[k]:6.2f} s\nphase {PHASE_LABELS.get(ph, '?')}\npush {f:+6.1f} N")
-        return foot, legs, trunk, head, com, zmp_m, comp_m, arrow, txt
+        extra = f"\npush y {float(d['push_force_y'][k]):+4.1f} N" if frontal and "push_force_y" in names else ""
+        txt.set_text(f"t = {t[k]:6.2f} s\nphase {PHASE_LABELS.get(ph, '?')}\npush {f:+6.1f} N{extra}")
+        arts = (foot, legs, trunk, head, com, zmp_m, comp_m, arrow, txt)
+        return arts + (update_frontal(k) if frontal else ())
 
     out = Path(out)
     out.parent.mkdir(parents=True, exist_ok=True)

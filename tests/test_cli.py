@@ -84,3 +84,13 @@ def test_summary_helpers():
     assert count_cycles(np.array([0, 1, 0, 1, 2, 3, 0])) == 1
     assert count_cycles(np.array([0, 1, 2, 3, 2, 3, 0, 1, 2, 0])) == 1
     assert count_cycles(np.array([1, 2, 3, 0])) == 0          # did not start from phase 0
+
+
+def test_3d_run_draws_the_frontal_plane(tmp_path):
+    """A 3D result gets the frontal-plane figure and a two-view animation (side and from behind)."""
+    from PIL import Image
+    out = tmp_path / "o"
+    assert main(["run", "side_push_3d", "--out", str(out), "--plots", "--animate", "--fps", "4"]) == 0
+    assert (out / "side_push_3d_frontal.png").stat().st_size > 1000
+    with Image.open(out / "side_push_3d.gif") as im:
+        assert im.n_frames >= 5 and im.width > 1.5 * im.height   # two panels side by side
