@@ -329,3 +329,27 @@ def test_step_push_above_tipping_falls_like_the_sagittal_plant(unzipped3d, plant
     assert worst < 0.02, worst
     print(f"step push {force:.2f} N: fall at {fall3:.4f} s (3D) vs {fall2:.4f} s (sagittal); "
           f"largest foot-pitch difference {worst:.4f} rad; " + ", ".join(crossings))
+
+
+def test_paper_pushes_peaks_within_15_percent_of_the_sagittal_plants():
+    """Establishes (cross-check 4): the paper's five pushes with the unchanged controller FMU on
+    both plants (`paper_five_pushes` and `paper_five_pushes_3d`): every push's peak hip angle and
+    peak ZMP on the 3D plant is within 15 % of the sagittal plant's (the cycles and the absence of
+    a fall are the scenarios' own expectations, checked in test_scenarios_closed_loop)."""
+    from anklehip.master import Models, simulate
+    from anklehip.paths import scenarios_dir
+    from anklehip.results import summarize_pushes
+    from anklehip.scenario import load_scenario
+
+    peaks = {}
+    for name in ("paper_five_pushes", "paper_five_pushes_3d"):
+        sc = load_scenario(scenarios_dir() / f"{name}.toml")
+        res = simulate(sc, Models.load(plant_model=sc.plant_model), progress=False)
+        assert res.outcome == "completed", res.message
+        peaks[sc.plant_model] = [(p.peak_hip, p.peak_zmp) for p in summarize_pushes(res, sc.push)]
+    assert len(peaks["3d"]) == len(peaks["sagittal"]) == 5
+    for i, ((h3, z3), (h2, z2)) in enumerate(zip(peaks["3d"], peaks["sagittal"])):
+        assert h3 == pytest.approx(h2, rel=0.15), (i, h3, h2)
+        assert z3 == pytest.approx(z2, rel=0.15), (i, z3, z2)
+        print(f"push {i + 1}: peak hip {np.degrees(h3):.2f} vs {np.degrees(h2):.2f} deg ({100 * (h3 / h2 - 1):+.1f} %), "
+              f"peak ZMP {1000 * z3:.1f} vs {1000 * z2:.1f} mm ({100 * (z3 / z2 - 1):+.1f} %)")
