@@ -195,45 +195,20 @@ class PlantFmu : public Model {
       res.status = fmi2Error;
       return res;
     }
-    if (plant_->fallen()) {
-      res.status = fmi2Discard;
-      res.last_successful_time = plant_->fall_time();
-      res.terminated = true;
-      ctx.log(kLogStatusDiscard, fmi2Discard, "the robot has fallen at t=%g s; no further steps", plant_->fall_time());
-      return res;
-    }
+    if (plant_->fallen()) return alreadyFallen(ctx, plant_->fall_time());
     attach(ctx);
-    double in[3] = {ctx.real(vr::theta_ankle_ref), ctx.real(vr::theta_hip_ref), ctx.real(vr::push_force)};
-    fmi2Status st = fmi2OK;
-    for (int i = 0; i < 3; ++i) {
-      if (!std::isfinite(in[i])) {  // contained: hold the last finite value
-        ctx.log(kLogStatusWarning, fmi2Warning, "non-finite input %s ignored at t=%g; holding %g",
-                i == 0 ? "theta_ankle_ref" : i == 1 ? "theta_hip_ref" : "push_force", t, last_in_[i]);
-        in[i] = last_in_[i];
-        st = fmi2Warning;
-      }
-      last_in_[i] = in[i];
-    }
+    static const fmi2ValueReference kInputVr[3] = {vr::theta_ankle_ref, vr::theta_hip_ref, vr::push_force};
+    static const char* const kInputNames[3] = {"theta_ankle_ref", "theta_hip_ref", "push_force"};
+    double in[3];
+    const fmi2Status st = readFiniteInputs(ctx, t, 3, kInputVr, kInputNames, last_in_, in);
     plant_->set_inputs(in[0], in[1], in[2]);
     const auto r = plant_->do_step(h);
     write_outputs(ctx);
     detach();
-    switch (r) {
-      case Plant::Result::Ok:
-        res.status = st;
-        return res;
-      case Plant::Result::Fallen:
-        ctx.log(kLogStatusDiscard, fmi2Discard, "%s", plant_->message().c_str());
-        res.status = fmi2Discard;
-        res.last_successful_time = plant_->fall_time();
-        res.terminated = true;
-        return res;
-      case Plant::Result::Error:
-        break;
-    }
-    ctx.log(kLogStatusError, fmi2Error, "plant step failed: %s", plant_->message().c_str());
-    res.status = fmi2Error;
-    return res;
+    const PlantOutcome outcome = r == Plant::Result::Ok       ? PlantOutcome::Ok
+                                 : r == Plant::Result::Fallen ? PlantOutcome::Fallen
+                                                              : PlantOutcome::Error;
+    return plantStepResult(ctx, outcome, st, plant_->fall_time(), plant_->message());
   }
 
   void save_state(StateWriter& w) const override {

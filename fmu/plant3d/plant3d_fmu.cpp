@@ -261,26 +261,10 @@ class Plant3DFmu : public Model {
       res.status = fmi2Error;
       return res;
     }
-    if (plant_->fallen()) {
-      res.status = fmi2Discard;
-      res.last_successful_time = plant_->fall_time();
-      res.terminated = true;
-      ctx.log(kLogStatusDiscard, fmi2Discard, "the robot has fallen at t=%g s; no further steps", plant_->fall_time());
-      return res;
-    }
+    if (plant_->fallen()) return alreadyFallen(ctx, plant_->fall_time());
     attach(ctx);
     double in[kInputs];
-    fmi2Status st = fmi2OK;
-    for (int i = 0; i < kInputs; ++i) {
-      in[i] = ctx.real(kInputVr[i]);
-      if (!std::isfinite(in[i])) {  // contained: hold the last finite value
-        ctx.log(kLogStatusWarning, fmi2Warning, "non-finite input %s ignored at t=%g; holding %g", kInputNames[i], t,
-                last_in_[i]);
-        in[i] = last_in_[i];
-        st = fmi2Warning;
-      }
-      last_in_[i] = in[i];
-    }
+    const fmi2Status st = readFiniteInputs(ctx, t, kInputs, kInputVr, kInputNames, last_in_, in);
     Inputs pin;
     pin.ref[AnklePitch] = in[0];
     pin.ref[HipPitch] = in[1];
@@ -294,22 +278,10 @@ class Plant3DFmu : public Model {
     const auto r = plant_->do_step(h);
     write_outputs(ctx);
     detach();
-    switch (r) {
-      case Plant3D::Result::Ok:
-        res.status = st;
-        return res;
-      case Plant3D::Result::Fallen:
-        ctx.log(kLogStatusDiscard, fmi2Discard, "%s", plant_->message().c_str());
-        res.status = fmi2Discard;
-        res.last_successful_time = plant_->fall_time();
-        res.terminated = true;
-        return res;
-      case Plant3D::Result::Error:
-        break;
-    }
-    ctx.log(kLogStatusError, fmi2Error, "plant step failed: %s", plant_->message().c_str());
-    res.status = fmi2Error;
-    return res;
+    const PlantOutcome outcome = r == Plant3D::Result::Ok       ? PlantOutcome::Ok
+                                 : r == Plant3D::Result::Fallen ? PlantOutcome::Fallen
+                                                                : PlantOutcome::Error;
+    return plantStepResult(ctx, outcome, st, plant_->fall_time(), plant_->message());
   }
 
   void save_state(StateWriter& w) const override {

@@ -231,6 +231,20 @@ class Model {
 const ModelInfo& modelInfo();                  // the variable table etc. (built once, immutable)
 std::unique_ptr<Model> createModel();          // a new model object for a new instance
 
+// ---- Helpers for plant models (the sagittal and the 3D plant share their doStep rules) -------
+// Reads n Real inputs into `in`. A non-finite value is logged with its name and replaced by the
+// last finite one, kept in `last` (the input is contained, never propagated). Returns fmi2Warning
+// if any input was replaced, else fmi2OK.
+fmi2Status readFiniteInputs(Context& ctx, double t, int n, const fmi2ValueReference* vrs,
+                            const char* const* names, double* last, double* in);
+// How a plant's step ended, and the doStep result for it: Ok gives `ok_status`; Fallen gives
+// fmi2Discard with fmi2Terminated at fall_time, the message logged; Error gives fmi2Error.
+enum class PlantOutcome { Ok, Fallen, Error };
+StepResult plantStepResult(Context& ctx, PlantOutcome outcome, fmi2Status ok_status, double fall_time,
+                           const std::string& message);
+// doStep on a plant that has already fallen: fmi2Discard, terminated, at the fall time.
+StepResult alreadyFallen(Context& ctx, double fall_time);
+
 // ---- Utilities used by the generator and the tests ------------------------------------------
 // Checks the table (unique names/vrs, legal causality/variability/initial combinations, start
 // values where required, bounds containing start, descriptions present). Empty string = OK.

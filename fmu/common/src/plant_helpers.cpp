@@ -1,0 +1,53 @@
+// Shared doStep rules of the plant FMUs (glue.hpp, "Helpers for plant models").
+#include <cmath>
+
+#include "fmuglue/glue.hpp"
+
+namespace fmuglue {
+
+fmi2Status readFiniteInputs(Context& ctx, double t, int n, const fmi2ValueReference* vrs,
+                            const char* const* names, double* last, double* in) {
+  fmi2Status st = fmi2OK;
+  for (int i = 0; i < n; ++i) {
+    in[i] = ctx.real(vrs[i]);
+    if (!std::isfinite(in[i])) {  // contained: hold the last finite value
+      ctx.log(kLogStatusWarning, fmi2Warning, "non-finite input %s ignored at t=%g; holding %g", names[i], t, last[i]);
+      in[i] = last[i];
+      st = fmi2Warning;
+    }
+    last[i] = in[i];
+  }
+  return st;
+}
+
+StepResult plantStepResult(Context& ctx, PlantOutcome outcome, fmi2Status ok_status, double fall_time,
+                           const std::string& message) {
+  StepResult res;
+  switch (outcome) {
+    case PlantOutcome::Ok:
+      res.status = ok_status;
+      return res;
+    case PlantOutcome::Fallen:
+      ctx.log(kLogStatusDiscard, fmi2Discard, "%s", message.c_str());
+      res.status = fmi2Discard;
+      res.last_successful_time = fall_time;
+      res.terminated = true;
+      return res;
+    case PlantOutcome::Error:
+      break;
+  }
+  ctx.log(kLogStatusError, fmi2Error, "plant step failed: %s", message.c_str());
+  res.status = fmi2Error;
+  return res;
+}
+
+StepResult alreadyFallen(Context& ctx, double fall_time) {
+  StepResult res;
+  res.status = fmi2Discard;
+  res.last_successful_time = fall_time;
+  res.terminated = true;
+  ctx.log(kLogStatusDiscard, fmi2Discard, "the robot has fallen at t=%g s; no further steps", fall_time);
+  return res;
+}
+
+}  // namespace fmuglue
