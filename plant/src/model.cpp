@@ -5,6 +5,8 @@
 
 #include <cmath>
 
+#include "hoap2/servo.h"
+
 namespace hoap2plant {
 
 namespace {
@@ -16,15 +18,6 @@ inline Vec2 rot(double a, double cx, double cz) {
 // d/da of rot(a, ...) = (r_z, -r_x).
 inline Vec2 drot(const Vec2& r) { return Vec2(r.y(), -r.x()); }
 }  // namespace
-
-double soft_sat(double u, double L) {
-  if (!(L > 0)) return u;
-  const double a = 0.8 * L, au = std::fabs(u);
-  if (au <= a) return u;
-  const double w = L - a;
-  const double v = a + w * std::tanh((au - a) / w);
-  return u < 0 ? -v : v;
-}
 
 Vec2 Model::foot_point(const Vec5& q, double cx, double cz) const {
   return Vec2(q[0], q[1]) + rot(q[2], cx, cz);
@@ -121,10 +114,10 @@ void Model::joint_torques(const Vec5& q, const Vec5& qd, double ref1, double ref
                           double& tau2) const {
   auto servo = [](double e, double w, double kp, double kd, double vmax, double tmax) {
     if (kd > 0) {
-      const double wcmd = soft_sat(kp / kd * e, vmax);  // position loop -> velocity command
-      return soft_sat(kd * (wcmd - w), tmax);           // velocity loop -> torque (limited)
+      const double wcmd = hoap2_soft_sat(kp / kd * e, vmax);  // position loop -> velocity command
+      return hoap2_soft_sat(kd * (wcmd - w), tmax);           // velocity loop -> torque (limited)
     }
-    return soft_sat(kp * e, tmax);
+    return hoap2_soft_sat(kp * e, tmax);
   };
   tau1 = -P.damping_ankle * qd[3];
   tau2 = -P.damping_hip * qd[4];

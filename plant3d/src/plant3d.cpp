@@ -37,6 +37,7 @@
 
 #include "hoap2/bodies.h"
 #include "hoap2/nominal.h"
+#include "hoap2/servo.h"
 
 namespace hoap2plant3d {
 
@@ -158,15 +159,6 @@ void rot_y(double a, double R[9]) {
 const char* joint_name(int j) {
   static const char* kNames[kLegJoints] = {"hip_yaw", "hip", "hip_roll", "knee", "ankle", "ankle_roll"};
   return j >= 0 && j < kLegJoints ? kNames[j] : "?";
-}
-
-double soft_sat(double u, double L) {
-  if (!(L > 0)) return u;
-  const double a = 0.8 * L, au = std::fabs(u);
-  if (au <= a) return u;
-  const double w = L - a;
-  const double v = a + w * std::tanh((au - a) / w);
-  return u < 0 ? -v : v;
 }
 
 double Params::mass() const {
@@ -626,7 +618,7 @@ bool Plant3D::ode_step(double dt) {
         dJointSetAMotorAxis(m, i, 0, -n[0], -n[1], -n[2]);
         dJointSetAMotorAngle(m, i, w.q[s][k]);  // for the limit rows
         const double kd = P_.servo_on ? 0.5 * sv.kd : 0.0, d = 0.5 * sv.damping;
-        const double wcmd = P_.servo_on ? soft_sat(sv.kp / sv.kd * (in_.ref[k] - w.q[s][k]), sv.vel_max) : 0.0;
+        const double wcmd = P_.servo_on ? hoap2_soft_sat(sv.kp / sv.kd * (in_.ref[k] - w.q[s][k]), sv.vel_max) : 0.0;
         const double gain = kd + d;
         const double vel = gain > 0 ? kd * wcmd / gain : 0.0;
         w.servo_vel[s][k] = vel;

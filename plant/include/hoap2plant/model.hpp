@@ -121,7 +121,4 @@ class Model {
   Vec5 impact(ContactMode mode, const Vec5& q, const Vec5& qd) const;
 };
 
-// Soft saturation: identity for |u| <= 0.8 L, smooth (C2) approach to +-L beyond.
-double soft_sat(double u, double L);
-
 }  // namespace hoap2plant

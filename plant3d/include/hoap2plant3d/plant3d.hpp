@@ -201,7 +201,5 @@ class Plant3D {
   std::string msg_;
 };
 
-// Hard limit with a smooth (C2) approach, as in the sagittal plant: identity for |u| <= 0.8 L.
-double soft_sat(double u, double L);
 
 }  // namespace hoap2plant3d
