@@ -1,5 +1,6 @@
 # add_fmu(NAME <ModelName> SOURCES <src>... [LINK <lib>...] [INCLUDE_DIRS <dir>...]
-#         [DOCUMENTATION <file>...] [OUTPUT_DIR <dir>])
+#         [DOCUMENTATION <file>...] [OUTPUT_DIR <dir>]
+#         [SOURCE_FMU_FILES <file>... SOURCE_FMU_HEADER_DIRS <dir>...])
 #
 # Turns a model (sources defining fmuglue::modelInfo() and fmuglue::createModel(), see
 # fmu/common/README.md) into ${ANKLEHIP_FMU_DIR}/<ModelName>.fmu:
@@ -11,6 +12,12 @@
 #   <ModelName>_fmu   (ALL) packs into OUTPUT_DIR (default ${ANKLEHIP_FMU_DIR}) modelDescription.xml, binaries/linux64/<ModelName>.so and
 #                     documentation/ (index.html + DOCUMENTATION files) and resources/ (ModelInfo::resources)
 #                     with `cmake -E tar --format=zip`.
+#   With SOURCE_FMU_FILES the FMU is also a source FMU: sources/ holds those files (compiled; the
+#   glue's fmi2_api.cpp, instance.cpp, state_format.cpp, model_description.cpp and plant_helpers.cpp
+#   are added) at its top level and the headers under each SOURCE_FMU_HEADER_DIRS (and the glue's)
+#   with their paths relative to that directory, so that sources/ is the only include directory;
+#   sources/buildDescription.xml (FMI 3.0 build description, which FMI 2.0.4 adopts) lists them.
+#   The FMI headers are the importer's.
 # Works with CMake 3.25 and 4.x.
 include_guard(GLOBAL)
 
@@ -18,7 +25,8 @@ set(_ADD_FMU_GLUE_SRC "${CMAKE_CURRENT_LIST_DIR}/../fmu/common/src")
 get_filename_component(_ADD_FMU_GLUE_SRC "${_ADD_FMU_GLUE_SRC}" ABSOLUTE)
 
 function(add_fmu)
-  cmake_parse_arguments(FMU "" "NAME;OUTPUT_DIR" "SOURCES;LINK;INCLUDE_DIRS;DOCUMENTATION" ${ARGN})
+  cmake_parse_arguments(FMU "" "NAME;OUTPUT_DIR"
+                        "SOURCES;LINK;INCLUDE_DIRS;DOCUMENTATION;SOURCE_FMU_FILES;SOURCE_FMU_HEADER_DIRS" ${ARGN})
   if(NOT FMU_NAME OR NOT FMU_SOURCES)
     message(FATAL_ERROR "add_fmu: NAME and SOURCES are required")
   endif()
@@ -67,16 +75,62 @@ function(add_fmu)
     list(APPEND doc_cmds COMMAND "${CMAKE_COMMAND}" -E copy "${doc_abs}" "${stage}/documentation/")
     list(APPEND doc_deps "${doc_abs}")
   endforeach()
+  set(src_cmds "")
+  set(src_deps "")
+  set(src_entry "")
+  if(FMU_SOURCE_FMU_FILES)
+    set(glue_generated "${CMAKE_BINARY_DIR}/generated")   # fmuglue/version.h
+    set(glue_include "${_ADD_FMU_GLUE_SRC}/../include")
+    get_filename_component(glue_include "${glue_include}" ABSOLUTE)
+    set(files ${FMU_SOURCE_FMU_FILES})
+    foreach(f fmi2_api.cpp instance.cpp state_format.cpp model_description.cpp plant_helpers.cpp)
+      list(APPEND files "${_ADD_FMU_GLUE_SRC}/${f}")
+    endforeach()
+    set(xml_files "")
+    set(src_names "")
+    foreach(f IN LISTS files)
+      get_filename_component(f_abs "${f}" ABSOLUTE)
+      get_filename_component(f_name "${f}" NAME)
+      list(APPEND src_cmds COMMAND "${CMAKE_COMMAND}" -E copy "${f_abs}" "${stage}/sources/${f_name}")
+      list(APPEND src_deps "${f_abs}")
+      string(APPEND xml_files "      <SourceFile name=\"${f_name}\"/>\n")
+      list(APPEND src_names "${f_name}")
+    endforeach()
+    foreach(dir IN LISTS FMU_SOURCE_FMU_HEADER_DIRS glue_include _ADD_FMU_GLUE_SRC glue_generated)
+      get_filename_component(dir_abs "${dir}" ABSOLUTE)
+      file(GLOB_RECURSE headers RELATIVE "${dir_abs}" CONFIGURE_DEPENDS "${dir_abs}/*.h" "${dir_abs}/*.hpp")
+      foreach(h IN LISTS headers)
+        list(APPEND src_cmds COMMAND "${CMAKE_COMMAND}" -E copy "${dir_abs}/${h}" "${stage}/sources/${h}")
+        list(APPEND src_deps "${dir_abs}/${h}")
+      endforeach()
+    endforeach()
+    # One source file set: FMPy (0.3.32) builds only the first. The .c files are C99 and compiled
+    # as C, the .cpp files as C++17 (by extension, as every C/C++ build tool does).
+    set(build_xml "${CMAKE_CURRENT_BINARY_DIR}/${name}_buildDescription.xml")
+    file(WRITE "${build_xml}" "<?xml version=\"1.0\" encoding=\"UTF-8\"?>
+<fmiBuildDescription fmiVersion=\"3.0\">
+  <BuildConfiguration modelIdentifier=\"${name}\" description=\"A shared library with the FMI 2.0 API; .c files are C99, .cpp files C++17; sources/ is the only include directory besides the FMI 2.0 headers\">
+    <SourceFileSet language=\"C++17\">
+${xml_files}      <IncludeDirectory name=\".\"/>
+    </SourceFileSet>
+  </BuildConfiguration>
+</fmiBuildDescription>
+")
+    list(APPEND src_cmds COMMAND "${CMAKE_COMMAND}" -E copy "${build_xml}" "${stage}/sources/buildDescription.xml")
+    list(APPEND src_deps "${build_xml}")
+    set(src_entry sources)
+  endif()
   add_custom_command(OUTPUT "${fmu}"
     COMMAND "${CMAKE_COMMAND}" -E rm -rf "${stage}"
     COMMAND "${CMAKE_COMMAND}" -E make_directory "${stage}/binaries/linux64" "${stage}/documentation" "${stage}/resources" "${ANKLEHIP_FMU_DIR}"
-    COMMAND $<TARGET_FILE:${name}_gen> "${stage}"
+    COMMAND $<TARGET_FILE:${name}_gen> "${stage}" ${src_names}
     COMMAND "${CMAKE_COMMAND}" -E copy $<TARGET_FILE:${name}> "${stage}/binaries/linux64/${name}.so"
     ${doc_cmds}
+    ${src_cmds}
     COMMAND "${CMAKE_COMMAND}" -E rm -f "${fmu}"
     COMMAND "${CMAKE_COMMAND}" -E chdir "${stage}" "${CMAKE_COMMAND}" -E tar cf "${fmu}" --format=zip
-            modelDescription.xml binaries documentation resources
-    DEPENDS ${name} ${name}_gen ${doc_deps}
+            modelDescription.xml binaries documentation resources ${src_entry}
+    DEPENDS ${name} ${name}_gen ${doc_deps} ${src_deps}
     COMMENT "Packing ${name}.fmu"
     VERBATIM)
   add_custom_target(${name}_fmu ALL DEPENDS "${fmu}")

@@ -656,11 +656,21 @@ def test_outputs_have_no_direct_feedthrough(raw_controller):
 
 
 def test_guid_is_deterministic(controller_fmu, native_tool, tmp_path):
+    """The generator reproduces the shipped modelDescription.xml byte for byte (given the source
+    FMU's file list), and the list of source files does not enter the GUID (the binary computes
+    its GUID from the variable table alone)."""
+    import xml.etree.ElementTree as ET
     gen = native_tool("AnkleHipController_gen")
-    (tmp_path / "documentation").mkdir()
-    subprocess.run([str(gen), str(tmp_path)], check=True)
     with zipfile.ZipFile(controller_fmu) as z:
-        assert z.read("modelDescription.xml") == (tmp_path / "modelDescription.xml").read_bytes()
+        shipped = z.read("modelDescription.xml")
+    sources = [f.get("name") for f in ET.fromstring(shipped).findall("CoSimulation/SourceFiles/File")]
+    assert sources, "the controller FMU lists no source files"
+    for sub, args in (("with", sources), ("without", [])):
+        (tmp_path / sub / "documentation").mkdir(parents=True)
+        subprocess.run([str(gen), str(tmp_path / sub), *args], check=True)
+    assert (tmp_path / "with" / "modelDescription.xml").read_bytes() == shipped
+    guid = ET.fromstring(shipped).get("guid")
+    assert ET.parse(tmp_path / "without" / "modelDescription.xml").getroot().get("guid") == guid
 
 
 def test_binary_exports_only_fmi2_and_needs_only_libc(controller_unzipped):

@@ -1,7 +1,9 @@
 // Build-time generator: writes modelDescription.xml and documentation/index.html of one FMU
 // from its ModelInfo (the same table the FMU uses at run time).
-//   <Name>_gen <out-dir>        writes <out-dir>/modelDescription.xml, <out-dir>/documentation/index.html
-//                               and ModelInfo::resources into <out-dir>/resources/
+//   <Name>_gen <out-dir> [<source file>...]
+//                               writes <out-dir>/modelDescription.xml, <out-dir>/documentation/index.html
+//                               and ModelInfo::resources into <out-dir>/resources/; source files
+//                               (names in sources/) make it a source FMU's description
 //   <Name>_gen --markdown       prints the variable table as Markdown (for docs/)
 #include <cmath>
 #include <cstdio>
@@ -10,6 +12,7 @@
 #include <iostream>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include "fmuglue/glue.hpp"
 
@@ -67,14 +70,15 @@ int main(int argc, char** argv) {
                 << g(v.min) << " | " << g(v.max) << " | " << markdownCell(v.description) << " |\n";
     return 0;
   }
-  if (argc != 2) {
-    std::cerr << "usage: " << argv[0] << " <out-dir> | --markdown\n";
+  if (argc < 2) {
+    std::cerr << "usage: " << argv[0] << " <out-dir> [<source file>...] | --markdown\n";
     return 2;
   }
   std::string dir = argv[1];
+  const std::vector<std::string> source_files(argv + 2, argv + argc);
   {
     std::ofstream f(dir + "/modelDescription.xml", std::ios::binary);
-    f << modelDescriptionXml(info);
+    f << modelDescriptionXml(info, source_files);
     if (!f) { std::cerr << "cannot write " << dir << "/modelDescription.xml\n"; return 1; }
   }
   {

@@ -60,7 +60,8 @@ bool hasStart(const Variable& v) {
 }
 
 // The XML with a given GUID string (the GUID itself is a hash of the XML with an empty GUID).
-std::string xmlWithGuid(const ModelInfo& info, const std::string& guid) {
+std::string xmlWithGuid(const ModelInfo& info, const std::string& guid,
+                        const std::vector<std::string>& source_files = {}) {
   std::ostringstream o;
   o << "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n";
   o << "<fmiModelDescription fmiVersion=\"2.0\" modelName=\"" << esc(info.model_name) << "\" guid=\"" << guid
@@ -76,7 +77,14 @@ std::string xmlWithGuid(const ModelInfo& info, const std::string& guid) {
     << " canHandleVariableCommunicationStepSize=\"" << (info.can_handle_variable_step ? "true" : "false") << "\""
     << " canInterpolateInputs=\"false\" maxOutputDerivativeOrder=\"0\" canRunAsynchronuously=\"false\""
     << " canBeInstantiatedOnlyOncePerProcess=\"false\" canNotUseMemoryManagementFunctions=\"true\""
-    << " canGetAndSetFMUstate=\"true\" canSerializeFMUstate=\"true\" providesDirectionalDerivative=\"false\"/>\n";
+    << " canGetAndSetFMUstate=\"true\" canSerializeFMUstate=\"true\" providesDirectionalDerivative=\"false\"";
+  if (source_files.empty()) {
+    o << "/>\n";
+  } else {
+    o << ">\n    <SourceFiles>\n";
+    for (const auto& f : source_files) o << "      <File name=\"" << esc(f) << "\"/>\n";
+    o << "    </SourceFiles>\n  </CoSimulation>\n";
+  }
 
   std::set<std::string> units;
   for (const auto& v : info.variables)
@@ -258,7 +266,9 @@ std::string modelGuid(const ModelInfo& info) {
   return buf;
 }
 
-std::string modelDescriptionXml(const ModelInfo& info) { return xmlWithGuid(info, modelGuid(info)); }
+std::string modelDescriptionXml(const ModelInfo& info, const std::vector<std::string>& source_files) {
+  return xmlWithGuid(info, modelGuid(info), source_files);
+}
 
 const char* xmlName(Type t) {
   switch (t) {
