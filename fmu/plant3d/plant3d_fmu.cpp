@@ -251,17 +251,9 @@ class Plant3DFmu : public Model {
 
   StepResult do_step(Context& ctx, double t, double h, bool) override {
     StepResult res;
-    if (!plant_) {
-      ctx.log(kLogStatusError, fmi2Error, "doStep without an initialized plant");
-      res.status = fmi2Error;
+    if (!plantMayStep(ctx, plant_ != nullptr, t, plant_ ? plant_->time() : 0.0, plant_ && plant_->fallen(),
+                      plant_ ? plant_->fall_time() : 0.0, res))
       return res;
-    }
-    if (std::fabs(t - plant_->time()) > 1e-9 * std::max(1.0, std::fabs(t))) {
-      ctx.log(kLogStatusError, fmi2Error, "doStep at t=%.12g but the plant is at t=%.12g", t, plant_->time());
-      res.status = fmi2Error;
-      return res;
-    }
-    if (plant_->fallen()) return alreadyFallen(ctx, plant_->fall_time());
     attach(ctx);
     double in[kInputs];
     const fmi2Status st = readFiniteInputs(ctx, t, kInputs, kInputVr, kInputNames, last_in_, in);

@@ -1,4 +1,5 @@
 // Shared doStep rules of the plant FMUs (glue.hpp, "Helpers for plant models").
+#include <algorithm>
 #include <cmath>
 
 #include "fmuglue/glue.hpp"
@@ -41,13 +42,27 @@ StepResult plantStepResult(Context& ctx, PlantOutcome outcome, fmi2Status ok_sta
   return res;
 }
 
-StepResult alreadyFallen(Context& ctx, double fall_time) {
-  StepResult res;
-  res.status = fmi2Discard;
-  res.last_successful_time = fall_time;
-  res.terminated = true;
-  ctx.log(kLogStatusDiscard, fmi2Discard, "the robot has fallen at t=%g s; no further steps", fall_time);
-  return res;
+bool plantMayStep(Context& ctx, bool initialized, double t, double plant_time, bool fallen, double fall_time,
+                  StepResult& res) {
+  res = StepResult();
+  if (!initialized) {
+    ctx.log(kLogStatusError, fmi2Error, "doStep without an initialized plant");
+    res.status = fmi2Error;
+    return false;
+  }
+  if (std::fabs(t - plant_time) > 1e-9 * std::max(1.0, std::fabs(t))) {
+    ctx.log(kLogStatusError, fmi2Error, "doStep at t=%.12g but the plant is at t=%.12g", t, plant_time);
+    res.status = fmi2Error;
+    return false;
+  }
+  if (fallen) {
+    res.status = fmi2Discard;
+    res.last_successful_time = fall_time;
+    res.terminated = true;
+    ctx.log(kLogStatusDiscard, fmi2Discard, "the robot has fallen at t=%g s; no further steps", fall_time);
+    return false;
+  }
+  return true;
 }
 
 }  // namespace fmuglue

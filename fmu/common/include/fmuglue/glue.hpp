@@ -243,8 +243,11 @@ fmi2Status readFiniteInputs(Context& ctx, double t, int n, const fmi2ValueRefere
 enum class PlantOutcome { Ok, Fallen, Error };
 StepResult plantStepResult(Context& ctx, PlantOutcome outcome, fmi2Status ok_status, double fall_time,
                            const std::string& message);
-// doStep on a plant that has already fallen: fmi2Discard, terminated, at the fall time.
-StepResult alreadyFallen(Context& ctx, double fall_time);
+// Whether a plant may step from t: not without an initialized plant or at another time than the
+// plant's (fmi2Error), not after a fall (fmi2Discard, terminated, at the fall time). True: go on;
+// false: return `res`, filled and logged.
+bool plantMayStep(Context& ctx, bool initialized, double t, double plant_time, bool fallen, double fall_time,
+                  StepResult& res);
 
 // ---- Utilities used by the generator and the tests ------------------------------------------
 // Checks the table (unique names/vrs, legal causality/variability/initial combinations, start
