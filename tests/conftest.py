@@ -326,3 +326,53 @@ def raw_glue_model(glue_test_fmu, tmp_path_factory) -> RawModel:
     with zipfile.ZipFile(glue_test_fmu) as z:
         z.extractall(d)
     return RawModel(d)
+
+
+class Slave:
+    """One FMPy instance of a plant FMU (unzipped): named access to every variable, 1 ms steps."""
+
+    def __init__(self, unzipped: Path, params: dict | None = None, name: str = "plant", inputs: dict | None = None):
+        from fmpy import read_model_description
+        from fmpy.fmi2 import FMU2Slave
+        self.md = read_model_description(str(unzipped / "modelDescription.xml"))
+        self.var = {v.name: v for v in self.md.modelVariables}
+        self.fmu = FMU2Slave(guid=self.md.guid, unzipDirectory=str(unzipped),
+                             modelIdentifier=self.md.coSimulation.modelIdentifier, instanceName=name)
+        self.fmu.instantiate(loggingOn=False)
+        self.fmu.setupExperiment(startTime=0.0)
+        self.fmu.enterInitializationMode()
+        for k, v in {**(params or {}), **(inputs or {})}.items():
+            self.set(k, v)
+        self.fmu.exitInitializationMode()
+        self.t = 0.0
+
+    def set(self, name, value):
+        v = self.var[name]
+        if v.type == "Real":
+            self.fmu.setReal([v.valueReference], [float(value)])
+        elif v.type == "Integer":
+            self.fmu.setInteger([v.valueReference], [int(value)])
+        else:
+            self.fmu.setBoolean([v.valueReference], [bool(value)])
+
+    def get(self, name):
+        v = self.var[name]
+        if v.type == "Real":
+            return self.fmu.getReal([v.valueReference])[0]
+        if v.type == "Integer":
+            return self.fmu.getInteger([v.valueReference])[0]
+        return self.fmu.getBoolean([v.valueReference])[0]
+
+    def step(self, h=1e-3):
+        """fmi2OK or fmi2Warning: 0; FMPy raises on fmi2Discard and worse (the status in .status)."""
+        self.fmu.doStep(currentCommunicationPoint=self.t, communicationStepSize=h)
+        self.t += h
+        return 0
+
+    def outputs(self) -> list[float]:
+        refs = [v.valueReference for v in self.md.modelVariables if v.causality == "output" and v.type == "Real"]
+        return list(self.fmu.getReal(refs))
+
+    def free(self):
+        self.fmu.terminate()
+        self.fmu.freeInstance()

@@ -15,10 +15,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 from fmpy import read_model_description
-from fmpy.fmi2 import FMU2Slave, fmi2LastSuccessfulTime
+from fmpy.fmi2 import fmi2LastSuccessfulTime
 from fmpy.validation import validate_fmu
 
-from conftest import NOMINAL, REPO_ROOT
+from conftest import NOMINAL, REPO_ROOT, Slave
 
 PLANT3D = "Hoap2Plant3D"
 
@@ -34,54 +34,6 @@ def unzipped3d(fmu3d, tmp_path_factory) -> Path:
     with zipfile.ZipFile(fmu3d) as z:
         z.extractall(d)
     return d
-
-
-class Slave:
-    """Named access to one instance, 1 ms steps."""
-
-    def __init__(self, unzipped: Path, params: dict | None = None, name: str = "p3d"):
-        self.md = read_model_description(str(unzipped / "modelDescription.xml"))
-        self.var = {v.name: v for v in self.md.modelVariables}
-        self.fmu = FMU2Slave(guid=self.md.guid, unzipDirectory=str(unzipped),
-                             modelIdentifier=self.md.coSimulation.modelIdentifier, instanceName=name)
-        self.fmu.instantiate(loggingOn=False)
-        self.fmu.setupExperiment(startTime=0.0)
-        self.fmu.enterInitializationMode()
-        for k, v in (params or {}).items():
-            self.set(k, v)
-        self.fmu.exitInitializationMode()
-        self.t = 0.0
-
-    def set(self, name, value):
-        v = self.var[name]
-        if v.type == "Real":
-            self.fmu.setReal([v.valueReference], [float(value)])
-        elif v.type == "Integer":
-            self.fmu.setInteger([v.valueReference], [int(value)])
-        else:
-            self.fmu.setBoolean([v.valueReference], [bool(value)])
-
-    def get(self, name):
-        v = self.var[name]
-        if v.type == "Real":
-            return self.fmu.getReal([v.valueReference])[0]
-        if v.type == "Integer":
-            return self.fmu.getInteger([v.valueReference])[0]
-        return self.fmu.getBoolean([v.valueReference])[0]
-
-    def step(self, h=1e-3):
-        """fmi2OK or fmi2Warning: 0; FMPy raises on fmi2Discard and worse (the status in .status)."""
-        self.fmu.doStep(currentCommunicationPoint=self.t, communicationStepSize=h)
-        self.t += h
-        return 0
-
-    def outputs(self) -> list[float]:
-        refs = [v.valueReference for v in self.md.modelVariables if v.causality == "output" and v.type == "Real"]
-        return list(self.fmu.getReal(refs))
-
-    def free(self):
-        self.fmu.terminate()
-        self.fmu.freeInstance()
 
 
 # ------------------------------------------------------------------------------------------------

@@ -13,58 +13,12 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from fmpy import read_model_description
-from fmpy.fmi2 import FMU2Slave, fmi2Discard, fmi2LastSuccessfulTime, fmi2Terminated
+from fmpy.fmi2 import fmi2Discard, fmi2LastSuccessfulTime, fmi2Terminated
 from fmpy.validation import validate_fmu
-from conftest import NOMINAL_MASS
+from conftest import NOMINAL_MASS, Slave
 
 G = 9.81
 MASS = NOMINAL_MASS  # nominal HOAP-2 (hoap2/nominal.h)
-
-
-class Slave:
-    """Small FMPy wrapper: named access, 1 ms steps."""
-
-    def __init__(self, plant_unzipped: Path, params: dict | None = None, name="plant", inputs: dict | None = None):
-        self.md = read_model_description(str(plant_unzipped / "modelDescription.xml"))
-        self.vr = {v.name: v.valueReference for v in self.md.modelVariables}
-        self.type = {v.name: v.type for v in self.md.modelVariables}
-        self.fmu = FMU2Slave(guid=self.md.guid, unzipDirectory=str(plant_unzipped),
-                             modelIdentifier=self.md.coSimulation.modelIdentifier, instanceName=name)
-        self.fmu.instantiate(loggingOn=False)
-        self.fmu.setupExperiment(startTime=0.0)
-        self.fmu.enterInitializationMode()
-        for k, v in (params or {}).items():
-            self.set(k, v)
-        for k, v in (inputs or {}).items():
-            self.set(k, v)
-        self.fmu.exitInitializationMode()
-        self.t = 0.0
-
-    def set(self, name, value):
-        t = self.type[name]
-        if t == "Real":
-            self.fmu.setReal([self.vr[name]], [float(value)])
-        elif t == "Integer":
-            self.fmu.setInteger([self.vr[name]], [int(value)])
-        else:
-            self.fmu.setBoolean([self.vr[name]], [bool(value)])
-
-    def get(self, name):
-        t = self.type[name]
-        if t == "Real":
-            return self.fmu.getReal([self.vr[name]])[0]
-        if t == "Integer":
-            return self.fmu.getInteger([self.vr[name]])[0]
-        return self.fmu.getBoolean([self.vr[name]])[0]
-
-    def step(self, h=1e-3):
-        self.fmu.doStep(currentCommunicationPoint=self.t, communicationStepSize=h)
-        self.t += h
-
-    def free(self):
-        self.fmu.terminate()
-        self.fmu.freeInstance()
 
 
 def test_validates(plant_fmu):
