@@ -16,6 +16,9 @@
 namespace hoap2plant {
 
 namespace {
+
+// M_PI is POSIX, not ISO C++ (MinGW has none); the same literal as glibc's, so the same double.
+constexpr double kPi = 3.14159265358979323846;
 constexpr int kNumRoots = 5;
 
 int cv_rhs(realtype t, N_Vector y, N_Vector yd, void* ud) {
@@ -70,7 +73,7 @@ double Plant::gauss() {
   // Box-Muller from two splitmix64 uniforms in (0, 1]; state advances by exactly 2 draws.
   const double u1 = (static_cast<double>(splitmix64(rng_) >> 11) + 1.0) * 0x1.0p-53;
   const double u2 = static_cast<double>(splitmix64(rng_) >> 11) * 0x1.0p-53;
-  return std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * M_PI * u2);
+  return std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * kPi * u2);
 }
 
 int Plant::rhs(double, const double* y, double* yd) {

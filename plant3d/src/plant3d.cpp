@@ -45,6 +45,9 @@ static_assert(sizeof(dReal) == sizeof(double), "ODE must be built in double prec
 
 namespace {
 
+// M_PI is POSIX, not ISO C++ (MinGW has none); the same literal as glibc's, so the same double.
+constexpr double kPi = 3.14159265358979323846;
+
 constexpr int kMaxContacts = 8;  // per foot (box-plane gives at most 4)
 
 // --- ODE's process-wide state: initialised once (thread-safe), its error hooks throw ------------
@@ -765,7 +768,7 @@ double Plant3D::gauss() {  // splitmix64 + Box-Muller, as the sagittal plant
     return (static_cast<double>(z >> 11) + 0.5) * (1.0 / 9007199254740992.0);
   };
   const double u1 = next(), u2 = next();
-  return std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * M_PI * u2);
+  return std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * kPi * u2);
 }
 
 void Plant3D::evaluate_outputs() {

@@ -35,17 +35,9 @@ class Instance {
 
   // --- logging ---
   void vlog(int category, fmi2Status status, const char* fmt, va_list ap);
-  void log(int category, fmi2Status status, const char* fmt, ...)
-#if defined(__GNUC__)
-      __attribute__((format(printf, 4, 5)))
-#endif
-      ;
+  void log(int category, fmi2Status status, const char* fmt, ...) FMUGLUE_PRINTF_FORMAT(4, 5);
   // Logs under logStatusError and returns fmi2Error.
-  fmi2Status error(const char* fmt, ...)
-#if defined(__GNUC__)
-      __attribute__((format(printf, 2, 3)))
-#endif
-      ;
+  fmi2Status error(const char* fmt, ...) FMUGLUE_PRINTF_FORMAT(2, 3);
   bool logEnabled(int category) const;
   int categoryCount() const { return static_cast<int>(categoryOn_.size()); }
   fmi2Status setDebugLogging(bool on, size_t n, const fmi2String categories[]);
