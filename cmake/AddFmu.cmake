@@ -9,7 +9,9 @@
 #                     linked statically, no undefined symbols; LINK libraries must be static.
 #   <ModelName>_gen   generator built from the same sources: writes modelDescription.xml and
 #                     documentation/index.html from the variable table.
-#   <ModelName>_fmu   (ALL) packs into OUTPUT_DIR (default ${ANKLEHIP_FMU_DIR}) modelDescription.xml, binaries/linux64/<ModelName>.so and
+#   <ModelName>_fmu   (ALL) packs into OUTPUT_DIR (default ${ANKLEHIP_FMU_DIR}) modelDescription.xml,
+#                     binaries/linux64/<ModelName>.so (and binaries/win64/<ModelName>.dll with
+#                     -DANKLEHIP_WIN64=ON, cross-built by cmake/Win64Fmus.cmake) and
 #                     documentation/ (index.html + DOCUMENTATION files) and resources/ (ModelInfo::resources)
 #                     with `cmake -E tar --format=zip`.
 #   With SOURCE_FMU_FILES the FMU is also a source FMU: sources/ holds those files (compiled; the
@@ -23,6 +25,35 @@ include_guard(GLOBAL)
 
 set(_ADD_FMU_GLUE_SRC "${CMAKE_CURRENT_LIST_DIR}/../fmu/common/src")
 get_filename_component(_ADD_FMU_GLUE_SRC "${_ADD_FMU_GLUE_SRC}" ABSOLUTE)
+
+# The FMU's shared library: the glue's FMI 2.0 API over the model's sources or objects, exporting
+# only the fmi2* functions. Linux: <name>.so, hidden visibility + version script, libstdc++/libgcc
+# static, no undefined symbols. Windows (mingw-w64): <name>.dll exporting what fmi2Functions.h marks
+# dllexport, everything static (-static: libstdc++, libgcc, libwinpthread), so that it needs only
+# Windows' own DLLs; written to <build>/binaries/.
+function(_add_fmu_binary name link include_dirs)
+  add_library(${name} SHARED "${_ADD_FMU_GLUE_SRC}/fmi2_api.cpp" ${ARGN})
+  target_link_libraries(${name} PRIVATE fmuglue ${link})
+  target_include_directories(${name} PRIVATE "${_ADD_FMU_GLUE_SRC}" ${include_dirs})
+  set_target_properties(${name} PROPERTIES PREFIX "" OUTPUT_NAME "${name}"
+    POSITION_INDEPENDENT_CODE ON CXX_VISIBILITY_PRESET hidden C_VISIBILITY_PRESET hidden
+    VISIBILITY_INLINES_HIDDEN ON)
+  target_compile_options(${name} PRIVATE -ffunction-sections -fdata-sections)
+  if(WIN32)
+    set_target_properties(${name} PROPERTIES SUFFIX ".dll"
+      RUNTIME_OUTPUT_DIRECTORY "${CMAKE_BINARY_DIR}/binaries")
+    target_link_options(${name} PRIVATE -static "LINKER:--no-undefined" "LINKER:--gc-sections"
+      $<$<CONFIG:Release,MinSizeRel>:-s>)
+  else()
+    set(vscript "${CMAKE_CURRENT_BINARY_DIR}/${name}_exports.map")
+    file(WRITE "${vscript}" "{\n  global:\n    fmi2*;\n  local:\n    *;\n};\n")
+    set_target_properties(${name} PROPERTIES SUFFIX ".so" LINK_DEPENDS "${vscript}"
+      LIBRARY_OUTPUT_DIRECTORY "${CMAKE_BINARY_DIR}/binaries")
+    target_link_options(${name} PRIVATE -static-libstdc++ -static-libgcc
+      "LINKER:--version-script=${vscript}" "LINKER:--no-undefined" "LINKER:--exclude-libs,ALL"
+      "LINKER:--as-needed" "LINKER:--gc-sections" $<$<CONFIG:Release,MinSizeRel>:-s>)
+  endif()
+endfunction()
 
 function(add_fmu)
   cmake_parse_arguments(FMU "" "NAME;OUTPUT_DIR"
@@ -41,6 +72,12 @@ function(add_fmu)
   endif()
   set(name ${FMU_NAME})
 
+  if(ANKLEHIP_FMU_BINARIES_ONLY)
+    # Another platform's binary only (cmake/Win64Fmus.cmake packs it): no generator, no packing.
+    _add_fmu_binary(${name} "${FMU_LINK}" "${FMU_INCLUDE_DIRS}" ${FMU_SOURCES})
+    return()
+  endif()
+
   # Model sources compiled once, used by the shared library and by the generator.
   add_library(${name}_objs OBJECT ${FMU_SOURCES})
   target_link_libraries(${name}_objs PUBLIC fmuglue ${FMU_LINK})
@@ -50,17 +87,7 @@ function(add_fmu)
   target_compile_options(${name}_objs PRIVATE -ffunction-sections -fdata-sections)
 
   # The FMU binary.
-  set(vscript "${CMAKE_CURRENT_BINARY_DIR}/${name}_exports.map")
-  file(WRITE "${vscript}" "{\n  global:\n    fmi2*;\n  local:\n    *;\n};\n")
-  add_library(${name} SHARED "${_ADD_FMU_GLUE_SRC}/fmi2_api.cpp" $<TARGET_OBJECTS:${name}_objs>)
-  target_link_libraries(${name} PRIVATE fmuglue ${FMU_LINK})
-  target_include_directories(${name} PRIVATE "${_ADD_FMU_GLUE_SRC}")
-  set_target_properties(${name} PROPERTIES PREFIX "" OUTPUT_NAME "${name}" SUFFIX ".so"
-    POSITION_INDEPENDENT_CODE ON CXX_VISIBILITY_PRESET hidden C_VISIBILITY_PRESET hidden
-    VISIBILITY_INLINES_HIDDEN ON LINK_DEPENDS "${vscript}")
-  target_link_options(${name} PRIVATE -static-libstdc++ -static-libgcc
-    "LINKER:--version-script=${vscript}" "LINKER:--no-undefined" "LINKER:--exclude-libs,ALL"
-    "LINKER:--as-needed" "LINKER:--gc-sections" $<$<CONFIG:Release,MinSizeRel>:-s>)
+  _add_fmu_binary(${name} "${FMU_LINK}" "" $<TARGET_OBJECTS:${name}_objs>)
 
   # The generator of modelDescription.xml / documentation.
   add_executable(${name}_gen "${_ADD_FMU_GLUE_SRC}/gen_main.cpp" $<TARGET_OBJECTS:${name}_objs>)
@@ -120,20 +147,33 @@ ${xml_files}      <IncludeDirectory name=\".\"/>
     list(APPEND src_deps "${build_xml}")
     set(src_entry sources)
   endif()
+  # With ANKLEHIP_WIN64 the Windows sub-build's <name>.dll goes next to the .so (Win64Fmus.cmake).
+  set(win_cmds "")
+  set(win_deps "")
+  if(ANKLEHIP_WIN64)
+    set(dll "${ANKLEHIP_WIN64_BINARY_DIR}/${name}.dll")
+    set(win_cmds COMMAND "${CMAKE_COMMAND}" -E make_directory "${stage}/binaries/win64"
+                 COMMAND "${CMAKE_COMMAND}" -E copy "${dll}" "${stage}/binaries/win64/${name}.dll")
+    set(win_deps "${dll}")
+  endif()
   add_custom_command(OUTPUT "${fmu}"
     COMMAND "${CMAKE_COMMAND}" -E rm -rf "${stage}"
     COMMAND "${CMAKE_COMMAND}" -E make_directory "${stage}/binaries/linux64" "${stage}/documentation" "${stage}/resources" "${ANKLEHIP_FMU_DIR}"
     COMMAND $<TARGET_FILE:${name}_gen> "${stage}" ${src_names}
     COMMAND "${CMAKE_COMMAND}" -E copy $<TARGET_FILE:${name}> "${stage}/binaries/linux64/${name}.so"
+    ${win_cmds}
     ${doc_cmds}
     ${src_cmds}
     COMMAND "${CMAKE_COMMAND}" -E rm -f "${fmu}"
     COMMAND "${CMAKE_COMMAND}" -E chdir "${stage}" "${CMAKE_COMMAND}" -E tar cf "${fmu}" --format=zip
             modelDescription.xml binaries documentation resources ${src_entry}
-    DEPENDS ${name} ${name}_gen ${doc_deps} ${src_deps}
+    DEPENDS ${name} ${name}_gen ${doc_deps} ${src_deps} ${win_deps}
     COMMENT "Packing ${name}.fmu"
     VERBATIM)
   add_custom_target(${name}_fmu ALL DEPENDS "${fmu}")
+  if(ANKLEHIP_WIN64)
+    add_dependencies(${name}_fmu win64_fmus)
+  endif()
   set_property(TARGET ${name}_fmu PROPERTY FMU_FILE "${fmu}")
   set_property(TARGET ${name}_fmu PROPERTY FMU_STAGE_DIR "${stage}")
 endfunction()

@@ -1,6 +1,8 @@
 // anklehip_rt_step — native real-time step test of an FMI 2.0 co-simulation FMU (no Python).
 //
-// Loads <fmu-dir>/binaries/linux64/<modelIdentifier>.so from an extracted FMU with dlopen, reads
+// Loads <fmu-dir>/binaries/linux64/<modelIdentifier>.so from an extracted FMU with dlopen (on
+// Windows binaries/win64/<modelIdentifier>.dll with LoadLibrary: the same program cross-built with
+// mingw-w64 replays a recorded run through the Windows binaries, under Wine here), reads
 // an input CSV (time + input columns by variable name), steps the FMU at a fixed period either
 // paced in wall-clock time with absolute deadlines (clock_nanosleep TIMER_ABSTIME on
 // CLOCK_MONOTONIC; deadline k = start + k*period, so no drift accumulates) or as fast as possible
@@ -9,12 +11,17 @@
 // misses. Communication points and input values are computed exactly as FMPy's simulate_fmu does
 // (t_k = t0 + k*h, linear interpolation of the CSV), so outputs are bit-identical to FMPy's.
 // See docs/fmu.md ("Native real-time runner").
+#ifdef _WIN32
+#include <windows.h>
+#else
 #include <dlfcn.h>
 #include <sched.h>
 #include <sys/mman.h>
 #include <time.h>
+#endif
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdarg>
 #include <cstdio>
@@ -127,17 +134,42 @@ void splitCsv(const std::string& line, std::vector<std::string>& f) {
 }
 
 int64_t nowNs() {
-  timespec ts;
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  return static_cast<int64_t>(ts.tv_sec) * 1000000000LL + ts.tv_nsec;
+  return std::chrono::duration_cast<std::chrono::nanoseconds>(
+             std::chrono::steady_clock::now().time_since_epoch()).count();
 }
 
-timespec toTs(int64_t ns) {
+#ifdef _WIN32
+const char* const kPlatform = "win64";
+const char* const kLibSuffix = ".dll";
+void* openLibrary(const std::string& path, std::string& err) {
+  HMODULE h = LoadLibraryA(path.c_str());
+  if (!h) err = "LoadLibrary error " + std::to_string(GetLastError());
+  return reinterpret_cast<void*>(h);
+}
+void* librarySymbol(void* lib, const char* name) {
+  return reinterpret_cast<void*>(GetProcAddress(static_cast<HMODULE>(lib), name));
+}
+// Paced mode needs absolute-deadline sleeps (clock_nanosleep), which this port does not have.
+constexpr bool kCanPace = false;
+void sleepUntil(int64_t) {}
+#else
+const char* const kPlatform = "linux64";
+const char* const kLibSuffix = ".so";
+void* openLibrary(const std::string& path, std::string& err) {
+  void* h = dlopen(path.c_str(), RTLD_NOW | RTLD_LOCAL);
+  if (!h) err = dlerror();
+  return h;
+}
+void* librarySymbol(void* lib, const char* name) { return dlsym(lib, name); }
+// Absolute deadline on CLOCK_MONOTONIC, the clock steady_clock reads on Linux.
+constexpr bool kCanPace = true;
+void sleepUntil(int64_t ns) {
   timespec ts;
   ts.tv_sec = static_cast<time_t>(ns / 1000000000LL);
   ts.tv_nsec = static_cast<long>(ns % 1000000000LL);
-  return ts;
+  while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) != 0) {}
 }
+#endif
 
 double pct(std::vector<int64_t> v, double q) {  // nearest-rank percentile, in microseconds
   if (v.empty()) return 0.0;
@@ -153,7 +185,8 @@ void usage(const char* a0) {
                "usage: %s --fmu-dir DIR --input IN.csv [--output OUT.csv] [--step H] [--stop-time T]\n"
                "          [--fast] [--param name=value]... [--timings TIMINGS.csv] [--rt-priority N]\n"
                "          [--mlock] [--log]\n"
-               "  DIR      extracted FMU (modelDescription.xml, binaries/linux64/<id>.so)\n"
+               "  DIR      extracted FMU (modelDescription.xml, binaries/linux64/<id>.so; Windows:\n"
+               "           binaries/win64/<id>.dll, and --fast is required)\n"
                "  --step   communication step = real-time period [s] (default: DefaultExperiment stepSize)\n"
                "  --fast   do not pace: run as fast as possible (WCET measurement)\n"
                "Exit status: 0 ok, 1 FMU error or I/O error, 2 usage error.\n",
@@ -162,7 +195,7 @@ void usage(const char* a0) {
 
 template <class F>
 bool sym(void* lib, const char* name, F& f) {
-  f = reinterpret_cast<F>(dlsym(lib, name));
+  f = reinterpret_cast<F>(librarySymbol(lib, name));
   if (!f) std::fprintf(stderr, "error: symbol %s missing in the FMU binary\n", name);
   return f != nullptr;
 }
@@ -200,6 +233,10 @@ int main(int argc, char** argv) {
     else { std::fprintf(stderr, "error: unknown option %s\n", a.c_str()); usage(argv[0]); return 2; }
   }
   if (dir.empty() || in.empty()) { usage(argv[0]); return 2; }
+  if (!fast && !kCanPace) {
+    std::fprintf(stderr, "error: paced mode is not available on this platform: use --fast\n");
+    return 2;
+  }
 
   std::string xml, err;
   if (!readFile(dir + "/modelDescription.xml", xml)) {
@@ -316,9 +353,10 @@ int main(int argc, char** argv) {
   std::vector<fmi2Boolean> bout((nSteps + 1) * obv.size());
 
   // ---- load the FMU ----
-  std::string so = dir + "/binaries/linux64/" + md.id + ".so";
-  void* lib = dlopen(so.c_str(), RTLD_NOW | RTLD_LOCAL);
-  if (!lib) { std::fprintf(stderr, "error: dlopen %s: %s\n", so.c_str(), dlerror()); return 1; }
+  std::string so = dir + "/binaries/" + kPlatform + "/" + md.id + kLibSuffix;
+  std::string loadErr;
+  void* lib = openLibrary(so, loadErr);
+  if (!lib) { std::fprintf(stderr, "error: loading %s: %s\n", so.c_str(), loadErr.c_str()); return 1; }
   fmi2InstantiateTYPE* instantiate; fmi2FreeInstanceTYPE* freeInstance; fmi2SetupExperimentTYPE* setup;
   fmi2EnterInitializationModeTYPE* enterInit; fmi2ExitInitializationModeTYPE* exitInit; fmi2TerminateTYPE* terminate;
   fmi2SetRealTYPE* setReal; fmi2SetIntegerTYPE* setInteger; fmi2SetBooleanTYPE* setBoolean;
@@ -377,6 +415,7 @@ int main(int argc, char** argv) {
   if (getOutputs(0) > fmi2Warning) return fail("getting the outputs");
 
   // ---- real-time loop ----
+#ifndef _WIN32
   if (mlock && mlockall(MCL_CURRENT | MCL_FUTURE) != 0) std::fprintf(stderr, "warning: mlockall failed\n");
   if (prio > 0) {
     sched_param sp{};
@@ -384,6 +423,9 @@ int main(int argc, char** argv) {
     if (sched_setscheduler(0, SCHED_FIFO, &sp) != 0)
       std::fprintf(stderr, "warning: SCHED_FIFO priority %d not granted (needs CAP_SYS_NICE)\n", prio);
   }
+#else
+  if (mlock || prio > 0) std::fprintf(stderr, "warning: --mlock and --rt-priority are ignored on Windows\n");
+#endif
   std::vector<int64_t> exec(nSteps), late(fast ? 0 : nSteps);
   const int64_t periodNs = static_cast<int64_t>(std::llround(step * 1e9));
   size_t misses = 0, done = 0;
@@ -392,8 +434,7 @@ int main(int argc, char** argv) {
   for (size_t s = 0; s < nSteps; ++s) {
     const int64_t deadline = start + static_cast<int64_t>(s) * periodNs;
     if (!fast) {
-      timespec ts = toTs(deadline);
-      while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) != 0) {}
+      sleepUntil(deadline);
       late[s] = nowNs() - deadline;
     }
     fmi2Status st = s == 0 ? fmi2OK : setInputs(s);
