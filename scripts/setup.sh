@@ -2,7 +2,16 @@
 # One-time (and idempotent) set-up: Debian packages, the Python virtual environment .venv with the
 # project installed in editable mode, and the native build in build/ (libraries, tests, FMUs).
 # Fast and silent when everything is already there; prints what it does otherwise.
+#   --win64   also the Windows 64-bit binaries of every FMU (mingw-w64 cross build, packed next to
+#             linux64) and Wine to run them (tests/test_win64.py); kept on for later runs.
 set -euo pipefail
+win64=0
+for arg in "$@"; do
+  case "$arg" in
+    --win64) win64=1 ;;
+    *) echo "usage: bash scripts/setup.sh [--win64]" >&2; exit 2 ;;
+  esac
+done
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$root"
 
@@ -52,6 +61,8 @@ fi
 # --- Debian packages the build needs ---------------------------------------------------------
 # dpkg-dev: dpkg-source, to unpack Debian's ODE source package.
 debs=(build-essential cmake dpkg-dev libeigen3-dev libsundials-dev libode-dev python3 python3-venv python3-dev)
+# --win64: the posix-thread mingw-w64 C/C++ cross compilers (with binutils, objdump) and Wine.
+[ "$win64" -eq 1 ] && debs+=(gcc-mingw-w64-x86-64-posix g++-mingw-w64-x86-64-posix wine64)
 missing=()
 for p in "${debs[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
@@ -84,7 +95,12 @@ fi
 # user's activated venv would; the build also works with Debian's cmake 3.25.
 export PATH="$root/.venv/bin:$PATH"
 build="${ANKLEHIP_BUILD_DIR:-build}"
+win_flag=()
+[ "$win64" -eq 1 ] && win_flag=(-DANKLEHIP_WIN64=ON)
 if [ ! -f "$build/CMakeCache.txt" ]; then
-  cmake -S . -B "$build" -DCMAKE_BUILD_TYPE=Release -DPython3_EXECUTABLE="$root/.venv/bin/python" >/dev/null
+  cmake -S . -B "$build" -DCMAKE_BUILD_TYPE=Release -DPython3_EXECUTABLE="$root/.venv/bin/python" "${win_flag[@]}" >/dev/null
+elif [ "$win64" -eq 1 ] && ! grep -q '^ANKLEHIP_WIN64:BOOL=ON' "$build/CMakeCache.txt"; then
+  echo "setup: enabling the Windows 64-bit FMU binaries in $build"
+  cmake -S . -B "$build" -DANKLEHIP_WIN64=ON >/dev/null
 fi
 cmake --build "$build" -j"$(nproc)" >"$build/last-build.log" 2>&1 || { cat "$build/last-build.log"; exit 1; }
