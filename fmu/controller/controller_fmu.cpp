@@ -100,28 +100,32 @@ ModelInfo makeInfo() {
     v.variability = Variability::Continuous; v.unit = unit; v.description = d; v.start = start;
     m.variables.push_back(v);
   };
-  auto out = [&](const char* n, fmi2ValueReference r, Type t, const char* unit, const char* d) {
+  // initial_inputs: what writeInitialOutputs computes the output from in initialization mode
+  auto out = [&](const char* n, fmi2ValueReference r, Type t, const char* unit, const char* d,
+                 std::vector<std::string> initial_inputs = {}) {
     Variable v;
     v.name = n; v.vr = r; v.type = t; v.causality = Causality::Output;
     v.variability = Variability::Discrete;  // sampled: changes only at control ticks
     v.unit = unit; v.description = d;
+    v.initial_inputs = std::move(initial_inputs);
     m.variables.push_back(v);
   };
+  const std::vector<std::string> posture = {"theta_ankle", "theta_hip"};
   in("theta_ankle", vr::theta_ankle, "rad", "Measured ankle angle theta1 (leg link pitch relative to the foot)", 0.0);
   in("theta_hip", vr::theta_hip, "rad", "Measured hip angle theta2 (upper body pitch relative to the leg link)", 0.0);
   in("zmp_x", vr::zmp_x, "m", "Measured ZMP x from the ankle's ground projection (+ toward the toes)", 0.0);
   in("fz", vr::fz, "N", "Total normal ground force (start: the model's weight)", weight);
 
-  out("theta_ankle_ref", vr::theta_ankle_ref, Type::Real, "rad", "Ankle joint set point");
-  out("theta_hip_ref", vr::theta_hip_ref, Type::Real, "rad", "Hip joint set point");
+  out("theta_ankle_ref", vr::theta_ankle_ref, Type::Real, "rad", "Ankle joint set point", {"theta_ankle"});
+  out("theta_hip_ref", vr::theta_hip_ref, Type::Real, "rad", "Hip joint set point", {"theta_hip"});
   out("dtheta_ankle_ref", vr::dtheta_ankle_ref, Type::Real, "rad/s", "Ankle reference rate");
   out("dtheta_hip_ref", vr::dtheta_hip_ref, Type::Real, "rad/s", "Hip reference rate");
   out("phase", vr::phase, Type::Integer, "", "Phase: 0 ankle, 1 ankle-to-hip, 2 hip, 3 hip-to-ankle");
-  out("com_x", vr::com_x, Type::Real, "m", "CoM ground projection r_x of the two-link model from the measured angles");
-  out("com_z", vr::com_z, Type::Real, "m", "CoM height r_z above the ankle joint from the measured angles");
+  out("com_x", vr::com_x, Type::Real, "m", "CoM ground projection r_x of the two-link model from the measured angles", posture);
+  out("com_z", vr::com_z, Type::Real, "m", "CoM height r_z above the ankle joint from the measured angles", posture);
   out("disturbance_moment", vr::disturbance_moment, Type::Real, "N.m", "Disturbance moment estimate d: external moment about the sole point under the ankle (reaction_compensation = 1) or m g (p - r_x) (= 0)");
   out("k_w", vr::k_w, Type::Real, "1", "Reactionless weight of eq. 23 (0 ankle strategy, 1 hip strategy)");
-  out("com_x_desired", vr::com_x_desired, Type::Real, "m", "Desired CoM projection r_x_d (= com_x in phase 0)");
+  out("com_x_desired", vr::com_x_desired, Type::Real, "m", "Desired CoM projection r_x_d (= com_x in phase 0)", posture);
   out("fault", vr::fault, Type::Integer, "", "Fault bit mask (AHC_FAULT_*; 0 = healthy, docs/fmu.md)");
 
   size_t count = 0;

@@ -1,8 +1,10 @@
 // modelDescription.xml generation, table validation and the deterministic GUID.
+#include <algorithm>
 #include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <map>
 #include <set>
 #include <sstream>
 
@@ -168,6 +170,26 @@ std::string xmlWithGuid(const ModelInfo& info, const std::string& guid,
   o << "  </ModelVariables>\n";
 
   o << "  <ModelStructure>\n";
+  // The knowns of initialization mode (FMI 2.0.4 section 2.2.8) are the inputs and the variables
+  // with initial="exact" (parameters). An initial unknown depends on every parameter (a superset
+  // of the true set costs an importer nothing: parameters are never connected) and on the inputs
+  // its Variable::initial_inputs names, no other.
+  std::map<std::string, int> input_index;
+  std::vector<int> param_indices;
+  index = 0;
+  for (const auto& v : info.variables) {
+    ++index;
+    if (v.causality == Causality::Input) input_index[v.name] = index;
+    if (v.causality == Causality::Parameter && effectiveInitial(v) == Initial::Exact) param_indices.push_back(index);
+  }
+  auto initial_dependencies = [&](const Variable& v) {
+    std::vector<int> deps = param_indices;
+    for (const auto& n : v.initial_inputs) deps.push_back(input_index.at(n));  // validated
+    std::sort(deps.begin(), deps.end());
+    std::string s;
+    for (int d : deps) s += (s.empty() ? "" : " ") + std::to_string(d);
+    return s;
+  };
   std::ostringstream outs, inits;
   index = 0;
   for (const auto& v : info.variables) {
@@ -179,7 +201,7 @@ std::string xmlWithGuid(const ModelInfo& info, const std::string& guid,
     }
     if ((v.causality == Causality::Output && (ini == Initial::Approx || ini == Initial::Calculated)) ||
         v.causality == Causality::CalculatedParameter)
-      inits << "      <Unknown index=\"" << index << "\"/>\n";
+      inits << "      <Unknown index=\"" << index << "\" dependencies=\"" << initial_dependencies(v) << "\"/>\n";
   }
   if (!outs.str().empty()) o << "    <Outputs>\n" << outs.str() << "    </Outputs>\n";
   if (!inits.str().empty()) o << "    <InitialUnknowns>\n" << inits.str() << "    </InitialUnknowns>\n";
@@ -251,6 +273,13 @@ std::string validateModelInfo(const ModelInfo& info) {
       if (!std::isnan(v.max) && v.start > v.max) err << w << "start " << v.start << " > max " << v.max << "\n";
     }
     if (!std::isnan(v.min) && !std::isnan(v.max) && v.min > v.max) err << w << "min > max\n";
+    if (!v.initial_inputs.empty() && v.causality != Causality::Output)
+      err << w << "only outputs have initial_inputs\n";
+    for (const auto& n : v.initial_inputs) {
+      auto it = std::find_if(info.variables.begin(), info.variables.end(), [&](const Variable& x) { return x.name == n; });
+      if (it == info.variables.end() || it->causality != Causality::Input)
+        err << w << "initial_inputs names \"" << n << "\", which is not an input\n";
+    }
   }
   return err.str();
 }

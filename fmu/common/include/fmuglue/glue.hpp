@@ -64,6 +64,11 @@ struct Variable {
   std::string start_string;
   double min = kNoBound;
   double max = kNoBound;
+  // Outputs: the inputs whose values set in initialization mode this output's initial value is
+  // computed from (e.g. a set point that holds the measured posture). <InitialUnknowns> lists
+  // them and every parameter as its dependencies, and no other input: an importer coupling two
+  // FMUs output-to-input then sees no algebraic loop at initialization where there is none.
+  std::vector<std::string> initial_inputs;
 };
 
 // Extra log category declared by a model (the glue declares its own, see LogCategory).
