@@ -160,18 +160,26 @@ class _Layout:
         self.all_cols = ["time"] + self.real_cols + self.int_cols
 
 
+def scenario_parameters(scenario: Scenario, models: Models, controller_overrides: dict | None = None,
+                        plant_overrides: dict | None = None) -> tuple[dict[str, Any], dict[str, Any]]:
+    """The controller's and the plant's parameter values a scenario sets (checked against the
+    FMUs). Precedence: the named configuration < the scenario's [controller] / [plant] tables <
+    the caller's overrides."""
+    origin = str(scenario.path) if scenario.path else scenario.name
+    c_over = {**models.controller.configuration(scenario.controller_config, f"{origin}: controller_config"),
+              **scenario.controller, **(controller_overrides or {})}
+    p_over = dict(scenario.plant, **(plant_overrides or {}))
+    check_overrides(models, c_over, p_over, origin)
+    return c_over, p_over
+
+
 def simulate(scenario: Scenario, models: Models | None = None, *, fmu_dir=None,
              controller_overrides: dict | None = None, plant_overrides: dict | None = None,
              push: PushProfile | None = None, stop_time: float | None = None,
              progress: bool | None = None, logger: Callable | None = None) -> RunResult:
     """Run one closed-loop scenario; never raises for a fall (outcome 'fell')."""
     models = models or Models.load(fmu_dir)
-    origin = str(scenario.path) if scenario.path else scenario.name
-    # precedence: the named configuration < the scenario's [controller] table < the caller's overrides
-    c_over = {**models.controller.configuration(scenario.controller_config, f"{origin}: controller_config"),
-              **scenario.controller, **(controller_overrides or {})}
-    p_over = dict(scenario.plant, **(plant_overrides or {}))
-    check_overrides(models, c_over, p_over, origin)
+    c_over, p_over = scenario_parameters(scenario, models, controller_overrides, plant_overrides)
     L = _Layout(models)
     h = scenario.step
     T = stop_time if stop_time is not None else scenario.stop_time
@@ -185,7 +193,7 @@ def simulate(scenario: Scenario, models: Models | None = None, *, fmu_dir=None,
     if PUSH_Y in L.push_cols:
         R[:N, L.off_push + 1] = scenario.push_y.step_averages(t0, h, N)
     elif scenario.push_y.peak() != 0:
-        raise FMUError(f"{origin}: push_y needs a plant with the input {PUSH_Y!r} ({models.plant.name} has none)")
+        raise FMUError(f"{scenario.path or scenario.name}: push_y needs a plant with the input {PUSH_Y!r} ({models.plant.name} has none)")
     R[N, L.off_push:L.off_cother] = R[N - 1, L.off_push:L.off_cother] if N else 0.0
 
     ctrl = plant = None
