@@ -78,21 +78,24 @@ def _connector(v: Var, kind: str | None = None) -> str:
     return f'<ssd:Connector name={quoteattr(v.name)} kind="{kind or v.causality}"><{SSC_TYPE[v.type]}/></ssd:Connector>'
 
 
-def write_ssp(path: str | Path, scenario: Scenario, models: Models, *, name: str = "AnkleHipBalance") -> Path:
+def write_ssp(path: str | Path, scenario: Scenario, models: Models, *, name: str = "AnkleHipBalance",
+              system_input: bool = True) -> Path:
     """Write the closed loop of `scenario` (its controller configuration and parameter overrides;
-    the push profile is the caller's input) as an SSP 1.0 archive."""
+    the push profile is the caller's input) as an SSP 1.0 archive. system_input=False leaves the
+    plant's push inputs unconnected instead of connecting them to system-level inputs, for libcosim,
+    which rejects a connection without a startElement (docs/integration.md)."""
     path = Path(path)
     c_over, p_over = scenario_parameters(scenario, models)
     infos = {"controller": models.controller, "plant": models.plant}
     params = {f"{comp}.{k}": (infos[comp].vars[k], x) for comp, over in (("controller", c_over), ("plant", p_over))
               for k, x in over.items()}
     links = connections(models)
-    ins = system_inputs(models)
+    ins = system_inputs(models) if system_input else []
     ssd = ['<?xml version="1.0" encoding="UTF-8"?>',
            f'<ssd:SystemStructureDescription {SSD_NS} version="1.0" name={quoteattr(name)}>',
            f'  <ssd:System name={quoteattr(name)} description={quoteattr(scenario.description or scenario.name)}>',
            "    <ssd:Connectors>"]
-    ssd += [f"      {_connector(v, 'input')}" for v in ins]
+    ssd += [f"      {_connector(v, 'input')}" for v in ins] or ["      <!-- none: the plant's push inputs are driven directly -->"]
     ssd += ["    </ssd:Connectors>",
             "    <ssd:ParameterBindings>",
             '      <ssd:ParameterBinding source="resources/parameters.ssv"/>',
