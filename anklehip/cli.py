@@ -481,6 +481,24 @@ def regen_steptests(fmu_dir) -> int:
     return rc
 
 
+def cmd_export(a) -> int:
+    from .export import write_container_fmu, write_ssp
+    from .fmu import FMUError
+    from .paths import MissingFileError
+    from .scenario import ScenarioError
+    try:
+        sc, models = _scenario_and_models(a)
+        if a.kind == "ssp":
+            out = write_ssp(a.out or f"{sc.name}.ssp", sc, models, system_input=not a.libcosim)
+        else:
+            out = write_container_fmu(a.out or f"{sc.name}.fmu", sc, models)
+    except (ScenarioError, MissingFileError, FMUError, OSError) as e:
+        return _err(str(e))
+    print(f"wrote {out}: {models.controller.name} + {models.plant.name}, parameters of {sc.name}; "
+          f"drive push_force (N) at the scenario's step {sc.step:g} s (docs/integration.md)")
+    return EXIT_OK
+
+
 # ----------------------------------------------------------------------------------------------
 
 def build_parser() -> argparse.ArgumentParser:
@@ -575,6 +593,17 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--workers", type=int, default=2)
     s.add_argument("--out", help="output folder (default results/sweep_<scenario>)")
     s.set_defaults(fn=cmd_sweep)
+
+    s = sub.add_parser("export", help="the closed loop of a scenario as an SSP file or as one container FMU")
+    s.add_argument("kind", choices=("ssp", "container"))
+    s.add_argument("scenario", help="its controller configuration and parameter overrides go into the artefact")
+    s.add_argument("--out", help="output file (default <scenario>.ssp / <scenario>.fmu)")
+    s.add_argument("--plant", choices=("sagittal", "3d"), help="the plant model (default: the scenario's)")
+    s.add_argument("--set", action="append", metavar="FMU.NAME=VALUE")
+    s.add_argument("--controller-config", metavar="NAME", help=CONTROLLER_CONFIG_HELP)
+    s.add_argument("--libcosim", action="store_true",
+                   help="ssp: no system-level push input (libcosim rejects it); drive plant.push_force instead")
+    s.set_defaults(fn=cmd_export)
 
     s = sub.add_parser("regen-references", help="re-run the scenarios and rewrite scenarios/reference/*.csv")
     s.add_argument("names", nargs="*", help="only these scenarios")

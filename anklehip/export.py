@@ -125,6 +125,11 @@ def write_ssp(path: str | Path, scenario: Scenario, models: Models, *, name: str
     return path
 
 
+def _platforms(fmu: Path) -> set[str]:
+    with zipfile.ZipFile(fmu) as z:
+        return {n.split("/")[1] for n in z.namelist() if n.startswith("binaries/") and n.count("/") >= 2}
+
+
 def write_container_fmu(path: str | Path, scenario: Scenario, models: Models, *,
                         name: str = "AnkleHipBalance") -> Path:
     """Pack the closed loop of `scenario` into one FMU with FMPy's container support: input
@@ -202,8 +207,19 @@ def write_container_fmu(path: str | Path, scenario: Scenario, models: Models, *,
     path.parent.mkdir(parents=True, exist_ok=True)
     work = Path(tempfile.mkdtemp(prefix="container_"))
     try:
+        packed = work / "packed.fmu"
+        (work / "unzipped").mkdir()          # create_container_fmu empties it first
+        create_container_fmu(config, work / "unzipped", packed)
+        # FMPy adds its container binary for every platform it has; keep those the nested FMUs
+        # also have binaries for (a darwin64 container of linux64/win64 FMUs cannot run).
+        platforms = set.intersection(*(_platforms(info.path) for info in infos.values()))
         tmp = path.with_name(path.name + ".part")
-        create_container_fmu(config, work, tmp)
+        with zipfile.ZipFile(packed) as src, zipfile.ZipFile(tmp, "w", zipfile.ZIP_DEFLATED) as dst:
+            for item in src.infolist():
+                parts = item.filename.split("/")
+                if parts[0] == "binaries" and len(parts) > 2 and parts[1] not in platforms:
+                    continue
+                dst.writestr(item, src.read(item))
         tmp.replace(path)
     finally:
         shutil.rmtree(work, ignore_errors=True)

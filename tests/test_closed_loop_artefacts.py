@@ -125,3 +125,18 @@ def test_container_fmu_runs_the_loop_like_our_master(scenario, models, master_ru
                           output=["theta_ankle", "theta_hip", "phase", "controller.zmp_limit_front"])
     assert np.all(r["controller.zmp_limit_front"] == 0.045)     # the scenario's configuration inside
     _compare(np.round(r["time"], 9), r["theta_ankle"], r["theta_hip"], r["phase"], master_run)
+
+
+def test_cli_exports_both_artefacts(fmu_dir, tmp_path):
+    from anklehip.cli import main
+
+    ssp, fmu = tmp_path / "p5.ssp", tmp_path / "p5.fmu"
+    assert main(["--fmu-dir", str(fmu_dir), "export", "ssp", "paper_five_pushes", "--out", str(ssp)]) == 0
+    assert main(["--fmu-dir", str(fmu_dir), "export", "container", "paper_five_pushes", "--out", str(fmu)]) == 0
+    with zipfile.ZipFile(fmu) as z:
+        platforms = {n.split("/")[1] for n in z.namelist() if n.startswith("binaries/") and n.count("/") >= 2}
+        nested = {n.split("/")[3] for n in z.namelist() if n.startswith("resources/Hoap2Plant/binaries/")
+                  and n.count("/") >= 4}
+    assert "linux64" in platforms and platforms <= nested, (platforms, nested)
+    assert zipfile.ZipFile(ssp).testzip() is None
+    assert main(["--fmu-dir", str(fmu_dir), "export", "ssp", "no_such_scenario"]) != 0
