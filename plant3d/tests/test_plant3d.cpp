@@ -11,19 +11,9 @@
 
 #include "hoap2/nominal.h"
 #include "hoap2plant3d/plant3d.hpp"
+#include "check.h"  // CHECK, g_fail (hoap2/testing)
 
 using namespace hoap2plant3d;
-
-static int g_fail = 0;
-#define CHECK(cond, ...)                                           \
-  do {                                                             \
-    if (!(cond)) {                                                 \
-      std::printf("  FAIL %s:%d: %s: ", __FILE__, __LINE__, #cond); \
-      std::printf(__VA_ARGS__);                                    \
-      std::printf("\n");                                           \
-      ++g_fail;                                                    \
-    }                                                              \
-  } while (0)
 
 static const double kDt = 1e-3;  // communication step [s]
 
