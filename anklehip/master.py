@@ -25,7 +25,7 @@ import numpy as np
 
 from .fmu import DISCARD, STATUS_NAMES, FMUError, FMUInfo, Slave, vr_array
 from .paths import CONTROLLER_FMU, PLANT_FMUS, find_fmu
-from .scenario import PushProfile, Scenario
+from .scenario import PushProfile, Scenario, ScenarioError, time_grid_problem
 
 CONTROLLER_INPUTS = ("theta_ankle", "theta_hip", "zmp_x", "fz")
 CONTROLLER_REFS = ("theta_ankle_ref", "theta_hip_ref")
@@ -177,12 +177,17 @@ def simulate(scenario: Scenario, models: Models | None = None, *, fmu_dir=None,
              controller_overrides: dict | None = None, plant_overrides: dict | None = None,
              push: PushProfile | None = None, stop_time: float | None = None,
              progress: bool | None = None, logger: Callable | None = None) -> RunResult:
-    """Run one closed-loop scenario; never raises for a fall (outcome 'fell')."""
+    """Run one closed-loop scenario; never raises for a fall (outcome 'fell'). Raises ScenarioError
+    for a stop time the run cannot have (scenario.time_grid_problem) and FMUError for FMUs that
+    do not fit together or a parameter they do not have."""
     models = models or Models.load(fmu_dir)
     c_over, p_over = scenario_parameters(scenario, models, controller_overrides, plant_overrides)
     L = _Layout(models)
     h = scenario.step
     T = stop_time if stop_time is not None else scenario.stop_time
+    problem = time_grid_problem(T, h)
+    if problem:
+        raise ScenarioError(f"{scenario.path or scenario.name}: stop time {T:g} {problem}")
     N = int(round(T / h))
     t0 = 0.0
     push = push if push is not None else scenario.push

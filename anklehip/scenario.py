@@ -6,16 +6,44 @@ problem, e.g. ``scenarios/x.toml: push[2].duration: must be > 0, got -1``.
 from __future__ import annotations
 
 import math
-import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from .files import read_toml
+
 
 class ScenarioError(ValueError):
     """A scenario file is malformed; the message names file, key and problem."""
+
+
+# The longest run a scenario, --stop-time or a step-test case may ask for, in communication steps:
+# one simulated hour at the default 1 ms step. A result row takes ~0.55 kB in memory for the
+# sagittal plant (~1.2 kB for the 3D plant: the master's arrays plus the structured result) and
+# ~0.56 kB of CSV, written at ~45 us per row, so the bound means at most ~2 GB (3D: ~4 GB) of
+# memory and a ~2 GB CSV written in ~3 minutes; beyond it numpy fails to allocate.
+MAX_STEPS = 3_600_000
+
+
+def time_grid_problem(stop_time: float, step: float, start: float = 0.0) -> str | None:
+    """Why a run from `start` to `stop_time` in steps of `step` is not allowed, as a phrase that
+    follows "stop time X" (None: it is allowed): the times must be finite, step > 0,
+    stop_time > start, the span a whole number of steps (to 1e-6 of a step), at most MAX_STEPS."""
+    if not math.isfinite(stop_time):
+        return "is not finite"
+    if not (math.isfinite(start) and math.isfinite(step) and step > 0):
+        return f"cannot be reached from {start:g} s in steps of {step:g} s (need finite times and a step > 0)"
+    if not stop_time > start:
+        return f"must be > the start time {start:g} s"
+    n = (stop_time - start) / step
+    if n > MAX_STEPS + 0.5:
+        return (f"is {n:.4g} steps of {step:g} s, more than the {MAX_STEPS} a run may have "
+                f"(each step is a result row in memory and in the CSV)")
+    if abs(n - round(n)) > 1e-6 * max(1.0, n):
+        return f"is not a whole number of steps of {step:g} s" + (f" from {start:g} s" if start else "")
+    return None
 
 
 # ----------------------------------------------------------------------------------------------
@@ -338,7 +366,10 @@ def _parse_push(v: _V, items: Any, stop_time: float, key: str = "push") -> PushP
         seg = PushSegment(**kw)
         now = start + seg.duration
         segs.append(seg)
-    return PushProfile.from_segments(segs)
+    profile = PushProfile.from_segments(segs)
+    if not np.all(np.isfinite(profile.values)):
+        v.fail(key, "the forces add up to more than a float can hold")
+    return profile
 
 
 def _parse_overrides(v: _V, d: Any, key: str) -> dict[str, Any]:
@@ -446,9 +477,9 @@ def parse_scenario(data: dict, where: str = "<scenario>", path: Path | None = No
     sc.stop_time = v.num(data["stop_time"], "stop_time", gt=0.0)
     if "step" in data:
         sc.step = v.num(data["step"], "step", gt=0.0, le=sc.stop_time)
-    n = sc.stop_time / sc.step
-    if abs(n - round(n)) > 1e-6 * max(1.0, n):
-        v.fail("step", f"stop_time {sc.stop_time:g} is not a whole number of steps of {sc.step:g}")
+    problem = time_grid_problem(sc.stop_time, sc.step)
+    if problem:
+        v.fail("step" if "step" in data else "stop_time", f"stop_time {sc.stop_time:g} {problem}")
     if "push" in data:
         sc.push = _parse_push(v, data["push"], sc.stop_time)
     if "push_y" in data:
@@ -479,14 +510,7 @@ def parse_scenario(data: dict, where: str = "<scenario>", path: Path | None = No
 def load_scenario(path: str | Path) -> Scenario:
     path = Path(path)
     where = _display(path)
-    try:
-        with open(path, "rb") as f:
-            data = tomllib.load(f)
-    except tomllib.TOMLDecodeError as e:
-        raise ScenarioError(f"{where}: invalid TOML: {e}") from None
-    except OSError as e:
-        raise ScenarioError(f"{where}: cannot read: {e.strerror}") from None
-    return parse_scenario(data, where, path)
+    return parse_scenario(read_toml(path, where, ScenarioError), where, path)
 
 
 def _display(path: Path) -> str:
