@@ -25,6 +25,8 @@ from typing import Any
 
 import numpy as np
 
+from .files import read_text
+
 
 class CompareError(ValueError):
     """The files cannot be compared (missing file or column, empty file, bad time column)."""
@@ -100,50 +102,51 @@ class CompareReport:
 
 
 def read_result_csv(path: str | Path, what: str = "file") -> np.ndarray:
-    """FMPy read_csv with clear errors for missing, empty and malformed files."""
-    from fmpy.util import read_csv
+    """A CSV in FMPy's read_csv/write_csv layout (header of quoted names, time first, one number
+    per cell) as a structured float array. Missing, unreadable, binary, empty and malformed files
+    are a CompareError naming `what`, the file and, for a bad cell, its line and column."""
     path = Path(path)
     if not path.is_file():
         raise CompareError(f"{what} {path}: no such file")
-    with open(path) as f:
-        head = [f.readline() for _ in range(2)]
-    if not head[0].strip():
+    text = read_text(path, f"{what} {path}", CompareError)
+    lines = text.replace("\r\n", "\n").replace("\r", "\n").split("\n")   # read_csv's line ends
+    if lines[-1] == "":
+        lines.pop()
+    if not lines or not lines[0].strip():
         raise CompareError(f"{what} {path}: empty file")
-    if not head[1].strip():
+    if len(lines) < 2 or not lines[1].strip():
         raise CompareError(f"{what} {path}: no data rows (header only)")
-    try:
-        data = read_csv(str(path))
-    except Exception as e:
-        where = _locate_csv_problem(path)
-        raise CompareError(f"{what} {path}: not a valid result CSV: "
-                           + (where or f"{type(e).__name__}: {e}")) from None
-    if data.dtype.names is None or len(data.dtype.names) < 1:
-        raise CompareError(f"{what} {path}: no columns")
-    first = data.dtype.names[0]
-    if first.strip().lower() != "time":
-        raise CompareError(f"{what} {path}: the first column must be the time column 'time' "
-                           f"(FMI cross-check / FMPy CSV layout), got {first!r}")
-    return np.atleast_1d(data)
-
-
-def _locate_csv_problem(path: Path) -> str | None:
-    """The first cell of a CSV that FMPy's read_csv cannot read: 'line L, column C: ...'."""
-    with open(path) as f:
-        lines = f.read().splitlines()
     names = [n.strip().strip('"') for n in lines[0].split(",")]
+    if names[0].lower() != "time":
+        raise CompareError(f"{what} {path}: the first column must be the time column 'time' "
+                           f"(FMI cross-check / FMPy CSV layout), got {names[0]!r}")
+    dup = sorted({n for n in names if names.count(n) > 1})
+    if dup or "" in names:
+        raise CompareError(f"{what} {path}: line 1: " + (f"column name(s) {', '.join(map(repr, dup))} appear more "
+                                                          "than once" if dup else "a column without a name"))
+    rows = []
     for i, line in enumerate(lines[1:], 2):
-        if not line.strip():
-            return f"line {i}: empty line"
         cells = line.split(",")
+        if not line.strip():
+            raise CompareError(f"{what} {path}: not a valid result CSV: line {i}: empty line")
         if len(cells) != len(names):
-            return f"line {i}: {len(cells)} cells, the header has {len(names)} columns"
-        for name, cell in zip(names, cells):
-            for lit in cell.split(" "):
-                try:
-                    float(lit)
-                except ValueError:
-                    return f"line {i}, column {name!r}: value {cell!r} is not a number"
-    return None
+            raise CompareError(f"{what} {path}: not a valid result CSV: line {i}: {len(cells)} cells, "
+                               f"the header has {len(names)} columns")
+        try:
+            rows.append(tuple(map(float, cells)))
+        except ValueError:
+            name, cell = next((n, c) for n, c in zip(names, cells) if not _is_number(c))
+            raise CompareError(f"{what} {path}: not a valid result CSV: line {i}, column {name!r}: "
+                               f"value {cell!r} is not a number") from None
+    return np.array(rows, dtype=[(n, np.float64) for n in names])
+
+
+def _is_number(cell: str) -> bool:
+    try:
+        float(cell)
+        return True
+    except ValueError:
+        return False
 
 
 def _time(data: np.ndarray, label: str) -> np.ndarray:
@@ -279,6 +282,16 @@ def compare(result: np.ndarray | str | Path, reference: np.ndarray | str | Path,
     empty or has a bad time column. ``tolerances`` may override abs_tol/rel_tol/dy/band_floor per
     signal. ``band_floor`` widens the band to at least +-band_floor around the reference.
     """
+    _check_options(dict(dy=dy, abs_tol=abs_tol, rel_tol=rel_tol, band_floor=band_floor))
+    for name, tol in (tolerances or {}).items():
+        _check_options(tol, f"{name}.")
+    if isinstance(dx, bool) or not isinstance(dx, (int, np.integer)) or dx < 1:
+        raise CompareError(f"dx: must be an integer >= 1, got {dx!r}")
+    if num is not None and (isinstance(num, bool) or not isinstance(num, (int, np.integer)) or num < 2):
+        raise CompareError(f"num: must be an integer >= 2, got {num!r}")
+    for k, v in (("t_start", t_start), ("t_stop", t_stop)):
+        if v is not None and not math.isfinite(v):
+            raise CompareError(f"{k}: must be finite, got {v!r}")
     res_label = result_label or (str(result) if not isinstance(result, np.ndarray) else "result")
     ref_label = reference_label or (str(reference) if not isinstance(reference, np.ndarray) else "reference")
     res = read_result_csv(result, "result") if not isinstance(result, np.ndarray) else result
@@ -330,6 +343,17 @@ def compare(result: np.ndarray | str | Path, reference: np.ndarray | str | Path,
                                       require_coverage=require_coverage))
     return CompareReport(result=res_label, reference=ref_label, signals=signals, extra_columns=extra,
                          notes=notes, t_res=t_res, t_ref=t_ref, res=res, ref=ref)
+
+
+def _check_options(opts: dict[str, Any], prefix: str = "") -> None:
+    """Tolerances and band widths are finite numbers >= 0 (None: not given); NaN would fail every
+    signal, a negative value every sample."""
+    for k, v in opts.items():
+        if v is None:
+            continue
+        if isinstance(v, bool) or not isinstance(v, (int, float, np.integer, np.floating)) or not (
+                math.isfinite(v) and v >= 0):
+            raise CompareError(f"{prefix}{k}: must be a finite number >= 0, got {v!r}")
 
 
 def plot_failed(report: CompareReport, out: str | Path, signals: list[str] | None = None) -> Path | None:
