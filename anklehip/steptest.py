@@ -18,7 +18,6 @@ import math
 import os
 import subprocess
 import time
-import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -26,9 +25,11 @@ from typing import Any
 import numpy as np
 
 from .compare import CompareReport, compare, read_result_csv
+from .files import read_text, read_toml
 from .fmu import FMUError, FMUInfo, Slave, vr_array
 from .master import RunResult
 from .results import atomic_write_csv, atomic_write_text
+from .scenario import REF_SIGNAL_KEYS, _parse_overrides, _V, time_grid_problem
 
 MODEL = "AnkleHipController"
 DEFAULT_TOL = {"abs_tol": 1e-9, "rel_tol": 1e-6}     # our FMU against its own recording: tight
@@ -47,8 +48,9 @@ def case_files(case_dir: Path, model: str = MODEL) -> dict[str, Path]:
 def read_opt(path: Path) -> dict[str, float]:
     if not path.is_file():
         raise StepTestError(f"{path}: no such file (the case needs StartTime/StopTime/StepSize/RelTol)")
+    text = read_text(path, str(path), StepTestError)
     opts: dict[str, float] = {}
-    for i, line in enumerate(path.read_text().splitlines(), 1):
+    for i, line in enumerate(text.splitlines(), 1):
         if not line.strip():
             continue
         parts = [p.strip() for p in line.split(",")]
@@ -58,11 +60,16 @@ def read_opt(path: Path) -> dict[str, float]:
             opts[parts[0]] = float(parts[1])
         except ValueError:
             raise StepTestError(f"{path}:{i}: {parts[0]}: not a number: {parts[1]!r}") from None
+        if not math.isfinite(opts[parts[0]]):
+            raise StepTestError(f"{path}:{i}: {parts[0]}: must be finite, got {parts[1]!r}")
     for k in ("StartTime", "StopTime", "StepSize"):
         if k not in opts:
             raise StepTestError(f"{path}: {k} missing")
-    if not opts["StepSize"] > 0 or not opts["StopTime"] > opts["StartTime"]:
-        raise StepTestError(f"{path}: need StepSize > 0 and StopTime > StartTime")
+    if not opts["StepSize"] > 0:
+        raise StepTestError(f"{path}: StepSize: must be > 0, got {opts['StepSize']:g}")
+    problem = time_grid_problem(opts["StopTime"], opts["StepSize"], opts["StartTime"])
+    if problem:
+        raise StepTestError(f"{path}: StopTime {opts['StopTime']:g} {problem}")
     opts.setdefault("RelTol", 1e-6)
     return opts
 
@@ -126,21 +133,46 @@ def _toml_value(v: Any) -> str:
 
 
 def read_meta(path: Path) -> dict[str, Any]:
+    """steptest.toml, checked: [source] (scenario, stop_time, outcome), [controller] parameter
+    values (numbers or booleans; names are checked against the FMU when the case runs),
+    [compare] tolerances (as in a scenario's [reference] table)."""
     if not path.is_file():
         return {}
-    with open(path, "rb") as f:
-        try:
-            meta = tomllib.load(f)
-        except tomllib.TOMLDecodeError as e:
-            raise StepTestError(f"{path}: invalid TOML: {e}") from None
-    unknown = set(meta) - {"source", "controller", "compare"}
-    if unknown:
-        raise StepTestError(f"{path}: unknown table(s) {', '.join(sorted(unknown))} (allowed: source, controller, compare)")
-    allowed_cmp = {"abs_tol", "rel_tol", "dx", "dy", "num", "signals"}
-    bad = set(meta.get("compare", {})) - allowed_cmp
-    if bad:
-        raise StepTestError(f"{path}: compare.{sorted(bad)[0]}: unknown key (allowed: {', '.join(sorted(allowed_cmp))})")
+    where = str(path)
+    meta = read_toml(path, where, StepTestError)
+    v = _StepTestV(where)
+    v.keys(meta, {"source", "controller", "compare"}, "")
+    src = v.table(meta.get("source", {}), "source")
+    v.keys(src, {"scenario", "stop_time", "outcome"}, "source.")
+    for k in ("scenario", "outcome"):
+        if k in src:
+            v.str_(src[k], f"source.{k}")
+    if "stop_time" in src:
+        v.num(src["stop_time"], "source.stop_time", gt=0.0)
+    if "controller" in meta:
+        meta["controller"] = _parse_overrides(v, meta["controller"], "controller")
+    cmp = v.table(meta.get("compare", {}), "compare")
+    v.keys(cmp, {"abs_tol", "rel_tol", "dx", "dy", "num", "signals"}, "compare.")
+    for k in ("abs_tol", "rel_tol", "dy"):
+        if k in cmp:
+            v.num(cmp[k], f"compare.{k}", ge=0.0)
+    if "dx" in cmp:
+        v.int_(cmp["dx"], "compare.dx", ge=1)
+    if "num" in cmp:
+        v.int_(cmp["num"], "compare.num", ge=2)
+    for name, tab in v.table(cmp.get("signals", {}), "compare.signals").items():
+        tab = v.table(tab, f"compare.signals.{name}")
+        v.keys(tab, REF_SIGNAL_KEYS, f"compare.signals.{name}.")
+        for k, x in tab.items():
+            v.num(x, f"compare.signals.{name}.{k}", ge=0.0)
     return meta
+
+
+class _StepTestV(_V):
+    """The scenario file checks, raising StepTestError."""
+
+    def fail(self, key: str, msg: str):
+        raise StepTestError(f"{self.where}: {key}: {msg}")
 
 
 # ----------------------------------------------------------------------------------------------
@@ -189,8 +221,8 @@ class StepTestResult:
 
 def run_controller(fmu: Path | FMUInfo, inputs: np.ndarray, start: float, stop: float, step: float,
                    parameters: dict[str, Any] | None = None, outputs: list[str] | None = None,
-                   realtime: bool = False, spin_us: float = 0.0,
-                   source: str = "input CSV") -> tuple[np.ndarray, RTStats | None]:
+                   realtime: bool = False, spin_us: float = 0.0, source: str = "input CSV",
+                   parameters_origin: str = "step-test case") -> tuple[np.ndarray, RTStats | None]:
     """Step the controller FMU alone on recorded inputs; outputs in the cross-check convention.
 
     The inputs must cover every communication point start, start + h, ..., stop - h (they are
@@ -198,7 +230,7 @@ def run_controller(fmu: Path | FMUInfo, inputs: np.ndarray, start: float, stop: 
     error messages."""
     info = fmu if isinstance(fmu, FMUInfo) else FMUInfo.load(fmu)
     parameters = parameters or {}
-    info.check_overrides(parameters, "step-test case")
+    info.check_overrides(parameters, parameters_origin)
     in_vars = info.by_causality("input")
     names = inputs.dtype.names
     missing = [v.name for v in in_vars if v.name not in names[1:]]
@@ -328,7 +360,8 @@ def run_case(case_dir: Path, fmu: Path, out_dir: Path | None = None, *, realtime
     ref = read_result_csv(f["ref"], "reference") if compare_ref and f["ref"].is_file() else None
     outputs = list(ref.dtype.names[1:]) if ref is not None else None
     data, rt = run_controller(fmu, inputs, opts["StartTime"], opts["StopTime"], opts["StepSize"],
-                              params, outputs=None, realtime=realtime, spin_us=spin_us, source=str(f["in"]))
+                              params, outputs=None, realtime=realtime, spin_us=spin_us, source=str(f["in"]),
+                              parameters_origin=f"{f['meta']} [controller]")
     out_csv = None
     if out_dir is not None:
         out_csv = Path(out_dir) / f"{model}_out.csv"
@@ -339,7 +372,7 @@ def run_case(case_dir: Path, fmu: Path, out_dir: Path | None = None, *, realtime
                          dy=dy if dy is not None else cm.get("dy", 0.1),
                          abs_tol=abs_tol if abs_tol is not None else cm.get("abs_tol"),
                          rel_tol=rel_tol if rel_tol is not None else cm.get("rel_tol"),
-                         result_label=str(out_csv or "output"), reference_label=str(f["ref"]))
+                         tolerances=cm.get("signals"), result_label=str(out_csv or "output"), reference_label=str(f["ref"]))
     elif compare_ref:
         raise StepTestError(f"{f['ref']}: no such file (use --no-compare to only produce outputs)")
     return StepTestResult(case=case_dir, out_csv=out_csv, data=data, report=report, rt=rt)
@@ -358,7 +391,7 @@ def run_native(exe: Path, fmu: Path, case_dir: Path, out_dir: Path | None, extra
     meta = read_meta(f["meta"])
     info = FMUInfo.load(fmu)
     params = dict(meta.get("controller", {}))
-    info.check_overrides(params, "step-test case")
+    info.check_overrides(params, f"{f['meta']} [controller]")
     work = Path(out_dir) if out_dir is not None else Path(tempfile.mkdtemp(prefix="rt_step_"))
     work.mkdir(parents=True, exist_ok=True)
     out_csv = work / f"{model}_out.csv"
@@ -385,5 +418,5 @@ def run_native(exe: Path, fmu: Path, case_dir: Path, out_dir: Path | None, extra
                 cm[k] = v
         report = compare(out_csv, ref, columns=list(ref.dtype.names[1:]), num=cm.get("num"),
                          dx=cm.get("dx", 20), dy=cm.get("dy", 0.1), abs_tol=cm.get("abs_tol"),
-                         rel_tol=cm.get("rel_tol"), reference_label=str(f["ref"]))
+                         rel_tol=cm.get("rel_tol"), tolerances=cm.get("signals"), reference_label=str(f["ref"]))
     return rc, report, out_csv
