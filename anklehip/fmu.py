@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import atexit
 import ctypes
+import math
 import os
 import shutil
 from dataclasses import dataclass
@@ -34,6 +35,8 @@ class Var:
     start: Any
     unit: str | None
     description: str | None
+    min: float | None = None     # the modelDescription's range (inclusive), None: unbounded
+    max: float | None = None
 
 
 class FMUInfo:
@@ -64,14 +67,19 @@ class FMUInfo:
             if unit is None and v.type == "Real" and v.declaredType is not None:
                 unit = getattr(v.declaredType, "unit", None)
             self.vars[v.name] = Var(v.name, v.valueReference, v.type, v.causality, v.variability,
-                                    start, unit, v.description)
+                                    start, unit, v.description, _bound(v, "min"), _bound(v, "max"))
 
     @classmethod
     def load(cls, path: str | os.PathLike) -> "FMUInfo":
         path = Path(path).resolve()
-        key = (str(path), path.stat().st_mtime)
-        if key not in cls._cache:
-            cls._cache[key] = cls(path)
+        try:
+            key = (str(path), path.stat().st_mtime)
+            if key not in cls._cache:
+                cls._cache[key] = cls(path)
+        except FMUError:
+            raise
+        except Exception as e:   # a missing, unreadable or corrupt file (zip, XML) is not an FMU
+            raise FMUError(f"{path}: not a readable FMU: {type(e).__name__}: {e}") from None
         return cls._cache[key]
 
     @property
@@ -119,6 +127,9 @@ class FMUInfo:
         return {k: v for k, v in confs[name].items() if k != "description"}
 
     def check_overrides(self, overrides: dict[str, Any], origin: str = "") -> None:
+        """Every override names a parameter and has its type, a finite value and a value inside
+        the range of the modelDescription; else an FMUError naming the parameter, the value, the
+        allowed values and `origin` (where the value came from)."""
         params = self.parameters()
         for k, val in overrides.items():
             src = f" ({origin})" if origin else ""
@@ -129,13 +140,39 @@ class FMUInfo:
             v = params[k]
             if v.variability == "constant":
                 raise FMUError(f"{self.name}: parameter {k!r} is a constant{src}")
+            if v.type == "Boolean":
+                if not isinstance(val, bool) and val not in (0, 1):
+                    raise FMUError(f"{self.name}: parameter {k!r} is Boolean, got {val!r}{src}")
+                continue
             if v.type == "Real" and isinstance(val, bool):
                 raise FMUError(f"{self.name}: parameter {k!r} is Real, got boolean {val}{src}")
-            if v.type in ("Integer", "Enumeration") and not isinstance(val, (bool, int)) \
-                    and not float(val).is_integer():          # booleans are taken as 0/1
+            if not isinstance(val, (bool, int, float)):
+                raise FMUError(f"{self.name}: parameter {k!r} is {v.type}, got {type(val).__name__} {val!r}{src}")
+            if isinstance(val, float) and not math.isfinite(val):
+                raise FMUError(f"{self.name}: parameter {k!r} must be finite, got {val}{src}")
+            if v.type in ("Integer", "Enumeration") and isinstance(val, float) and not val.is_integer():
                 raise FMUError(f"{self.name}: parameter {k!r} is Integer, got {val!r}{src}")
-            if v.type == "Boolean" and not isinstance(val, bool) and val not in (0, 1):
-                raise FMUError(f"{self.name}: parameter {k!r} is Boolean, got {val!r}{src}")
+            lo, hi = v.min, v.max
+            if v.type in ("Integer", "Enumeration"):    # fmi2Integer is a 32-bit int
+                lo = max(lo, INT32_MIN) if lo is not None else INT32_MIN
+                hi = min(hi, INT32_MAX) if hi is not None else INT32_MAX
+            if (lo is not None and val < lo) or (hi is not None and val > hi):
+                rng = f"[{'-inf' if lo is None else f'{lo:g}'}, {'inf' if hi is None else f'{hi:g}'}]"
+                raise FMUError(f"{self.name}: parameter {k!r} = {val!r} is outside its range {rng}{src}")
+
+
+INT32_MIN, INT32_MAX = -2 ** 31, 2 ** 31 - 1
+
+
+def _bound(v, attr: str) -> float | None:
+    """A variable's min or max from the modelDescription (or its declared type), as a float."""
+    b = getattr(v, attr, None)
+    if b is None and v.declaredType is not None:
+        b = getattr(v.declaredType, attr, None)
+    try:
+        return float(b) if b is not None else None
+    except ValueError:
+        return None
 
 
 _vr_t = ctypes.c_uint
@@ -179,14 +216,17 @@ class Slave:
     def set_values(self, values: dict[str, Any]) -> None:
         for name, val in values.items():
             v = self.info.var(name)
-            if v.type == "Real":
-                self.fmu.setReal([v.vr], [float(val)])
-            elif v.type in ("Integer", "Enumeration"):
-                self.fmu.setInteger([v.vr], [int(val)])
-            elif v.type == "Boolean":
-                self.fmu.setBoolean([v.vr], [bool(val)])
-            else:
-                self.fmu.setString([v.vr], [str(val)])
+            try:
+                if v.type == "Real":
+                    self.fmu.setReal([v.vr], [float(val)])
+                elif v.type in ("Integer", "Enumeration"):
+                    self.fmu.setInteger([v.vr], [int(val)])
+                elif v.type == "Boolean":
+                    self.fmu.setBoolean([v.vr], [bool(val)])
+                else:
+                    self.fmu.setString([v.vr], [str(val)])
+            except Exception as e:    # FMPy's FMICallException: the FMU refused the value (it logs why)
+                raise FMUError(f"{self.info.name} refused {name} = {val!r}: {e}") from None
 
     def get_values(self, names: list[str]) -> dict[str, Any]:
         out = {}
