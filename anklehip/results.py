@@ -5,12 +5,18 @@ import json
 import math
 import os
 import tempfile
+from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 from fmpy.util import write_csv
+
+try:
+    import fcntl
+except ImportError:     # Windows
+    fcntl = None
 
 from .master import RunResult
 from .scenario import Expect, PushProfile, Scenario
@@ -52,9 +58,16 @@ def atomic_write_text(path: Path, text: str) -> None:
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    with os.fdopen(fd, "w") as f:
-        f.write(text)
-    _publish(tmp, path)
+    try:
+        with os.fdopen(fd, "w") as f:
+            f.write(text)
+        _publish(tmp, path)
+    except BaseException:
+        try:
+            os.unlink(tmp)
+        except OSError:
+            pass
+        raise
 
 
 def result_paths(out_dir: Path, name: str) -> dict[str, Path]:
@@ -68,15 +81,54 @@ FIGURE_SUFFIXES = ("_overview.png", "_fig4_joint_angles.png", "_fig5_first_cycle
                    "_reference_failed.png")
 
 
-def clear_previous(out_dir: Path, name: str) -> None:
-    """Remove the files of an earlier run (data, summary, figures) so that nothing stale looks like
-    this run's result."""
+def clear_previous(out_dir: Path, name: str, keep: tuple[Path, ...] = ()) -> None:
+    """Remove the files of an earlier run (data, summary, figures) except `keep`, so that nothing
+    stale looks like this run's result. Call it once this run's data file is in place (`keep`):
+    a run that fails before it has data to write leaves the previous result alone."""
     extra = [Path(out_dir) / f"{name}{s}" for s in FIGURE_SUFFIXES]
+    keep = {Path(k) for k in keep}
     for p in list(result_paths(out_dir, name).values()) + extra:
+        if p in keep:
+            continue
         try:
             p.unlink()
         except FileNotFoundError:
             pass
+
+
+LOCK_FILE = ".anklehip.lock"
+
+
+class OutputBusyError(RuntimeError):
+    """Another process is writing results into the same folder."""
+
+
+@contextmanager
+def output_lock(folder: Path):
+    """Hold an exclusive lock on `folder` while a run writes there: fcntl.flock on
+    `folder/.anklehip.lock` (which holds the owner's pid; the kernel releases the lock when the
+    process ends, even on a crash). Raises OutputBusyError at once when another process holds it,
+    so two runs never mix their files in one folder. Creates the folder. No lock where fcntl does
+    not exist (Windows)."""
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    if fcntl is None:
+        yield
+        return
+    fd = os.open(folder / LOCK_FILE, os.O_RDWR | os.O_CREAT, 0o666)
+    try:
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            pid = os.pread(fd, 32, 0).decode(errors="replace").strip()
+            who = f"(pid {pid}) " if pid.isdigit() else ""
+            raise OutputBusyError(f"{folder}: another anklehip run {who}is writing into this folder; "
+                                  "wait for it to finish or choose another output folder") from None
+        os.ftruncate(fd, 0)
+        os.pwrite(fd, f"{os.getpid()}\n".encode(), 0)
+        yield
+    finally:
+        os.close(fd)      # releases the lock
 
 
 # ----------------------------------------------------------------------------------------------
