@@ -1,12 +1,16 @@
 """Command-line interface: ``anklehip <command> ...`` (see docs/scenarios.md, docs/step-tests.md).
 
 Exit status: 0 success, 1 a check failed (expected outcome, comparison, step test),
-2 the input is wrong (bad scenario, missing file or column, unknown parameter).
+2 the input is wrong (bad scenario, missing file or column, unknown parameter, bad option value,
+output folder in use). An error is one line on stderr that names the file, key, cell or option
+and the reason; no input ends in a Python traceback.
 """
 from __future__ import annotations
 
 import argparse
 import json
+import math
+import os
 import sys
 from pathlib import Path
 from typing import Any
@@ -15,6 +19,11 @@ import numpy as np
 
 EXIT_OK, EXIT_FAIL, EXIT_ERROR = 0, 1, 2
 
+
+class UsageError(ValueError):
+    """A command-line argument is wrong (the message names the option and the value)."""
+
+
 DEFAULT_REF_COLUMNS = ["theta_ankle", "theta_hip", "theta_ankle_ref", "theta_hip_ref", "zmp_x", "com_x",
                        "fz", "push_force", "phase"]
 
@@ -22,6 +31,32 @@ DEFAULT_REF_COLUMNS = ["theta_ankle", "theta_hip", "theta_ankle_ref", "theta_hip
 def _err(msg: str) -> int:
     print(f"anklehip: error: {msg}", file=sys.stderr)
     return EXIT_ERROR
+
+
+def check_output_folder(path: str | Path, option: str) -> Path:
+    """An output folder that exists or can be created: the nearest existing ancestor is a
+    writable folder. Checked before anything runs, so a bad --out costs no run."""
+    p = Path(path)
+    for q in [p, *p.parents]:
+        if q.exists():
+            if not q.is_dir():
+                raise UsageError(f"{option} {path}: {q} exists and is not a folder")
+            if not os.access(q, os.W_OK | os.X_OK):
+                raise UsageError(f"{option} {path}: cannot write into {q}")
+            break
+    return p
+
+
+def check_stop_time(sc, stop_time: float | None) -> None:
+    """--stop-time: finite, after the start, a whole number of the scenario's steps, at most
+    scenario.MAX_STEPS steps (scenario.time_grid_problem)."""
+    from .scenario import time_grid_problem
+    if stop_time is None:
+        return
+    problem = time_grid_problem(stop_time, sc.step)
+    if problem:
+        raise UsageError(f"--stop-time {stop_time:g} {problem} (scenario {_rel(sc.path) if sc.path else sc.name}, "
+                         f"step {sc.step:g} s)")
 
 
 # ----------------------------------------------------------------------------------------------
@@ -145,8 +180,7 @@ def _scenario_and_models(a):
     from .scenario import ScenarioError, load_scenario, parse_set
     sc = load_scenario(find_scenario(a.scenario))
     c_set, p_set = parse_set(a.set or [])
-    sc.controller.update(c_set)
-    sc.plant.update(p_set)
+    check_stop_time(sc, getattr(a, "stop_time", None))
     if getattr(a, "plant", None):
         sc.plant_model = a.plant
     if sc.push_y.peak() != 0 and sc.plant_model == "sagittal":
@@ -157,27 +191,45 @@ def _scenario_and_models(a):
         models.controller.configuration(sc.controller_config, "--controller-config")
     else:
         models.controller.configuration(sc.controller_config, f"{_rel(sc.path)}: controller_config")
-    check_overrides(models, sc.controller, sc.plant, _rel(sc.path) + (" / --set" if a.set else ""))
+    # names, types and ranges (the modelDescription's min/max) of the scenario's tables and of each
+    # --set, before anything runs
+    check_overrides(models, sc.controller, sc.plant, _rel(sc.path))
+    for fmu, info, over in (("controller", models.controller, c_set), ("plant", models.plant, p_set)):
+        for k, v in over.items():
+            info.check_overrides({k: v}, f"--set {fmu}.{k}, scenario {_rel(sc.path)}")
+    sc.controller.update(c_set)
+    sc.plant.update(p_set)
     return sc, models
 
 
 def cmd_run(a) -> int:
     from .fmu import FMUError
-    from .master import simulate
     from .paths import MissingFileError
-    from .results import (atomic_write_csv, check_expect, clear_previous, format_summary, result_paths,
-                          summarize_pushes, summary_dict, write_summary_json)
+    from .results import output_lock
     from .scenario import ScenarioError
     try:
         sc, models = _scenario_and_models(a)
     except (ScenarioError, MissingFileError, FMUError) as e:
         return _err(str(e))
-    out = Path(a.out) if a.out else Path("results") / sc.name
+    # every argument is checked before the output folder is touched
+    out = check_output_folder(a.out if a.out else Path("results") / sc.name, "--out")
+    if a.record_steptest:
+        check_output_folder(a.record_steptest, "--record-steptest")
+    with output_lock(out):      # a second run into the same folder fails here, at once
+        return _run(a, sc, models, out)
+
+
+def _run(a, sc, models, out: Path) -> int:
+    from .master import simulate
+    from .results import (atomic_write_csv, check_expect, clear_previous, format_summary, result_paths,
+                          summarize_pushes, summary_dict, write_summary_json)
     paths = result_paths(out, sc.name)
-    clear_previous(out, sc.name)
     res = simulate(sc, models, stop_time=a.stop_time, progress=None if not a.no_progress else False)
     csv = paths["csv"] if res.complete else paths["incomplete_csv"]
     atomic_write_csv(csv, res.data)
+    # only now that this run's data are in place: the previous run's files go (its complete CSV
+    # must not sit next to this run's incomplete one), the new summary is written last
+    clear_previous(out, sc.name, keep=(csv,))
     files = {"csv": str(csv), "summary": str(paths["summary"])}
     pushes = summarize_pushes(res, sc.push, sc.expect.erect_tol)
     checks = check_expect(res, sc.expect) if a.stop_time is None else []
@@ -206,14 +258,21 @@ def cmd_run(a) -> int:
                 p = plot_failed(rep, out / f"{sc.name}_reference_failed.png")
                 if p:
                     files["reference_failures_plot"] = str(p)
+    # figures and the step-test case must not lose the summary of a run that has been computed
     if a.plots or a.animate:
         anim = {"fps": a.fps, "speed": a.speed, "t_start": a.anim_start, "t_stop": a.anim_stop}
-        for p in make_figures(sc.name, res.data, out, res, animate=a.animate, anim_args=anim, figures=a.plots):
-            files[p.stem] = str(p)
+        try:
+            for p in make_figures(sc.name, res.data, out, res, animate=a.animate, anim_args=anim, figures=a.plots):
+                files[p.stem] = str(p)
+        except Exception as e:
+            warnings.append(f"figures failed: {type(e).__name__}: {e}")
     if a.record_steptest:
         from .steptest import record_case
-        record_case(res, Path(a.record_steptest), res.controller_overrides, source=sc.name)
-        files["steptest_case"] = a.record_steptest
+        try:
+            record_case(res, Path(a.record_steptest), res.controller_overrides, source=sc.name)
+            files["steptest_case"] = a.record_steptest
+        except Exception as e:
+            warnings.append(f"--record-steptest {a.record_steptest}: {type(e).__name__}: {e}")
     s = summary_dict(sc, res, pushes, checks, files, cmp)
     if warnings:
         s["warnings"] = warnings
@@ -356,14 +415,17 @@ def cmd_record(a) -> int:
     from .paths import MissingFileError
     from .scenario import ScenarioError
     from .steptest import record_case
+    from .results import output_lock
     try:
         sc, models = _scenario_and_models(a)
     except (ScenarioError, MissingFileError, FMUError) as e:
         return _err(str(e))
-    res = simulate(sc, models, stop_time=a.stop_time, progress=None)
-    if res.outcome in ("error", "interrupted"):
-        return _err(f"the run failed: {res.message}")
-    files = record_case(res, Path(a.out), res.controller_overrides, source=sc.name)
+    out = check_output_folder(a.out, "OUT")
+    with output_lock(out):
+        res = simulate(sc, models, stop_time=a.stop_time, progress=None)
+        if res.outcome in ("error", "interrupted"):
+            return _err(f"the run failed: {res.message}")
+        files = record_case(res, out, res.controller_overrides, source=sc.name)
     print(f"recorded {len(res.data) - 1} controller steps of {sc.name} ({res.message or res.outcome}):")
     for f in files.values():
         print(f"  {f}")
@@ -459,19 +521,25 @@ def steptests_dir() -> Path:
 
 def regen_steptests(fmu_dir) -> int:
     """Re-record every committed step-test case from the scenario named in its steptest.toml."""
+    from .fmu import FMUError
     from .master import Models, simulate
-    from .paths import find_scenario
-    from .scenario import load_scenario
-    from .steptest import read_meta, record_case
+    from .paths import MissingFileError, find_scenario
+    from .scenario import ScenarioError, load_scenario
+    from .steptest import StepTestError, read_meta, record_case
     rc = EXIT_OK
     for case in sorted(p for p in steptests_dir().glob("*") if p.is_dir()):
-        src = read_meta(case / "steptest.toml").get("source", {})
-        if "scenario" not in src or "stop_time" not in src:
-            print(f"{_rel(case)}: no [source] scenario/stop_time in steptest.toml, skipped")
+        try:
+            src = read_meta(case / "steptest.toml").get("source", {})
+            if "scenario" not in src or "stop_time" not in src:
+                print(f"{_rel(case)}: no [source] scenario/stop_time in steptest.toml, skipped")
+                continue
+            sc = load_scenario(find_scenario(src["scenario"]))
+            res = simulate(sc, Models.load(fmu_dir, plant_model=sc.plant_model), stop_time=float(src["stop_time"]),
+                           progress=False)
+        except (StepTestError, ScenarioError, MissingFileError, FMUError) as e:
+            print(f"anklehip: error: {_rel(case)}: {e}", file=sys.stderr)
+            rc = EXIT_ERROR
             continue
-        sc = load_scenario(find_scenario(src["scenario"]))
-        res = simulate(sc, Models.load(fmu_dir, plant_model=sc.plant_model), stop_time=float(src["stop_time"]),
-                       progress=False)
         if res.outcome in ("error", "interrupted"):
             print(f"{_rel(case)}: run failed: {res.message}")
             rc = EXIT_FAIL
@@ -501,8 +569,36 @@ def cmd_export(a) -> int:
 
 # ----------------------------------------------------------------------------------------------
 
+class _Parser(argparse.ArgumentParser):
+    """argparse with a one-line error (the usage is in --help); subcommands inherit it."""
+
+    def error(self, message: str):
+        self.exit(EXIT_ERROR, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
+
+
+def _number(ge: float | None = None, gt: float | None = None, integer: bool = False):
+    """An argparse type: a finite number (an integer with `integer`), >= ge, > gt; the error names
+    the value (argparse adds the option)."""
+    what = "an integer" if integer else "a finite number"
+    what += f" >= {ge:g}" if ge is not None else f" > {gt:g}" if gt is not None else ""
+
+    def convert(text: str):
+        try:
+            v = int(text) if integer else float(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"must be {what}, got {text!r}") from None
+        if not math.isfinite(v) or (ge is not None and v < ge) or (gt is not None and not v > gt):
+            raise argparse.ArgumentTypeError(f"must be {what}, got {text!r}")
+        return v
+    return convert
+
+
+FINITE, NON_NEGATIVE, POSITIVE = _number(), _number(ge=0.0), _number(gt=0.0)
+
+
 def build_parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(prog="anklehip", description="Ankle/hip balance control FMUs: closed-loop "
+    from .scenario import MAX_STEPS
+    p = _Parser(prog="anklehip", description="Ankle/hip balance control FMUs: closed-loop "
                                 "scenarios, step tests, comparison, plots, sweeps.")
     p.add_argument("--fmu-dir", help="folder with the .fmu files (default: $ANKLEHIP_FMU_DIR or <repo>/build/fmus)")
     sub = p.add_subparsers(dest="cmd", required=True, metavar="COMMAND")
@@ -511,10 +607,10 @@ def build_parser() -> argparse.ArgumentParser:
     s.set_defaults(fn=cmd_list)
 
     def anim_opts(s):
-        s.add_argument("--fps", type=float, default=20.0, help="animation frames per second (default 20)")
-        s.add_argument("--speed", type=float, default=1.0, help="simulated seconds per real second (default 1)")
-        s.add_argument("--anim-start", type=float, help="animation start time [s]")
-        s.add_argument("--anim-stop", type=float, help="animation stop time [s]")
+        s.add_argument("--fps", type=POSITIVE, default=20.0, help="animation frames per second (default 20)")
+        s.add_argument("--speed", type=POSITIVE, default=1.0, help="simulated seconds per real second (default 1)")
+        s.add_argument("--anim-start", type=FINITE, help="animation start time [s]")
+        s.add_argument("--anim-stop", type=FINITE, help="animation stop time [s]")
 
     s = sub.add_parser("run", help="run a scenario (CSV, summary, optional plots and animation)")
     s.add_argument("scenario", help="scenario name (scenarios/<name>.toml) or path")
@@ -526,7 +622,8 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--controller-config", metavar="NAME", help=CONTROLLER_CONFIG_HELP)
     s.add_argument("--plant", choices=("sagittal", "3d"),
                    help="the plant model (default: the scenario's plant_model, else sagittal)")
-    s.add_argument("--stop-time", type=float, help="stop earlier than the scenario (no outcome checks)")
+    s.add_argument("--stop-time", type=FINITE, help="stop at this time instead of the scenario's stop_time (no outcome "
+                   f"checks): > 0, a whole number of the scenario's steps, at most {MAX_STEPS} steps")
     s.add_argument("--no-progress", action="store_true")
     s.add_argument("--no-compare", action="store_true", help="skip the comparison with the reference CSV")
     s.add_argument("--record-steptest", metavar="DIR", help="also write the controller's step-test case")
@@ -544,14 +641,14 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("result")
     s.add_argument("reference")
     s.add_argument("--columns", help="comma-separated signals (default: all reference columns)")
-    s.add_argument("--num", type=int, help="band samples (validate_signal num; default max(1000, reference rows))")
-    s.add_argument("--dx", type=int, default=20, help="band horizontal width in samples (default 20)")
-    s.add_argument("--dy", type=float, default=0.1, help="band vertical width relative to the range (default 0.1)")
-    s.add_argument("--abs-tol", type=float, help="stricter tube: absolute tolerance")
-    s.add_argument("--rel-tol", type=float, help="stricter tube: relative tolerance")
-    s.add_argument("--band-floor", type=float, help="minimum band half-height (absolute) for nearly constant signals")
-    s.add_argument("--t-start", type=float)
-    s.add_argument("--t-stop", type=float)
+    s.add_argument("--num", type=_number(ge=2, integer=True), help="band samples (validate_signal num; default max(1000, reference rows))")
+    s.add_argument("--dx", type=_number(ge=1, integer=True), default=20, help="band horizontal width in samples (default 20)")
+    s.add_argument("--dy", type=NON_NEGATIVE, default=0.1, help="band vertical width relative to the range (default 0.1)")
+    s.add_argument("--abs-tol", type=NON_NEGATIVE, help="stricter tube: absolute tolerance")
+    s.add_argument("--rel-tol", type=NON_NEGATIVE, help="stricter tube: relative tolerance")
+    s.add_argument("--band-floor", type=NON_NEGATIVE, help="minimum band half-height (absolute) for nearly constant signals")
+    s.add_argument("--t-start", type=FINITE)
+    s.add_argument("--t-stop", type=FINITE)
     s.add_argument("--allow-partial", action="store_true", help="do not fail when the result covers less time")
     s.add_argument("--plot", metavar="PNG", help="plot reference, band and result of the failed signals")
     s.add_argument("--json", metavar="FILE", help="write the report as JSON")
@@ -566,13 +663,13 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--native", action="store_true",
                    help="use the native anklehip_rt_step (fmu/rt_runner): paced with --realtime, else as fast as possible")
     s.add_argument("--native-args", nargs=argparse.REMAINDER, help="extra arguments for anklehip_rt_step")
-    s.add_argument("--spin-us", type=float, default=0.0, help="busy-wait the last N µs before a deadline")
+    s.add_argument("--spin-us", type=NON_NEGATIVE, default=0.0, help="busy-wait the last N µs before a deadline")
     s.add_argument("--histogram", metavar="PNG", help="plot execution time and lateness histograms")
     s.add_argument("--fail-on-miss", action="store_true", help="exit 1 on any deadline miss")
-    s.add_argument("--abs-tol", type=float)
-    s.add_argument("--rel-tol", type=float)
-    s.add_argument("--dx", type=int)
-    s.add_argument("--dy", type=float)
+    s.add_argument("--abs-tol", type=NON_NEGATIVE)
+    s.add_argument("--rel-tol", type=NON_NEGATIVE)
+    s.add_argument("--dx", type=_number(ge=1, integer=True))
+    s.add_argument("--dy", type=NON_NEGATIVE)
     s.add_argument("--no-compare", action="store_true")
     s.add_argument("--plot", action="store_true", help="plot the failed signals")
     s.add_argument("--failed-only", action="store_true")
@@ -581,7 +678,7 @@ def build_parser() -> argparse.ArgumentParser:
     s = sub.add_parser("record", help="run a scenario and write the controller's step-test case")
     s.add_argument("scenario")
     s.add_argument("out", help="case folder to write")
-    s.add_argument("--stop-time", type=float)
+    s.add_argument("--stop-time", type=FINITE, help="as for run")
     s.add_argument("--set", action="append", metavar="FMU.NAME=VALUE")
     s.add_argument("--controller-config", metavar="NAME", help=CONTROLLER_CONFIG_HELP)
     s.set_defaults(fn=cmd_record)
@@ -590,7 +687,7 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("scenario")
     s.add_argument("--forces", required=True, help="start:stop:step (inclusive) or a,b,c [N]")
     s.add_argument("--variant", action="append", help="repeatable: " + _variants_help())
-    s.add_argument("--workers", type=int, default=2)
+    s.add_argument("--workers", type=_number(ge=1, integer=True), default=2)
     s.add_argument("--out", help="output folder (default results/sweep_<scenario>)")
     s.set_defaults(fn=cmd_sweep)
 
@@ -614,6 +711,17 @@ def build_parser() -> argparse.ArgumentParser:
     return p
 
 
+def _input_errors() -> tuple[type[Exception], ...]:
+    """Our exception classes for wrong input; each message names the file, key, cell or option."""
+    from .compare import CompareError
+    from .fmu import FMUError
+    from .paths import MissingFileError
+    from .results import OutputBusyError
+    from .scenario import ScenarioError
+    from .steptest import StepTestError
+    return UsageError, ScenarioError, MissingFileError, FMUError, CompareError, StepTestError, OutputBusyError
+
+
 def main(argv=None) -> int:
     p = build_parser()
     a = p.parse_args(argv)
@@ -624,6 +732,16 @@ def main(argv=None) -> int:
         return 130
     except BrokenPipeError:
         return EXIT_OK
+    except Exception as e:
+        if isinstance(e, _input_errors()):
+            return _err(str(e))
+        if isinstance(e, OSError):      # a file or folder we cannot read or write
+            return _err(f"{e.filename}: {e.strerror}" if e.filename else str(e))
+        if os.environ.get("ANKLEHIP_DEBUG"):
+            raise
+        # a bug: still one line on stderr, not a traceback
+        return _err(f"unexpected {type(e).__name__}: {e} (please report it with the command line; "
+                    "ANKLEHIP_DEBUG=1 shows the traceback)")
 
 
 if __name__ == "__main__":

@@ -23,14 +23,26 @@ class Variant:
     config: str | None = None     # a named controller configuration (None: the scenario's)
 
 
+MAX_GRID = 10_000     # grid points: each is a closed-loop run
+
+
 def parse_grid(spec: str, what: str = "grid") -> list[float]:
-    """'2:12:1' (start:stop:step, inclusive) or '3,5,8'."""
+    """'2:12:1' (start:stop:step, inclusive) or '3,5,8'; a ValueError naming `what` and the spec."""
+    parts = spec.split(":") if ":" in spec else [x for x in spec.split(",") if x.strip()]
+    try:
+        vals = [float(x) for x in parts]
+    except ValueError:
+        raise ValueError(f"{what} {spec}: expected start:stop:step or a,b,c (numbers)") from None
+    if not vals or not all(np.isfinite(vals)) or (":" in spec and len(vals) != 3):
+        raise ValueError(f"{what} {spec}: expected start:stop:step or a,b,c (finite numbers)")
     if ":" in spec:
-        a, b, s = (float(x) for x in spec.split(":"))
+        a, b, s = vals
         if s <= 0 or b < a:
             raise ValueError(f"{what} {spec}: need start <= stop and step > 0")
+        if (b - a) / s > MAX_GRID:
+            raise ValueError(f"{what} {spec}: more than {MAX_GRID} grid points")
         return [float(round(x, 9)) for x in np.arange(a, b + s / 2, s)]
-    return [float(x) for x in spec.split(",") if x.strip()]
+    return vals
 
 
 def parse_variant(spec: str) -> Variant:
