@@ -30,7 +30,7 @@ MAX_STEPS = 3_600_000
 def time_grid_problem(stop_time: float, step: float, start: float = 0.0) -> str | None:
     """Why a run from `start` to `stop_time` in steps of `step` is not allowed, as a phrase that
     follows "stop time X" (None: it is allowed): the times must be finite, step > 0,
-    stop_time > start, the span a whole number of steps (to 1e-6 of a step), at most MAX_STEPS."""
+    stop_time > start, the span a whole number of steps (to 1e-6 of a step), 1 to MAX_STEPS of them."""
     if not math.isfinite(stop_time):
         return "is not finite"
     if not (math.isfinite(start) and math.isfinite(step) and step > 0):
@@ -38,6 +38,8 @@ def time_grid_problem(stop_time: float, step: float, start: float = 0.0) -> str 
     if not stop_time > start:
         return f"must be > the start time {start:g} s"
     n = (stop_time - start) / step
+    if n < 0.5:
+        return f"is less than one step of {step:g} s after the start time {start:g} s"
     if n > MAX_STEPS + 0.5:
         return (f"is {n:.4g} steps of {step:g} s, more than the {MAX_STEPS} a run may have "
                 f"(each step is a result row in memory and in the CSV)")
