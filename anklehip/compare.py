@@ -160,9 +160,11 @@ def _time(data: np.ndarray, label: str) -> np.ndarray:
 
 
 def _is_discrete(*arrays: np.ndarray) -> bool:
+    """All finite values are integers of an fmi2Integer's (32-bit) range, e.g. phase or fault; 1e20
+    is an integral float, not a discrete signal (and would overflow the int64 cast)."""
     for a in arrays:
         a = a[np.isfinite(a)]
-        if a.size == 0 or not np.all(a == np.round(a)):
+        if a.size == 0 or not np.all(a == np.round(a)) or np.max(np.abs(a)) > 2 ** 31:
             return False
     return True
 
@@ -330,17 +332,19 @@ def compare(result: np.ndarray | str | Path, reference: np.ndarray | str | Path,
         mr, mf = (t_res >= a) & (t_res <= b), (t_ref >= a) & (t_ref <= b)
         res, t_res, ref, t_ref = res[mr], t_res[mr], ref[mf], t_ref[mf]
         if len(t_ref) < 2:
-            raise CompareError(f"reference {ref_label}: fewer than 2 samples in the window {a:g}..{b:g}")
+            raise CompareError(f"reference {ref_label}: fewer than 2 samples in the window t_start..t_stop = "
+                               f"{a:g}..{b:g}")
     signals = []
     for c in columns:
         tol = (tolerances or {}).get(c, {})
         if res[c].ndim > 1 or ref[c].ndim > 1:
             raise CompareError(f"column {c}: array-valued columns are not supported")
-        signals.append(compare_signal(c, t_res, res[c], t_ref, ref[c], num=num, dx=dx,
-                                      dy=tol.get("dy", dy), abs_tol=tol.get("abs_tol", abs_tol),
-                                      rel_tol=tol.get("rel_tol", rel_tol),
-                                      band_floor=tol.get("band_floor", band_floor),
-                                      require_coverage=require_coverage))
+        with np.errstate(invalid="ignore", over="ignore"):   # values near 1.8e308: an infinite band or deviation
+            signals.append(compare_signal(c, t_res, res[c], t_ref, ref[c], num=num, dx=dx,
+                                          dy=tol.get("dy", dy), abs_tol=tol.get("abs_tol", abs_tol),
+                                          rel_tol=tol.get("rel_tol", rel_tol),
+                                          band_floor=tol.get("band_floor", band_floor),
+                                          require_coverage=require_coverage))
     return CompareReport(result=res_label, reference=ref_label, signals=signals, extra_columns=extra,
                          notes=notes, t_res=t_res, t_ref=t_ref, res=res, ref=ref)
 
