@@ -279,7 +279,7 @@ def _run(a, sc, models, out: Path) -> int:
     if a.stop_time is not None:
         # A shortened run is complete for what was asked, but it is not the scenario's result.
         s["shortened_from_stop_time"] = sc.stop_time
-        print(f"anklehip: note: --stop-time {a.stop_time:g} s shortens the scenario's {sc.stop_time:g} s; "
+        print(f"anklehip: note: --stop-time {a.stop_time:g} s replaces the scenario's {sc.stop_time:g} s; "
               "its expectations and reference were not checked", file=sys.stderr)
     write_summary_json(paths["summary"], s)
     print(format_summary(s, pushes))
