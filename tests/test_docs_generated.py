@@ -28,7 +28,7 @@ def test_generated_doc_sections_are_current(build_dir):
 
 def test_controller_parameter_table_defaults_are_the_fmus(fmu_path):
     """docs/controller.md section 7 (written for C users, not generated) states each parameter's
-    default; every one equals the controller FMU's start value (so a change of defaults, or of the
+    default and range; every one equals the controller FMU's start value and min/max (so a change of defaults, or of the
     HOAP-2 numbers, cannot leave the table behind)."""
     import re
 
@@ -37,7 +37,8 @@ def test_controller_parameter_table_defaults_are_the_fmus(fmu_path):
     params = FMUInfo.load(fmu_path("AnkleHipController")).parameters()
     text = (REPO_ROOT / "docs" / "controller.md").read_text()
     section = text[text.index("## 7. Parameters"):text.index("## 8.")]
-    rows = re.findall(r"^\| `(\w+)` \| [^|]* \| ([^|]*) \|", section, re.M)
+    rows = re.findall(r"^\| `(\w+)` \| [^|]* \| ([^|]*) \| \[([^,]*), ([^]]*)\] \|", section, re.M)
     assert len(rows) == len(params), f"table has {len(rows)} rows, the FMU {len(params)} parameters"
-    for name, default in rows:
+    for name, default, lo, hi in rows:
         assert float(default) == pytest.approx(float(params[name].start), rel=1e-12, abs=0), name
+        assert (float(lo), float(hi)) == (float(params[name].min), float(params[name].max)), name

@@ -555,7 +555,7 @@ def test_forged_state_with_valid_checksum_rejected(raw_controller):
         forged[-8:] = _fnv1a64(bytes(forged[:-8])).to_bytes(8, "little")
         b = _running(raw_controller, name="victim")
         assert _restore_bytes(b, bytes(forged)) == fmi2Error, forged_g
-        assert any("invalid parameters" in m and "g = " in m for m in b.errors()), b.log
+        assert any("rejected" in m and "g = " in m for m in b.errors()), b.log
         assert b.fmi2DoStep(0.0, 1e-3, 1) == fmi2OK  # unchanged and usable
         b.free()
     a.free()

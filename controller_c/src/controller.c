@@ -14,6 +14,8 @@
  * kinematics (r_x, r_z, C1, C12) use the measured angles unless kinematics_source says otherwise.
  */
 #include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
 #include <string.h>
 
 #include "ahc/controller.h"
@@ -270,6 +272,8 @@ static unsigned classify(const ahc_params *p, const ahc_sensors *s)
         f |= AHC_FAULT_FZ_NONFINITE;
     else if (s->fz < p->fz_lifted)
         f |= AHC_FAULT_LIFTED;
+    else if (s->fz > p->fz_max)
+        f |= AHC_FAULT_FZ_IMPLAUSIBLE; /* never fed to the disturbance estimate */
     return f;
 }
 
@@ -523,4 +527,101 @@ void ahc_step(ahc_controller *c, const ahc_sensors *s, ahc_outputs *out)
     c->fault = f;
     write_outputs(c, &k, out);
     c->tick++;
+}
+
+/* ------------------------------------------------------------------------------------------- */
+
+static int in_range(double x, double lo, double hi) { return isfinite(x) && x >= lo && x <= hi; }
+
+#define STATE_FAIL(...) (snprintf_msg(msg, msg_size, __VA_ARGS__), AHC_ERR_INCONSISTENT)
+
+static void snprintf_msg(char *msg, size_t n, const char *fmt, ...)
+{
+    if (msg && n > 0) {
+        va_list ap;
+        va_start(ap, fmt);
+        vsnprintf(msg, n, fmt, ap);
+        va_end(ap);
+    }
+}
+
+int ahc_state_validate(const ahc_controller *c, char *msg, size_t msg_size)
+{
+    /* Bound on every state value without a tighter physical range: rates [rad/s], moments [N m]
+     * and sums that a running controller keeps many orders of magnitude below it. */
+    const double big = 1e9;
+    const ahc_params *p;
+    ahc_controller ref;
+    int rc, i;
+    if (msg && msg_size > 0) msg[0] = '\0';
+    if (!c) return AHC_ERR_NULL;
+    if (c->valid != 0 && c->valid != 1) return STATE_FAIL("valid = %d is not 0 or 1", c->valid);
+    if (!c->valid) return AHC_OK; /* ahc_step reads nothing but `valid` then */
+    p = &c->p;
+    rc = ahc_params_validate(p, msg, msg_size);
+    if (rc != AHC_OK) return rc;
+
+    ref = *c; /* derived constants must be those of the parameters */
+    compute_derived(&ref);
+    if (ref.m != c->m || ref.km != c->km || ref.J2 != c->J2 || ref.rz_erect != c->rz_erect ||
+        ref.zmp_alpha != c->zmp_alpha || ref.d_alpha != c->d_alpha)
+        return STATE_FAIL("derived constants do not match the parameters");
+
+    {
+        const struct { const char *name; int v, hi; } flags[] = {
+            {"started", c->started, 1}, {"zmp_f_valid", c->zmp_f_valid, 1}, {"calib_done", c->calib_done, 1},
+            {"holding", c->holding, 1}, {"d_f_valid", c->d_f_valid, 1}, {"hist_n", c->hist_n, 2},
+            {"phase", c->phase, AHC_PHASE_HIP_TO_ANKLE}, {"last_out.phase", c->last_out.phase, AHC_PHASE_HIP_TO_ANKLE},
+        };
+        for (i = 0; i < (int)(sizeof flags / sizeof flags[0]); ++i)
+            if (flags[i].v < 0 || flags[i].v > flags[i].hi)
+                return STATE_FAIL("%s = %d is outside [0, %d]", flags[i].name, flags[i].v, flags[i].hi);
+    }
+    if (c->push_sign != 1 && c->push_sign != -1) return STATE_FAIL("push_sign = %d is not +-1", c->push_sign);
+    if ((c->fault & ~(unsigned)AHC_FAULT_ALL_MASK) || (c->last_out.fault & ~(unsigned)AHC_FAULT_ALL_MASK))
+        return STATE_FAIL("fault = 0x%x has undefined bits", c->fault | c->last_out.fault);
+
+    {
+        /* Values with a physical range: the reference angles are clamped to the joint limits, the
+         * measured angles and the (filtered) ZMP were accepted by classify(), k_w is a weight. */
+        const double am = p->angle_fault_margin, zm = p->zmp_fault_margin;
+        const struct { const char *name; double v, lo, hi; } ranged[] = {
+            {"th1", c->th1, p->ankle_min, p->ankle_max},
+            {"th2", c->th2, p->hip_min, p->hip_max},
+            {"last_th1", c->last_th1, p->ankle_min - am, p->ankle_max + am},
+            {"last_th2", c->last_th2, p->hip_min - am, p->hip_max + am},
+            {"hist_th1[0]", c->hist_th1[0], p->ankle_min - am, p->ankle_max + am},
+            {"hist_th1[1]", c->hist_th1[1], p->ankle_min - am, p->ankle_max + am},
+            {"hist_th2[0]", c->hist_th2[0], p->hip_min - am, p->hip_max + am},
+            {"hist_th2[1]", c->hist_th2[1], p->hip_min - am, p->hip_max + am},
+            {"zmp_f", c->zmp_f, p->heel_x - zm, p->toe_x + zm},
+            {"k_w", c->k_w, 0.0, 1.0},
+            {"phase_time", c->phase_time, 0.0, big},
+            {"fallback_timer", c->fallback_timer, 0.0, big},
+            {"kw_spline.T", c->kw_spline.T, 1e-6, 100.0},
+            {"rxd_spline.T", c->rxd_spline.T, 1e-6, 100.0},
+            {"last_out.k_w", c->last_out.k_w, 0.0, 1.0},
+        };
+        const struct { const char *name; double v; } bounded[] = {
+            {"dth1", c->dth1}, {"dth2", c->dth2}, {"hip_bump", c->hip_bump}, {"rxd", c->rxd}, {"drxd", c->drxd},
+            {"calib_sum", c->calib_sum}, {"calib_bias", c->calib_bias}, {"d_f1", c->d_f1}, {"d_f", c->d_f},
+            {"last_out.theta_ankle_ref", c->last_out.theta_ankle_ref},
+            {"last_out.theta_hip_ref", c->last_out.theta_hip_ref},
+            {"last_out.dtheta_ankle_ref", c->last_out.dtheta_ankle_ref},
+            {"last_out.dtheta_hip_ref", c->last_out.dtheta_hip_ref}, {"last_out.com_x", c->last_out.com_x},
+            {"last_out.com_z", c->last_out.com_z}, {"last_out.disturbance_moment", c->last_out.disturbance_moment},
+            {"last_out.com_x_desired", c->last_out.com_x_desired},
+        };
+        for (i = 0; i < (int)(sizeof ranged / sizeof ranged[0]); ++i)
+            if (!in_range(ranged[i].v, ranged[i].lo, ranged[i].hi))
+                return STATE_FAIL("%s = %g is outside [%g, %g]", ranged[i].name, ranged[i].v, ranged[i].lo,
+                                  ranged[i].hi);
+        for (i = 0; i < (int)(sizeof bounded / sizeof bounded[0]); ++i)
+            if (!in_range(bounded[i].v, -big, big))
+                return STATE_FAIL("%s = %g is not finite or beyond +-%g", bounded[i].name, bounded[i].v, big);
+        for (i = 0; i < 6; ++i)
+            if (!in_range(c->kw_spline.c[i], -big, big) || !in_range(c->rxd_spline.c[i], -big, big))
+                return STATE_FAIL("spline coefficient %d is not finite or beyond +-%g", i, big);
+    }
+    return AHC_OK;
 }

@@ -65,6 +65,10 @@ void ahc_params_default(ahc_params *p)
 
     /* faults */
     p->fz_lifted = 10.0;           /* ~14 % of the robot's weight (70 N) */
+    /* 4 x the weight (281 N): the sole sensors of a robot standing on its own feet never read
+     * that much (the hip strategy's vertical accelerations stay within +-20 % of the weight);
+     * a larger reading is a sensor fault, not a load to balance against. */
+    p->fz_max = 4.0 * (HOAP2_M1 + HOAP2_M2 + HOAP2_FEET_MASS) * HOAP2_G;
     p->zmp_fault_margin = 0.02;
     p->angle_fault_margin = 0.1;
 
@@ -117,73 +121,78 @@ int ahc_params_named(ahc_params *p, const char *name)
 
 /* ------------------------------------------------------------------------------------------- */
 
-#define PI_D(field, unit, lo, hi, strict, desc) \
-    { #field, unit, desc, lo, hi, offsetof(ahc_params, field), 0, strict }
+#define PI_D(field, unit, lo, hi, desc) \
+    { #field, unit, desc, lo, hi, offsetof(ahc_params, field), 0 }
 #define PI_I(field, lo, hi, desc) \
-    { #field, "", desc, lo, hi, offsetof(ahc_params, field), 1, 0 }
+    { #field, "", desc, lo, hi, offsetof(ahc_params, field), 1 }
 
-/* Append new rows at the end only: the FMU derives value references from the row index. */
+/* Append new rows at the end only: the FMU derives value references from the row index.
+ * Ranges are closed and physically meaningful (a positive quantity's minimum is the smallest
+ * value that still means something for a legged robot, not 0 excluded): the FMU declares them as
+ * min/max, so an importer is refused at set time, not only at initialization. */
 static const ahc_param_info k_table[] = {
-    PI_D(g, "m/s2", 0.0, 100.0, 1, "Gravitational acceleration"),
-    PI_D(m1, "kg", 0.0, 1000.0, 1, "Mass of link 1 (both legs, ankle to hip)"),
-    PI_D(l1, "m", 0.0, 10.0, 1, "Length of link 1, ankle axis to hip axis"),
-    PI_D(lg1, "m", 0.0, 10.0, 1, "Distance ankle axis to CoM of link 1"),
-    PI_D(I1, "kg.m2", 0.0, 100.0, 0, "Inertia of link 1 about its CoM (pitch)"),
-    PI_D(m2, "kg", 0.0, 1000.0, 1, "Mass of link 2 (upper body)"),
-    PI_D(lg2, "m", 0.0, 10.0, 1, "Distance hip axis to CoM of link 2"),
-    PI_D(I2, "kg.m2", 0.0, 100.0, 0, "Inertia of link 2 about its CoM (pitch)"),
-    PI_D(feet_mass, "kg", 0.0, 1000.0, 0, "Mass of both feet (used by feet_offset_mode = 1)"),
-    PI_D(feet_com_x, "m", -1.0, 1.0, 0, "Feet CoM x forward of the ankle axis"),
-    PI_D(feet_com_z, "m", 0.0, 1.0, 0, "Feet CoM height above the sole (informational; not used by the control laws)"),
-    PI_D(toe_x, "m", 0.0, 1.0, 1, "Toe edge x from the ankle axis (> 0)"),
-    PI_D(heel_x, "m", -1.0, 0.0, 0, "Heel edge x from the ankle axis (< 0)"),
-    PI_D(ankle_height, "m", 0.0, 1.0, 0, "Ankle axis height above the sole (lever of the disturbance moment balance)"),
-    PI_D(ankle_min, "rad", -3.2, 0.0, 0, "Ankle joint lower limit"),
-    PI_D(ankle_max, "rad", 0.0, 3.2, 0, "Ankle joint upper limit"),
-    PI_D(hip_min, "rad", -3.2, 0.0, 0, "Hip joint lower limit"),
-    PI_D(hip_max, "rad", 0.0, 3.2, 0, "Hip joint upper limit"),
-    PI_D(Ka, "N.m/rad", 0.0, 1e6, 1, "Ankle virtual stiffness (eq. 11; paper 40000 N.mm/rad)"),
-    PI_D(Ca, "N.m.s/rad", 0.0, 1e6, 0, "Ankle virtual damping (eq. 11; paper 10000 N.mm.s/rad)"),
-    PI_D(Kh, "N.m/rad", 0.0, 1e6, 1, "Hip virtual stiffness (eq. 16; paper 4000 N.mm/rad)"),
-    PI_D(Ch, "N.m.s/rad", 0.0, 1e6, 0, "Hip virtual damping (eq. 16; paper 1000 N.mm.s/rad)"),
-    PI_D(Kpr, "1/s", 0.0, 1e6, 1, "CoM projection feedback gain (eq. 24)"),
-    PI_D(Kp_theta, "1/s", 0.0, 1e6, 1, "Hip return regulator gain (eq. 25)"),
+    PI_D(g, "m/s2", 0.1, 100.0, "Gravitational acceleration"),
+    PI_D(m1, "kg", 0.01, 1000.0, "Mass of link 1 (both legs, ankle to hip)"),
+    PI_D(l1, "m", 0.001, 10.0, "Length of link 1, ankle axis to hip axis"),
+    PI_D(lg1, "m", 0.001, 10.0, "Distance ankle axis to CoM of link 1"),
+    PI_D(I1, "kg.m2", 0.0, 100.0, "Inertia of link 1 about its CoM (pitch)"),
+    PI_D(m2, "kg", 0.01, 1000.0, "Mass of link 2 (upper body)"),
+    PI_D(lg2, "m", 0.001, 10.0, "Distance hip axis to CoM of link 2"),
+    PI_D(I2, "kg.m2", 0.0, 100.0, "Inertia of link 2 about its CoM (pitch)"),
+    PI_D(feet_mass, "kg", 0.0, 1000.0, "Mass of both feet (used by feet_offset_mode = 1)"),
+    PI_D(feet_com_x, "m", -1.0, 1.0, "Feet CoM x forward of the ankle axis"),
+    PI_D(feet_com_z, "m", 0.0, 1.0, "Feet CoM height above the sole (informational; not used by the control laws)"),
+    PI_D(toe_x, "m", 0.001, 1.0, "Toe edge x from the ankle axis (> 0)"),
+    PI_D(heel_x, "m", -1.0, -0.001, "Heel edge x from the ankle axis (< 0)"),
+    PI_D(ankle_height, "m", 0.0, 1.0, "Ankle axis height above the sole (lever of the disturbance moment balance)"),
+    PI_D(ankle_min, "rad", -3.2, 0.0, "Ankle joint lower limit"),
+    PI_D(ankle_max, "rad", 0.0, 3.2, "Ankle joint upper limit"),
+    PI_D(hip_min, "rad", -3.2, 0.0, "Hip joint lower limit"),
+    PI_D(hip_max, "rad", 0.0, 3.2, "Hip joint upper limit"),
+    PI_D(Ka, "N.m/rad", 1e-3, 1e6, "Ankle virtual stiffness (eq. 11; paper 40000 N.mm/rad)"),
+    PI_D(Ca, "N.m.s/rad", 0.0, 1e6, "Ankle virtual damping (eq. 11; paper 10000 N.mm.s/rad)"),
+    PI_D(Kh, "N.m/rad", 1e-3, 1e6, "Hip virtual stiffness (eq. 16; paper 4000 N.mm/rad)"),
+    PI_D(Ch, "N.m.s/rad", 0.0, 1e6, "Hip virtual damping (eq. 16; paper 1000 N.mm.s/rad)"),
+    PI_D(Kpr, "1/s", 1e-3, 1e6, "CoM projection feedback gain (eq. 24)"),
+    PI_D(Kp_theta, "1/s", 1e-3, 1e6, "Hip return regulator gain (eq. 25)"),
     PI_I(hip_strategy_enabled, 0.0, 1.0,
          "1: ankle and hip strategies with transitions; 0: ankle strategy only"),
-    PI_D(zmp_limit_front, "m", 0.0, 1.0, 1,
+    PI_D(zmp_limit_front, "m", 0.001, 1.0,
          "ZMP safety limit on the toe side (x coordinate) that starts the ankle-to-hip transition"),
-    PI_D(zmp_limit_back, "m", -1.0, 0.0, 0,
+    PI_D(zmp_limit_back, "m", -1.0, -0.001,
          "ZMP safety limit on the heel side (x coordinate, < 0) for pushes from the front"),
-    PI_D(T_ah, "s", 0.0, 100.0, 1, "Duration of the ankle-to-hip transition"),
-    PI_D(rz_band_low, "m", -1.0, 0.0, 0,
+    PI_D(T_ah, "s", 0.002, 100.0, "Duration of the ankle-to-hip transition"),
+    PI_D(rz_band_low, "m", -1.0, 0.0,
          "Hip-to-ankle trigger: lower edge of the CoM height band relative to erect"),
-    PI_D(rz_band_high, "m", 0.0, 1.0, 0,
+    PI_D(rz_band_high, "m", 0.0, 1.0,
          "Hip-to-ankle trigger: upper edge of the CoM height band relative to erect"),
-    PI_D(fallback_disturbance_tol, "N.m", 0.0, 100.0, 0,
+    PI_D(fallback_disturbance_tol, "N.m", 0.0, 100.0,
          "Hip-to-ankle fallback: disturbance moment magnitude below this"),
-    PI_D(fallback_hip_tol, "rad", 0.0, 3.2, 0,
+    PI_D(fallback_hip_tol, "rad", 0.0, 3.2,
          "Hip-to-ankle fallback: hip reference magnitude below this"),
-    PI_D(fallback_dwell, "s", 0.0, 100.0, 0,
+    PI_D(fallback_dwell, "s", 0.0, 100.0,
          "Hip-to-ankle fallback: time both fallback conditions must hold"),
-    PI_D(return_hip_angle_tol, "rad", 0.0, 1.0, 1,
+    PI_D(return_hip_angle_tol, "rad", 1e-6, 1.0,
          "Return to the ankle strategy when |hip reference| is below this"),
-    PI_D(return_hip_rate_tol, "rad/s", 0.0, 10.0, 1,
+    PI_D(return_hip_rate_tol, "rad/s", 1e-6, 10.0,
          "Return to the ankle strategy when |hip reference rate| is below this"),
-    PI_D(zmp_filter_tau, "s", 0.0, 10.0, 0, "Time constant of the ZMP low-pass filter (0 = off)"),
+    PI_D(zmp_filter_tau, "s", 0.0, 10.0, "Time constant of the ZMP low-pass filter (0 = off)"),
     PI_I(feet_offset_mode, 0.0, 2.0,
          "Feet in the disturbance estimate: 0 ignore (paper), 1 model, 2 calibrate at rest"),
-    PI_D(feet_calibration_time, "s", 0.0, 100.0, 0,
+    PI_D(feet_calibration_time, "s", 0.0, 100.0,
          "Averaging time of the at-rest calibration (feet_offset_mode = 2)"),
     PI_I(kinematics_source, 0.0, 1.0,
          "Angles for r_x, r_z, C1, C12: 0 measured, 1 controller reference"),
-    PI_D(fz_lifted, "N", 0.0, 1e4, 0, "Normal force below which the robot counts as lifted"),
-    PI_D(zmp_fault_margin, "m", 0.0, 1.0, 0,
+    PI_D(fz_lifted, "N", 0.0, 1e4, "Normal force below which the robot counts as lifted"),
+    PI_D(zmp_fault_margin, "m", 0.0, 1.0,
          "ZMP beyond a sole edge by more than this is a sensor fault"),
-    PI_D(angle_fault_margin, "rad", 0.0, 3.2, 0,
+    PI_D(angle_fault_margin, "rad", 0.0, 3.2,
          "Measured angle beyond its joint limit by more than this is a sensor fault"),
-    PI_D(sample_period, "s", 0.0, 1.0, 1, "Control period; one ahc_step advances by this"),
+    PI_D(sample_period, "s", 1e-5, 0.1, "Control period; one ahc_step advances by this (10 us to 100 ms)"),
     PI_I(reaction_compensation, 0.0, 1.0,
          "Disturbance estimate: 1 moment balance minus the measured motion's reaction, 0 paper m g (p - r_x)"),
+    PI_D(fz_max, "N", 1.0, 1e5,
+         "Normal force above this is an implausible sensor reading (fault, hold): several times the robot's weight"),
 };
 
 #define TABLE_LEN (sizeof k_table / sizeof k_table[0])
@@ -250,8 +259,6 @@ int ahc_params_validate(const ahc_params *p, char *msg, size_t msg_size)
         const double v = field_value(p, e);
         if (!isfinite(v))
             return fail(msg, msg_size, AHC_ERR_NONFINITE, "%s = %g must be finite", e->name, v);
-        if (e->strict_min && !(v > e->min))
-            return fail(msg, msg_size, AHC_ERR_RANGE, "%s = %.6g must be > %.6g", e->name, v, e->min);
         if (v < e->min)
             return fail(msg, msg_size, AHC_ERR_RANGE, "%s = %.6g must be >= %.6g", e->name, v, e->min);
         if (v > e->max)
@@ -281,6 +288,9 @@ int ahc_params_validate(const ahc_params *p, char *msg, size_t msg_size)
     if (!(p->hip_min < p->hip_max))
         return fail(msg, msg_size, AHC_ERR_INCONSISTENT, "hip_min = %.6g must be < hip_max = %.6g",
                     p->hip_min, p->hip_max);
+    if (!(p->fz_lifted < p->fz_max))
+        return fail(msg, msg_size, AHC_ERR_INCONSISTENT, "fz_lifted = %.6g must be < fz_max = %.6g",
+                    p->fz_lifted, p->fz_max);
     if (!(p->rz_band_low < p->rz_band_high))
         return fail(msg, msg_size, AHC_ERR_INCONSISTENT,
                     "rz_band_low = %.6g must be < rz_band_high = %.6g", p->rz_band_low, p->rz_band_high);
@@ -355,6 +365,7 @@ const char *ahc_fault_string(unsigned fault, char *msg, size_t msg_size)
         { AHC_FAULT_ANGLE_RANGE, "angle_range" },
         { AHC_FAULT_REF_SATURATED, "ref_saturated" },
         { AHC_FAULT_NOT_INITIALIZED, "not_initialized" },
+        { AHC_FAULT_FZ_IMPLAUSIBLE, "fz_implausible" },
     };
     size_t i, used = 0;
     if (!msg || msg_size == 0) return msg;

@@ -9,8 +9,13 @@
  *  - faults during the ankle->hip transition pause the transition (no NaN, phase kept);
  *  - a fault on the very first tick outputs the erect reference (zeros), finite;
  *  - an instance whose init failed reports AHC_FAULT_NOT_INITIALIZED with zero outputs;
- *  - a reference driven to a joint limit is clamped and flagged with the warning bit.
+ *  - a reference driven to a joint limit is clamped and flagged with the warning bit;
+ *  - an implausibly large fz (above fz_max, up to DBL_MAX), for one tick or a hundred, holds the
+ *    reference with its bit and is never fed to the disturbance estimate: the controller ends at
+ *    the same lean as one that never saw it (audit: one fz = 1e10 sample made the robot fall).
  */
+#include <float.h>
+
 #include "ahc_test.h"
 
 static int outputs_finite(const ahc_outputs *o)
@@ -81,6 +86,8 @@ int main(void)
             { { p.ankle_max + p.angle_fault_margin + 0.01, 0.0, 0.01, 70.0 }, AHC_FAULT_ANGLE_RANGE, "ankle range" },
             { { 0.0, p.hip_min - p.angle_fault_margin - 0.01, 0.01, 70.0 }, AHC_FAULT_ANGLE_RANGE, "hip range" },
             { { NAN, 0.0, 0.01, 0.0 }, AHC_FAULT_THETA_ANKLE_NONFINITE | AHC_FAULT_LIFTED, "combined" },
+            { { 0.0, 0.0, 0.01, p.fz_max + 0.5 }, AHC_FAULT_FZ_IMPLAUSIBLE, "fz beyond fz_max" },
+            { { 0.0, 0.0, 0.01, 1e300 }, AHC_FAULT_FZ_IMPLAUSIBLE, "fz = 1e300" },
         };
         size_t i;
         for (i = 0; i < sizeof cases / sizeof cases[0]; ++i) {
@@ -101,6 +108,41 @@ int main(void)
             ahc_sensors edge = { 0.0, 0.0, p.toe_x + p.zmp_fault_margin - 0.001, p.fz_lifted + 0.5 };
             ahc_step(&c, &edge, &o);
             CHECK(o.fault == 0, "edge values are healthy: 0x%x", o.fault);
+        }
+    }
+
+    /* implausible fz for 1 and 100 ticks, with both disturbance estimates */
+    {
+        const double fz_bad[] = { p.fz_max * 1.01, 1e4, 1e10, 1e300, DBL_MAX };
+        const int ticks[] = { 1, 100 };
+        size_t i, k;
+        int rc_mode;
+        for (rc_mode = 0; rc_mode <= 1; ++rc_mode) {
+            ahc_params q = p;
+            q.reaction_compensation = rc_mode;
+            for (i = 0; i < sizeof fz_bad / sizeof fz_bad[0]; ++i) {
+                for (k = 0; k < 2; ++k) {
+                    ahc_sensors bad = good;
+                    bad.fz = fz_bad[i];
+                    CHECK(ahc_init(&c, &q) == AHC_OK && ahc_init(&ref, &q) == AHC_OK, "init");
+                    for (n = 0; n < 300; ++n) {
+                        ahc_step(&c, &good, &o);
+                        ahc_step(&ref, &good, &o_ref);
+                    }
+                    for (n = 0; n < ticks[k]; ++n) {
+                        ahc_step(&c, &bad, &o);
+                        CHECK(o.fault == AHC_FAULT_FZ_IMPLAUSIBLE && outputs_finite(&o) && o.disturbance_moment == 0.0,
+                              "fz = %g: fault 0x%x, d = %g", fz_bad[i], o.fault, o.disturbance_moment);
+                    }
+                    for (n = 0; n < 6000; ++n) {
+                        ahc_step(&c, &good, &o);
+                        ahc_step(&ref, &good, &o_ref);
+                    }
+                    CHECK(o.fault == 0 && fabs(o.disturbance_moment) < 1.0, "fz = %g: recovered, d = %g", fz_bad[i],
+                          o.disturbance_moment);
+                    CHECK_NEAR(o.theta_ankle_ref, o_ref.theta_ankle_ref, 1e-9, "same lean after an implausible fz");
+                }
+            }
         }
     }
 

@@ -148,11 +148,12 @@ int main(void)
         CHECK(ahc_param_find("nonexistent") == NULL, "unknown name");
     }
 
-    /* every row's range enforced, message names field and value */
+    /* every row's range is closed (min and max themselves are accepted by the row check) and
+     * enforced, the message names field and value */
     for (i = 0; i < count; ++i) {
         double bad[3];
         int nb = 0, k;
-        if (t[i].min > -1e300) bad[nb++] = t[i].strict_min ? t[i].min : t[i].min - 1.0;
+        if (t[i].min > -1e300) bad[nb++] = t[i].is_int ? t[i].min - 1.0 : nextafter(t[i].min, -INFINITY);
         if (t[i].max < 1e300) bad[nb++] = t[i].max + 1.0;
         if (!t[i].is_int) bad[nb++] = NAN;
         for (k = 0; k < nb; ++k) {
@@ -171,7 +172,7 @@ int main(void)
     q = p;
     q.m1 = -1;
     rc = ahc_params_validate(&q, msg, sizeof msg);
-    CHECK(rc == AHC_ERR_RANGE && strcmp(msg, "m1 = -1 must be > 0") == 0, "m1 message: %s", msg);
+    CHECK(rc == AHC_ERR_RANGE && strcmp(msg, "m1 = -1 must be >= 0.01") == 0, "m1 message: %s", msg);
     q = p;
     q.zmp_limit_front = 0.07;
     rc = ahc_params_validate(&q, msg, sizeof msg);
@@ -191,9 +192,21 @@ int main(void)
     rc = ahc_params_validate(&q, msg, sizeof msg);
     CHECK(rc == AHC_ERR_RANGE && contains(msg, "sample_period = 0"), "sample period: %s", msg);
     q = p;
+    q.sample_period = 2.2e-310; /* audit: a denormal period made fmi2DoStep run ~1e9 ticks */
+    rc = ahc_params_validate(&q, msg, sizeof msg);
+    CHECK(rc == AHC_ERR_RANGE && contains(msg, "sample_period = 2.2e-310 must be >= 1e-05"), "denormal period: %s", msg);
+    q = p;
     q.sample_period = 0.2;
     rc = ahc_params_validate(&q, msg, sizeof msg);
-    CHECK(rc == AHC_ERR_INCONSISTENT && contains(msg, "sample_period = 0.2"), "unstable period: %s", msg);
+    CHECK(rc == AHC_ERR_RANGE && contains(msg, "sample_period = 0.2"), "period beyond 100 ms: %s", msg);
+    q = p;
+    q.sample_period = 0.05;
+    rc = ahc_params_validate(&q, msg, sizeof msg);
+    CHECK(rc == AHC_ERR_INCONSISTENT && contains(msg, "sample_period = 0.05"), "unstable period: %s", msg);
+    q = p;
+    q.fz_max = 5.0;
+    rc = ahc_params_validate(&q, msg, sizeof msg);
+    CHECK(rc == AHC_ERR_INCONSISTENT && contains(msg, "fz_lifted = 10 must be < fz_max = 5"), "fz_max: %s", msg);
     q = p;
     q.Ka = INFINITY;
     rc = ahc_params_validate(&q, msg, sizeof msg);

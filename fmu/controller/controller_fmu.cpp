@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <limits>
 #include <string>
 
 #include "ahc/controller.h"
@@ -139,7 +140,7 @@ ModelInfo makeInfo() {
     v.causality = Causality::Parameter;
     v.variability = isTunable(p.name) ? Variability::Tunable : Variability::Fixed;
     v.unit = p.is_int ? "" : p.unit;
-    v.description = std::string(p.description) + (p.strict_min ? " (must be > min)" : "");
+    v.description = p.description;
     const char* base = reinterpret_cast<const char*>(&def) + p.offset;
     if (p.is_int) {
       int x;
@@ -215,6 +216,13 @@ class ControllerModel final : public Model {
     return fmi2OK;
   }
 
+  // At most kMaxTicksPerStep control ticks per fmi2DoStep (1000 s at the 1 ms default period,
+  // about 0.1 s of computation): a longer step is refused before anything runs.
+  static constexpr double kMaxTicksPerStep = 1e6;
+  double max_step_size(const Context&) const override {
+    return ctl_.valid ? kMaxTicksPerStep * ctl_.p.sample_period : std::numeric_limits<double>::infinity();
+  }
+
   StepResult do_step(Context& ctx, double t, double h, bool) override {
     StepResult r;
     if (!ctl_.valid || !(ctl_.p.sample_period > 0.0)) {  // unreachable after a successful exit_initialization
@@ -242,6 +250,7 @@ class ControllerModel final : public Model {
       nonfinite_ = 0;
     }
     const double T = ctl_.p.sample_period;
+    // t and h are finite and h <= max_step_size (the glue checked): due_d < 2^53, exact.
     const double due_d = std::floor((t + h - t0_) / T + 1e-9);
     const unsigned long long due = due_d > 0.0 ? static_cast<unsigned long long>(due_d) : 0ull;
     ahc_outputs o = ctl_.last_out;
@@ -277,7 +286,7 @@ class ControllerModel final : public Model {
     w.i32(nonfinite_);
   }
 
-  bool load_state(StateReader& r, std::string& err) override {
+  bool load_state(Context& ctx, StateReader& r, std::string& err) override {
     std::uint64_t size = 0;
     if (!r.u64(size) || size != sizeof(ahc_controller)) {
       err = "controller state size mismatch";
@@ -292,26 +301,19 @@ class ControllerModel final : public Model {
       err = "controller state truncated";
       return false;
     }
-    if (phase < 0 || phase > 3 || !std::isfinite(t0)) {
+    if (phase < 0 || phase > 3 || t0 != ctx.start_time()) {
       err = "controller state corrupt";
       return false;
     }
-    // The checksum only catches accidental corruption: check that the controller struct is one
-    // ahc_init could have produced, so that a forged blob cannot make fmi2DoStep divide by a zero
-    // sample period or run with parameters ahc_params_validate would reject.
-    if (c.valid) {
-      char msg[256] = {0};
-      if (ahc_params_validate(&c.p, msg, sizeof msg) != AHC_OK) {
-        err = std::string("controller state has invalid parameters: ") + msg;
-        return false;
-      }
-      if (c.valid != 1 || c.phase < AHC_PHASE_ANKLE || c.phase > AHC_PHASE_HIP_TO_ANKLE ||
-          !std::isfinite(c.th1) || !std::isfinite(c.dth1) || !std::isfinite(c.th2) || !std::isfinite(c.dth2)) {
-        err = "controller state corrupt (phase or reference states)";
-        return false;
-      }
-    } else if (ticks != 0) {
-      err = "controller state corrupt (ticks counted on an uninitialized controller)";
+    // The checksum only catches accidental corruption: the controller struct must be one that
+    // ahc_init and ahc_step could have produced, and the FMU's counters must agree with it.
+    char msg[256] = {0};
+    if (ahc_state_validate(&c, msg, sizeof msg) != AHC_OK) {
+      err = std::string("controller state rejected: ") + msg;
+      return false;
+    }
+    if (ticks != c.tick || (!c.valid && ticks != 0) || (fault & ~unsigned(AHC_FAULT_ALL_MASK)) || nonfinite < 0 || nonfinite > 1) {
+      err = "controller state corrupt (tick counter, fault mask or input flag)";
       return false;
     }
     ctl_ = c;

@@ -4,6 +4,7 @@
 // from hoap2plant::default_params() (which reads hoap2/nominal.h: one source of truth).
 // Outputs are sampled at the communication points (no direct feed-through).
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <memory>
 #include <string>
@@ -18,6 +19,11 @@ using hoap2plant::Plant;
 
 namespace {
 
+// Largest push magnitude accepted [N]: 14 times the robot's weight, far beyond any push it can
+// survive (about 11 N held statically) yet still a force the integrator resolves into a
+// fall. A larger value is refused by fmi2SetReal, naming the variable and the range.
+constexpr double kMaxPush = 1000.0;
+
 namespace vr {
 enum : fmi2ValueReference {
   // inputs
@@ -26,7 +32,7 @@ enum : fmi2ValueReference {
   theta_ankle = 10, theta_hip = 11, dtheta_ankle = 12, dtheta_hip = 13, zmp_x = 14, fz = 15, fx = 16,
   com_x = 17, com_z = 18, foot_pitch = 19, contact_mode = 20, fallen = 21, f_toe = 22, f_heel = 23,
   required_mu = 24, zmp_true = 25, fz_true = 26, energy = 27, tau_ankle = 28, tau_hip = 29,
-  moment_ankle = 30,
+  moment_ankle = 30, input_fault = 31,
   cvode_steps = 40, rhs_evals = 41, root_evals = 42, mode_switches = 43, impacts = 44,
   // parameters: 100 + index into kParams; then the non-Real ones
   first_real_param = 100,
@@ -105,7 +111,8 @@ ModelInfo makeInfo() {
   const auto Cont = Variability::Continuous, Disc = Variability::Discrete, Fix = Variability::Fixed;
   add("theta_ankle_ref", vr::theta_ankle_ref, Type::Real, In, Cont, "rad", "Ankle servo set point", 0.0);
   add("theta_hip_ref", vr::theta_hip_ref, Type::Real, In, Cont, "rad", "Hip servo set point", 0.0);
-  add("push_force", vr::push_force, Type::Real, In, Cont, "N", "Horizontal force on the back of link 2 (+ forward)", 0.0);
+  add("push_force", vr::push_force, Type::Real, In, Cont, "N", "Horizontal force on the back of link 2 (+ forward)", 0.0,
+      -kMaxPush, kMaxPush);
 
   add("theta_ankle", vr::theta_ankle, Type::Real, Out, Cont, "rad", "Ankle angle theta1 (leg relative to foot)");
   add("theta_hip", vr::theta_hip, Type::Real, Out, Cont, "rad", "Hip angle theta2 (upper body relative to leg)");
@@ -128,6 +135,9 @@ ModelInfo makeInfo() {
   add("energy", vr::energy, Type::Real, Out, Cont, "J", "Mechanical energy (kinetic + potential)");
   add("tau_ankle", vr::tau_ankle, Type::Real, Out, Cont, "N.m", "Ankle joint torque (servo + passive damping)");
   add("tau_hip", vr::tau_hip, Type::Real, Out, Cont, "N.m", "Hip joint torque (servo + passive damping)");
+  add("input_fault", vr::input_fault, Type::Integer, Out, Disc, "",
+      "Inputs held at their last finite value because they are NaN/Inf: bit 0 theta_ankle_ref, 1 theta_hip_ref, "
+      "2 push_force (0 = healthy)");
   add("cvode_steps", vr::cvode_steps, Type::Integer, Out, Disc, "", "CVODE internal steps so far");
   add("rhs_evals", vr::rhs_evals, Type::Integer, Out, Disc, "", "Right-hand-side evaluations so far (incl. Jacobian)");
   add("root_evals", vr::root_evals, Type::Integer, Out, Disc, "", "Root-function evaluations so far");
@@ -148,23 +158,38 @@ ModelInfo makeInfo() {
 
 int clampi(std::int64_t v) { return v > 2147483647 ? 2147483647 : static_cast<int>(v); }
 
+// The plant's parameters from the parameter variables (range-checked by the glue), with the
+// checks that involve several of them; false with the reason in `why`.
+bool paramsFromStore(const Context& ctx, Params& p, std::string& why) {
+  p = hoap2plant::default_params();
+  for (int i = 0; i < kNumParams; ++i) p.*(kParams[i].field) = ctx.real(vr::first_real_param + i);
+  p.servo_on = ctx.boolean(vr::servo_on);
+  p.lock_joints_at_impact = ctx.boolean(vr::lock_joints_at_impact);
+  p.seed = static_cast<std::uint64_t>(ctx.integer(vr::seed));
+  char buf[160];
+  if (!(p.toe_x > p.heel_x)) {
+    std::snprintf(buf, sizeof buf, "toe_x (%g) must be > heel_x (%g)", p.toe_x, p.heel_x);
+  } else if (p.h_push <= p.ankle_height + p.l1) {
+    std::snprintf(buf, sizeof buf, "h_push (%g m) must be above the hip (ankle_height + l1 = %g m)", p.h_push,
+                  p.ankle_height + p.l1);
+  } else {
+    return true;
+  }
+  why = buf;
+  return false;
+}
+
 class PlantFmu : public Model {
  public:
   void reset(Context&) override { plant_.reset(); }
 
+  std::uint32_t state_version() const override { return 2; }  // 2: field by field, parameters from the store
+
   fmi2Status exit_initialization(Context& ctx) override {
-    Params p = hoap2plant::default_params();
-    for (int i = 0; i < kNumParams; ++i) p.*(kParams[i].field) = ctx.real(vr::first_real_param + i);
-    p.servo_on = ctx.boolean(vr::servo_on);
-    p.lock_joints_at_impact = ctx.boolean(vr::lock_joints_at_impact);
-    p.seed = static_cast<std::uint64_t>(ctx.integer(vr::seed));
-    if (!(p.heel_x < p.feet_com_x + 1.0) || !(p.toe_x > p.heel_x)) {
-      ctx.log(kLogStatusError, fmi2Error, "toe_x (%g) must be > heel_x (%g)", p.toe_x, p.heel_x);
-      return fmi2Error;
-    }
-    if (p.h_push <= p.ankle_height + p.l1) {
-      ctx.log(kLogStatusError, fmi2Error, "h_push (%g m) must be above the hip (ankle_height + l1 = %g m)", p.h_push,
-              p.ankle_height + p.l1);
+    Params p;
+    std::string why;
+    if (!paramsFromStore(ctx, p, why)) {
+      ctx.log(kLogStatusError, fmi2Error, "%s", why.c_str());
       return fmi2Error;
     }
     plant_ = std::make_unique<Plant>(p);
@@ -183,6 +208,10 @@ class PlantFmu : public Model {
     return fmi2OK;
   }
 
+  // CVODE adapts its steps (1000 s at rest take microseconds), but a step of 1e300 s breaks its
+  // time arithmetic: communication steps are bounded at a simulated hour.
+  double max_step_size(const Context&) const override { return 3600.0; }
+
   StepResult do_step(Context& ctx, double t, double h, bool) override {
     StepResult res;
     if (!plantMayStep(ctx, plant_ != nullptr, t, plant_ ? plant_->time() : 0.0, plant_ && plant_->fallen(),
@@ -192,7 +221,7 @@ class PlantFmu : public Model {
     static const fmi2ValueReference kInputVr[3] = {vr::theta_ankle_ref, vr::theta_hip_ref, vr::push_force};
     static const char* const kInputNames[3] = {"theta_ankle_ref", "theta_hip_ref", "push_force"};
     double in[3];
-    const fmi2Status st = readFiniteInputs(ctx, t, 3, kInputVr, kInputNames, last_in_, in);
+    const fmi2Status st = readFiniteInputs(ctx, t, 3, kInputVr, kInputNames, last_in_, in, vr::input_fault);
     plant_->set_inputs(in[0], in[1], in[2]);
     const auto r = plant_->do_step(h);
     write_outputs(ctx);
@@ -203,22 +232,17 @@ class PlantFmu : public Model {
     return plantStepResult(ctx, outcome, st, plant_->fall_time(), plant_->message());
   }
 
+  // The parameters are not in the model's part of the state: load_state rebuilds them from the
+  // restored (and checked) parameter variables, as exit_initialization does.
   void save_state(StateWriter& w) const override {
     w.u32(plant_ ? 1u : 0u);
     if (!plant_) return;
-    // copies into zeroed storage so padding bytes are deterministic in the serialized state
-    Params p;
-    hoap2plant::Snapshot s;
-    std::memset(static_cast<void*>(&p), 0, sizeof p);
-    std::memset(static_cast<void*>(&s), 0, sizeof s);
-    p = plant_->model().P;
-    s = plant_->snapshot();
-    w.pod(p);
-    w.pod(s);
-    w.bytes(last_in_, sizeof last_in_);
+    const hoap2plant::Snapshot snap = plant_->snapshot();
+    visit_fields(snap, FieldWriter{w});
+    for (double x : last_in_) w.f64(x);
   }
 
-  bool load_state(StateReader& r, std::string& err) override {
+  bool load_state(Context& ctx, StateReader& r, std::string& err) override {
     std::uint32_t has = 0;
     if (!r.u32(has) || has > 1) return err = "bad plant state header", false;
     if (!has) {
@@ -226,11 +250,16 @@ class PlantFmu : public Model {
       return true;
     }
     Params p;
+    if (!paramsFromStore(ctx, p, err)) return false;
     hoap2plant::Snapshot s;
+    FieldReader fr{r};
+    visit_fields(s, fr);
     double li[3];
-    if (!r.pod(p) || !r.pod(s) || !r.bytes(li, sizeof li)) return err = "truncated plant state", false;
+    for (double& x : li) fr("last_inputs", x);
+    if (!fr.ok()) return err = "plant snapshot: " + fr.error, false;
+    if (s.t != ctx.time()) return err = "plant snapshot: its time is not the instance's", false;
     auto fresh = std::make_unique<Plant>(p);
-    if (!fresh->restore(s)) return err = "invalid plant snapshot", false;
+    if (!fresh->restore(s)) return err = "invalid plant snapshot (contact mode, flags or state out of range)", false;
     plant_ = std::move(fresh);  // CVODE is re-initialized from the snapshot at the next step
     std::memcpy(last_in_, li, sizeof li);
     return true;

@@ -4,8 +4,10 @@
 // and every scenario connect unchanged; the 3D signals are added beside them. Servo parameters
 // are named as Hoap2Plant's (kp_ankle, ...), for both legs together.
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <functional>
+#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
@@ -19,6 +21,11 @@ using namespace hoap2plant3d;
 
 namespace {
 
+// Largest push magnitude accepted [N]: 14 times the robot's weight, far beyond any push it can
+// survive (about 11 N held statically) yet still a force the integrator resolves into a
+// fall. A larger value is refused by fmi2SetReal, naming the variable and the range.
+constexpr double kMaxPush = 1000.0;
+
 namespace vr {
 enum : fmi2ValueReference {
   // inputs: the sagittal two, the push, then the other set points
@@ -28,7 +35,7 @@ enum : fmi2ValueReference {
   theta_ankle = 10, theta_hip = 11, dtheta_ankle = 12, dtheta_hip = 13, zmp_x = 14, fz = 15, fx = 16,
   com_x = 17, com_z = 18, foot_pitch = 19, contact_mode = 20, fallen = 21, f_toe = 22, f_heel = 23,
   required_mu = 24, zmp_true = 25, fz_true = 26, energy = 27, tau_ankle = 28, tau_hip = 29,
-  moment_ankle = 30,
+  moment_ankle = 30, input_fault = 31,
   // 3D outputs
   zmp_y = 50, fy = 51, com_y = 52, foot_roll = 53, zmp_true_y = 54, fz_left = 55, fz_right = 56,
   slip_speed_left = 57, slip_speed_right = 58, imu_roll = 59, imu_pitch = 60, imu_yaw = 61,
@@ -134,8 +141,10 @@ ModelInfo makeInfo() {
   const auto R = Type::Real, I = Type::Integer, B = Type::Boolean;
   add("theta_ankle_ref", vr::theta_ankle_ref, R, In, Cont, "rad", "Ankle pitch set point, both legs", 0.0);
   add("theta_hip_ref", vr::theta_hip_ref, R, In, Cont, "rad", "Hip pitch set point, both legs", 0.0);
-  add("push_force", vr::push_force, R, In, Cont, "N", "Horizontal force on the trunk, x (+ forward)", 0.0);
-  add("push_force_y", vr::push_force_y, R, In, Cont, "N", "Horizontal force on the trunk, y (+ to the left)", 0.0);
+  add("push_force", vr::push_force, R, In, Cont, "N", "Horizontal force on the trunk, x (+ forward)", 0.0, -kMaxPush,
+      kMaxPush);
+  add("push_force_y", vr::push_force_y, R, In, Cont, "N", "Horizontal force on the trunk, y (+ to the left)", 0.0,
+      -kMaxPush, kMaxPush);
   add("theta_ankle_roll_ref", vr::theta_ankle_roll_ref, R, In, Cont, "rad", "Ankle roll set point, both legs", 0.0);
   add("theta_hip_roll_ref", vr::theta_hip_roll_ref, R, In, Cont, "rad", "Hip roll set point, both legs", 0.0);
   add("theta_hip_yaw_ref", vr::theta_hip_yaw_ref, R, In, Cont, "rad", "Hip yaw set point, both legs", 0.0);
@@ -188,6 +197,10 @@ ModelInfo makeInfo() {
     for (int k = 0; k < kLegJoints; ++k)
       add(std::string("q_") + kSideNames[s] + "_" + joint_name(k), vr::first_joint + s * kLegJoints + k, R, Out, Cont,
           "rad", std::string(kSideNames[s]) + " " + joint_name(k) + " joint angle");
+  add("input_fault", vr::input_fault, I, Out, Disc, "",
+      "Inputs held at their last finite value because they are NaN/Inf: bit i = input i in the order theta_ankle_ref, "
+      "theta_hip_ref, push_force, push_force_y, theta_ankle_roll_ref, theta_hip_roll_ref, theta_hip_yaw_ref, "
+      "theta_knee_ref (0 = healthy)");
   add("ode_steps", vr::ode_steps, I, Out, Disc, "", "ODE steps so far");
   add("mode_switches", vr::mode_switches, I, Out, Disc, "", "Contact mode switches so far");
   add("contacts", vr::contacts, I, Out, Disc, "", "Sole-corner contacts in the last ODE step");
@@ -213,19 +226,37 @@ const char* kInputNames[kInputs] = {"theta_ankle_ref",      "theta_hip_ref",    
                                     "push_force_y",         "theta_ankle_roll_ref", "theta_hip_roll_ref",
                                     "theta_hip_yaw_ref",    "theta_knee_ref"};
 
+// The plant's parameters from the parameter variables (range-checked by the glue).
+Params paramsFromStore(const Context& ctx) {
+  Params p = default_params();
+  const auto& params = realParams();
+  for (size_t i = 0; i < params.size(); ++i)
+    params[i].field(p) = ctx.real(vr::first_real_param + static_cast<fmi2ValueReference>(i));
+  p.servo_on = ctx.boolean(vr::servo_on);
+  p.seed = static_cast<std::uint64_t>(ctx.integer(vr::seed));
+  return p;
+}
+
+// The checks that involve several parameters; false with the reason in `why`.
+bool paramsConsistent(const Params& p, std::string& why) {
+  if (p.h_push > HOAP2_ANKLE_HEIGHT + HOAP2_L1) return true;
+  char buf[160];
+  std::snprintf(buf, sizeof buf, "h_push (%g m) must be above the hips (%g m)", p.h_push, HOAP2_ANKLE_HEIGHT + HOAP2_L1);
+  why = buf;
+  return false;
+}
+
 class Plant3DFmu : public Model {
  public:
   void reset(Context&) override { plant_.reset(); }
 
+  std::uint32_t state_version() const override { return 2; }  // 2: field by field, parameters from the store
+
   fmi2Status exit_initialization(Context& ctx) override {
-    Params p = default_params();
-    const auto& params = realParams();
-    for (size_t i = 0; i < params.size(); ++i) params[i].field(p) = ctx.real(vr::first_real_param + i);
-    p.servo_on = ctx.boolean(vr::servo_on);
-    p.seed = static_cast<std::uint64_t>(ctx.integer(vr::seed));
-    if (p.h_push <= HOAP2_ANKLE_HEIGHT + HOAP2_L1) {
-      ctx.log(kLogStatusError, fmi2Error, "h_push (%g m) must be above the hips (%g m)", p.h_push,
-              HOAP2_ANKLE_HEIGHT + HOAP2_L1);
+    const Params p = paramsFromStore(ctx);
+    std::string why;
+    if (!paramsConsistent(p, why)) {
+      ctx.log(kLogStatusError, fmi2Error, "%s", why.c_str());
       return fmi2Error;
     }
     try {
@@ -249,6 +280,13 @@ class Plant3DFmu : public Model {
     return fmi2OK;
   }
 
+  // At most kMaxOdeStepsPerStep ODE steps per fmi2DoStep (50 s at the default 0.5 ms internal
+  // step, a few seconds of computation): a longer step is refused before anything runs.
+  static constexpr double kMaxOdeStepsPerStep = 1e5;
+  double max_step_size(const Context&) const override {
+    return plant_ ? kMaxOdeStepsPerStep * plant_->params().internal_step : std::numeric_limits<double>::infinity();
+  }
+
   StepResult do_step(Context& ctx, double t, double h, bool) override {
     StepResult res;
     if (!plantMayStep(ctx, plant_ != nullptr, t, plant_ ? plant_->time() : 0.0, plant_ && plant_->fallen(),
@@ -256,7 +294,7 @@ class Plant3DFmu : public Model {
       return res;
     attach(ctx);
     double in[kInputs];
-    const fmi2Status st = readFiniteInputs(ctx, t, kInputs, kInputVr, kInputNames, last_in_, in);
+    const fmi2Status st = readFiniteInputs(ctx, t, kInputs, kInputVr, kInputNames, last_in_, in, vr::input_fault);
     Inputs pin;
     pin.ref[AnklePitch] = in[0];
     pin.ref[HipPitch] = in[1];
@@ -276,36 +314,39 @@ class Plant3DFmu : public Model {
     return plantStepResult(ctx, outcome, st, plant_->fall_time(), plant_->message());
   }
 
+  // The parameters are not in the model's part of the state: load_state rebuilds them from the
+  // restored (and checked) parameter variables, as exit_initialization does.
   void save_state(StateWriter& w) const override {
     w.u32(plant_ ? 1u : 0u);
     if (!plant_) return;
-    // copies into zeroed storage so padding bytes are deterministic in the serialized state
-    Params p;
-    std::memset(static_cast<void*>(&p), 0, sizeof p);
-    p = plant_->params();
-    w.pod(p);
-    w.pod(plant_->snapshot());
-    w.bytes(last_in_, sizeof last_in_);
+    const Snapshot snap = plant_->snapshot();
+    visit_fields(snap, FieldWriter{w});
+    for (double x : last_in_) w.f64(x);
   }
 
-  bool load_state(StateReader& r, std::string& err) override {
+  bool load_state(Context& ctx, StateReader& r, std::string& err) override {
     std::uint32_t has = 0;
     if (!r.u32(has) || has > 1) return err = "bad plant state header", false;
     if (!has) {
       plant_.reset();
       return true;
     }
-    Params p;
+    const Params p = paramsFromStore(ctx);
+    if (!paramsConsistent(p, err)) return false;
     Snapshot s;
+    FieldReader fr{r};
+    visit_fields(s, fr);
     double li[kInputs];
-    if (!r.pod(p) || !r.pod(s) || !r.bytes(li, sizeof li)) return err = "truncated plant state", false;
+    for (double& x : li) fr("last_inputs", x);
+    if (!fr.ok()) return err = "plant snapshot: " + fr.error, false;
+    if (s.t != ctx.time()) return err = "plant snapshot: its time is not the instance's", false;
     std::unique_ptr<Plant3D> fresh;
     try {
       fresh = std::make_unique<Plant3D>(p);
     } catch (const std::exception& e) {
       return err = std::string("invalid plant parameters in the state: ") + e.what(), false;
     }
-    if (!fresh->restore(s)) return err = "invalid plant snapshot", false;
+    if (!fresh->restore(s)) return err = "invalid plant snapshot (contact mode, flags or state out of range)", false;
     plant_ = std::move(fresh);
     std::memcpy(last_in_, li, sizeof li);
     return true;

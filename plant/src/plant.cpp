@@ -488,7 +488,14 @@ Snapshot Plant::snapshot() const {
 
 bool Plant::restore(const Snapshot& s) {
   if (s.magic != Snapshot{}.magic || s.version != Snapshot{}.version) return false;
-  if (s.mode < 0 || s.mode > 3) return false;
+  if (s.mode < 0 || s.mode > 3 || s.fallen < 0 || s.fallen > 1 || s.out.contact_mode < 0 || s.out.contact_mode > 3)
+    return false;
+  if (!std::isfinite(s.t) || !std::isfinite(s.t_fall) || !std::isfinite(s.pivot[0]) || !std::isfinite(s.pivot[1]))
+    return false;
+  for (double x : s.y)
+    if (!std::isfinite(x)) return false;
+  for (double x : s.inputs)
+    if (!std::isfinite(x)) return false;
   t_ = s.t;
   std::memcpy(y_, s.y, sizeof y_);
   mode_ = static_cast<ContactMode>(s.mode);

@@ -1018,7 +1018,12 @@ Snapshot Plant3D::snapshot() const {
 
 bool Plant3D::restore(const Snapshot& s) {
   if (s.magic != Snapshot().magic || s.version != Snapshot().version) return false;
+  if (s.fallen < 0 || s.fallen > 1 || s.mode < 0 || s.mode > 3 || s.limits_near < 0 || s.limits_near > 1 ||
+      s.out.contact_mode < 0 || s.out.contact_mode > 3 || s.out.contacts < 0 || !std::isfinite(s.t) ||
+      !std::isfinite(s.t_fall))
+    return false;
   for (const BodyState& st : s.body) {
+    for (double x : st.rot) if (!std::isfinite(x)) return false;
     for (double x : st.pos) if (!std::isfinite(x)) return false;
     for (double x : st.quat) if (!std::isfinite(x)) return false;
     for (double x : st.lvel) if (!std::isfinite(x)) return false;

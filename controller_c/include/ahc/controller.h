@@ -47,14 +47,18 @@ enum {
                                                   by more than angle_fault_margin              */
     AHC_FAULT_REF_SATURATED         = 1u << 7, /* warning: a reference angle was clamped to its
                                                   joint limit this tick                         */
-    AHC_FAULT_NOT_INITIALIZED       = 1u << 8  /* hold: ahc_step called on an instance whose
+    AHC_FAULT_NOT_INITIALIZED       = 1u << 8, /* hold: ahc_step called on an instance whose
                                                   ahc_init failed (outputs are zeros)           */
+    AHC_FAULT_FZ_IMPLAUSIBLE        = 1u << 9  /* hold: fz > fz_max, more than the robot can
+                                                  load its own feet with                        */
 };
 /* Mask of all bits that cause the hold. */
 #define AHC_FAULT_HOLD_MASK                                                                       \
     (AHC_FAULT_THETA_ANKLE_NONFINITE | AHC_FAULT_THETA_HIP_NONFINITE | AHC_FAULT_ZMP_NONFINITE | \
      AHC_FAULT_FZ_NONFINITE | AHC_FAULT_ZMP_OUTSIDE_FOOT | AHC_FAULT_LIFTED |                     \
-     AHC_FAULT_ANGLE_RANGE | AHC_FAULT_NOT_INITIALIZED)
+     AHC_FAULT_ANGLE_RANGE | AHC_FAULT_NOT_INITIALIZED | AHC_FAULT_FZ_IMPLAUSIBLE)
+/* Mask of every defined bit. */
+#define AHC_FAULT_ALL_MASK (AHC_FAULT_HOLD_MASK | AHC_FAULT_REF_SATURATED)
 
 /* Error codes of ahc_params_validate / ahc_init. */
 enum {
@@ -152,6 +156,7 @@ typedef struct {
                                    angular momentum of the measured joint motion (moment balance
                                    about the sole point, docs/controller.md "disturbance
                                    estimate"); 0 (default): paper literal, d = m g (p - r_x)   */
+    double fz_max;              /* fz above this is an implausible reading (fault, hold) [N]     */
 } ahc_params;
 
 /* Fill with the HOAP-2 defaults (hoap2/nominal.h) and the SI gains. */
@@ -179,7 +184,7 @@ int ahc_params_validate(const ahc_params *p, char *msg, size_t msg_size);
 /* Parameter metadata: one row per ahc_params field, in declaration order. The single source of
  * truth for the FMU's parameter variables (start values come from ahc_params_default).
  * name = field name; offset = offsetof(ahc_params, field); is_int = 1 for int fields.
- * min/max: allowed closed range; strict_min = 1 means the value must be > min (not >=). */
+ * min/max: the allowed closed range. */
 typedef struct {
     const char *name;
     const char *unit;        /* SI unit string ("kg", "m", "N.m/rad", "1/s", "s", "" ...)     */
@@ -187,7 +192,6 @@ typedef struct {
     double min, max;
     size_t offset;
     int is_int;
-    int strict_min;
 } ahc_param_info;
 
 const ahc_param_info *ahc_param_table(size_t *count);
@@ -293,6 +297,12 @@ int ahc_update_params(ahc_controller *c, const ahc_params *p);
 /* One control tick of p.sample_period: reads the sensors, updates the state, writes the outputs.
  * Never writes NaN/Inf to the outputs. s and out must not be NULL. */
 void ahc_step(ahc_controller *c, const ahc_sensors *s, ahc_outputs *out);
+
+/* Whether c holds a state that ahc_init and ahc_step could have produced: valid parameters,
+ * derived constants that match them, flags 0/1, phase and counters in range, every stored value
+ * finite and within its physical range. For snapshots restored from untrusted bytes (a checksum
+ * catches accidents, not forgeries). AHC_OK, or AHC_ERR_* with a message naming the field. */
+int ahc_state_validate(const ahc_controller *c, char *msg, size_t msg_size);
 
 /* Time of the controller [s] = tick * sample_period. */
 double ahc_time(const ahc_controller *c);

@@ -23,21 +23,37 @@ constexpr unsigned kMaskSet = kInst | kInit | kComplete;
 constexpr unsigned kMaskState = kInst | kInit | kComplete | kFailed | kCanceled | kTerminated;
 constexpr unsigned kMaskStatus = kComplete | kInProgress | kFailed | kCanceled | kTerminated;
 
-constexpr std::uint64_t kSnapshotTag = 0x41484649534e4150ull;  // "AHFISNAP"
-struct Snapshot {
-  std::uint64_t tag = kSnapshotTag;
-  std::vector<std::uint8_t> bytes;
-};
-
 Instance* toInst(fmi2Component c) { return static_cast<Instance*>(c); }
 
-Snapshot* toSnap(Instance* inst, fmi2FMUstate s, const char* fn) {
-  auto* snap = static_cast<Snapshot*>(s);
-  if (snap == nullptr) { inst->error("%s: FMUstate is NULL", fn); return nullptr; }
-  if (snap->tag != kSnapshotTag) { inst->error("%s: not an FMU state of this FMU", fn); return nullptr; }
-  return snap;
+// The instance's own FMU state behind the importer's pointer, or nullptr (logged). The pointer is
+// looked up, never dereferenced first: a freed, forged or foreign pointer is an error, not a crash.
+StateSnapshot* toSnap(Instance* inst, fmi2FMUstate s, const char* fn) {
+  if (s == nullptr) { inst->error("%s: FMUstate is NULL", fn); return nullptr; }
+  auto it = inst->states.find(s);
+  if (it == inst->states.end()) {
+    inst->error("%s: FMUstate %p was not created by this instance or was already freed (move a state to another "
+                "instance with fmi2SerializeFMUstate and fmi2DeSerializeFMUstate)", fn, s);
+    return nullptr;
+  }
+  return it->second.get();
 }
 
+StateSnapshot* newSnap(Instance* inst) {
+  auto snap = std::make_unique<StateSnapshot>();
+  StateSnapshot* p = snap.get();
+  inst->states.emplace(p, std::move(snap));
+  return p;
+}
+
+// The fmi2StatusKind / fmi2Type the caller passed, as the integer it is: an out-of-range value is
+// an error to report, and loading it as the enum type would be undefined behaviour.
+template <class Enum>
+int enumValue(const Enum& e) {
+  static_assert(sizeof(Enum) == sizeof(int), "FMI 2.0 enums are int-sized");
+  int v;
+  std::memcpy(&v, &e, sizeof v);
+  return v;
+}
 
 // Common checks of fmi2Get*/fmi2Set* arguments; returns the store indices in `idx`.
 bool resolve(Instance* inst, const char* fn, const fmi2ValueReference vr[], size_t nvr, const void* values,
@@ -127,20 +143,24 @@ bool checkSettable(Instance* inst, const char* fn, const std::vector<int>& idx) 
 }
 
 bool checkNumber(Instance* inst, const char* fn, int i, double v) {
-  const Variable& var = inst->info.variables[i];
-  if (!std::isfinite(v)) {
-    if (var.causality == Causality::Input) return true;  // contained by the model (fault output)
-    inst->error("%s: \"%s\" = %g is not a finite number", fn, var.name.c_str(), v);
-    return false;
-  }
-  if ((!std::isnan(var.min) && v < var.min) || (!std::isnan(var.max) && v > var.max)) {
-    inst->error("%s: \"%s\" = %.17g is outside [%g, %g]", fn, var.name.c_str(), v, var.min, var.max);
-    return false;
-  }
-  return true;
+  std::string why;
+  if (valueAllowed(inst->info.variables[i], v, why)) return true;
+  inst->error("%s: %s", fn, why.c_str());
+  return false;
 }
 
 }  // namespace
+
+#if defined(__GLIBCXX__) && !defined(_WIN32)
+// The statically linked libstdc++ allocates its exception emergency pool (72 704 bytes) when the
+// binary is loaded and never frees it, so an importer that loads and unloads the FMU repeatedly
+// lost that much every time. __gnu_cxx::__freeres(), libstdc++'s hook for memory checkers, frees
+// it when the binary is unloaded (the pool is private to this binary: its libstdc++ is hidden).
+namespace __gnu_cxx {
+void __freeres() noexcept;
+}
+__attribute__((destructor)) static void releaseStaticRuntime() { __gnu_cxx::__freeres(); }
+#endif
 
 #define CALLLOG(inst, ...) \
   do { if ((inst)->logEnabled(kLogCalls)) (inst)->log(kLogCalls, fmi2OK, __VA_ARGS__); } while (0)
@@ -172,8 +192,9 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
                         loggingOn != fmi2False);
     if (name[0] == '\0') { inst->error("fmi2Instantiate: missing instance name"); delete inst; return nullptr; }
     if (functions == nullptr) { delete inst; return nullptr; }
-    if (fmuType != fmi2CoSimulation) {
-      inst->error("fmi2Instantiate: %s supports only fmi2CoSimulation", info.model_name.c_str());
+    if (enumValue(fmuType) != fmi2CoSimulation) {
+      inst->error("fmi2Instantiate: fmuType %d: %s supports only fmi2CoSimulation (%d)", enumValue(fmuType),
+                  info.model_name.c_str(), static_cast<int>(fmi2CoSimulation));
       delete inst;
       return nullptr;
     }
@@ -385,13 +406,13 @@ fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate* FMUstate) {
     CALLLOG(inst, "fmi2GetFMUstate");
     if (!inst->allowed(kMaskState, "fmi2GetFMUstate")) return fmi2Error;
     if (FMUstate == nullptr) return inst->error("fmi2GetFMUstate: FMUstate pointer is NULL");
-    Snapshot* snap = nullptr;
+    StateSnapshot* snap = nullptr;
     if (*FMUstate != nullptr) {
       snap = toSnap(inst, *FMUstate, "fmi2GetFMUstate");
       if (!snap) return fmi2Error;
     }
     std::vector<std::uint8_t> bytes = encodeState(*inst);
-    if (!snap) snap = new Snapshot();
+    if (!snap) snap = newSnap(inst);
     snap->bytes = std::move(bytes);
     *FMUstate = snap;
     return fmi2OK;
@@ -402,7 +423,7 @@ fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate FMUstate) {
   return guarded(c, "fmi2SetFMUstate", [&](Instance* inst) {
     CALLLOG(inst, "fmi2SetFMUstate");
     if (!inst->allowed(kMaskState | kErr, "fmi2SetFMUstate")) return fmi2Error;
-    Snapshot* snap = toSnap(inst, FMUstate, "fmi2SetFMUstate");
+    StateSnapshot* snap = toSnap(inst, FMUstate, "fmi2SetFMUstate");
     if (!snap) return fmi2Error;
     std::string err;
     if (!decodeState(*inst, snap->bytes.data(), snap->bytes.size(), err))
@@ -416,10 +437,8 @@ fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate* FMUstate) {
     CALLLOG(inst, "fmi2FreeFMUstate");
     if (FMUstate == nullptr) return inst->error("fmi2FreeFMUstate: FMUstate pointer is NULL");
     if (*FMUstate == nullptr) return fmi2OK;
-    Snapshot* snap = toSnap(inst, *FMUstate, "fmi2FreeFMUstate");
-    if (!snap) return fmi2Error;
-    snap->tag = 0;
-    delete snap;
+    if (!toSnap(inst, *FMUstate, "fmi2FreeFMUstate")) return fmi2Error;
+    inst->states.erase(*FMUstate);
     *FMUstate = nullptr;
     return fmi2OK;
   });
@@ -429,7 +448,7 @@ fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate FMUstate, si
   return guarded(c, "fmi2SerializedFMUstateSize", [&](Instance* inst) {
     CALLLOG(inst, "fmi2SerializedFMUstateSize");
     if (!inst->allowed(kMaskState | kErr, "fmi2SerializedFMUstateSize")) return fmi2Error;
-    Snapshot* snap = toSnap(inst, FMUstate, "fmi2SerializedFMUstateSize");
+    StateSnapshot* snap = toSnap(inst, FMUstate, "fmi2SerializedFMUstateSize");
     if (!snap) return fmi2Error;
     if (size == nullptr) return inst->error("fmi2SerializedFMUstateSize: size is NULL");
     *size = snap->bytes.size();
@@ -441,7 +460,7 @@ fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate FMUstate, fmi2Byt
   return guarded(c, "fmi2SerializeFMUstate", [&](Instance* inst) {
     CALLLOG(inst, "fmi2SerializeFMUstate(size=%zu)", size);
     if (!inst->allowed(kMaskState | kErr, "fmi2SerializeFMUstate")) return fmi2Error;
-    Snapshot* snap = toSnap(inst, FMUstate, "fmi2SerializeFMUstate");
+    StateSnapshot* snap = toSnap(inst, FMUstate, "fmi2SerializeFMUstate");
     if (!snap) return fmi2Error;
     if (serializedState == nullptr) return inst->error("fmi2SerializeFMUstate: buffer is NULL");
     if (size < snap->bytes.size())
@@ -473,12 +492,12 @@ fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte serializedSta
     inst->state = saved;
     if (!restored)
       return inst->error("fmi2DeSerializeFMUstate: internal error restoring the instance: %s", err2.c_str());
-    Snapshot* snap = nullptr;
+    StateSnapshot* snap = nullptr;
     if (*FMUstate != nullptr) {
       snap = toSnap(inst, *FMUstate, "fmi2DeSerializeFMUstate");
       if (!snap) return fmi2Error;
     } else {
-      snap = new Snapshot();
+      snap = newSnap(inst);
     }
     snap->bytes.assign(p, p + size);
     *FMUstate = snap;
@@ -514,6 +533,12 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real t, fmi2Real h, fmi2Boolean noSet
     if (!inst->allowed(kComplete, "fmi2DoStep")) return fmi2Error;
     if (!std::isfinite(t) || !std::isfinite(h) || !(h > 0.0))
       return inst->error("fmi2DoStep: invalid communication point %g or step size %g (must be > 0)", t, h);
+    const double hmax = inst->model->max_step_size(inst->ctx);
+    if (h > hmax)
+      return inst->error("fmi2DoStep: communication step %.17g s is longer than this FMU's largest step %.17g s; "
+                         "split it into shorter steps", h, hmax);
+    if (t + h == t)
+      return inst->error("fmi2DoStep: step size %g is below the time resolution at t = %.17g", h, t);
     double tol = 1e-9 * (1.0 + std::fabs(inst->time)) + 1e-6 * h;
     if (std::fabs(t - inst->time) > tol)
       return inst->error("fmi2DoStep: currentCommunicationPoint %.17g does not match the FMU time %.17g", t,
@@ -569,7 +594,8 @@ fmi2Status fmi2GetRealStatus(fmi2Component c, const fmi2StatusKind s, fmi2Real* 
   return guarded(c, "fmi2GetRealStatus", [&](Instance* inst) {
     if (!inst->allowed(kMaskStatus, "fmi2GetRealStatus")) return fmi2Error;
     if (value == nullptr) return inst->error("fmi2GetRealStatus: value is NULL");
-    if (s != fmi2LastSuccessfulTime) return inst->error("fmi2GetRealStatus: only fmi2LastSuccessfulTime is provided");
+    if (enumValue(s) != fmi2LastSuccessfulTime)
+      return inst->error("fmi2GetRealStatus: status kind %d: only fmi2LastSuccessfulTime is provided", enumValue(s));
     *value = inst->lastSuccessfulTime;
     return fmi2OK;
   });
@@ -588,7 +614,8 @@ fmi2Status fmi2GetBooleanStatus(fmi2Component c, const fmi2StatusKind s, fmi2Boo
   return guarded(c, "fmi2GetBooleanStatus", [&](Instance* inst) {
     if (!inst->allowed(kMaskStatus, "fmi2GetBooleanStatus")) return fmi2Error;
     if (value == nullptr) return inst->error("fmi2GetBooleanStatus: value is NULL");
-    if (s != fmi2Terminated) return inst->error("fmi2GetBooleanStatus: only fmi2Terminated is provided");
+    if (enumValue(s) != fmi2Terminated)
+      return inst->error("fmi2GetBooleanStatus: status kind %d: only fmi2Terminated is provided", enumValue(s));
     *value = inst->terminatedFlag ? fmi2True : fmi2False;
     return fmi2OK;
   });
@@ -598,7 +625,8 @@ fmi2Status fmi2GetStringStatus(fmi2Component c, const fmi2StatusKind s, fmi2Stri
   return guarded(c, "fmi2GetStringStatus", [&](Instance* inst) {
     if (!inst->allowed(kMaskStatus, "fmi2GetStringStatus")) return fmi2Error;
     if (value == nullptr) return inst->error("fmi2GetStringStatus: value is NULL");
-    if (s != fmi2PendingStatus) return inst->error("fmi2GetStringStatus: only fmi2PendingStatus is provided");
+    if (enumValue(s) != fmi2PendingStatus)
+      return inst->error("fmi2GetStringStatus: status kind %d: only fmi2PendingStatus is provided", enumValue(s));
     *value = "";
     return fmi2Discard;
   });

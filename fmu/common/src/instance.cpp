@@ -159,6 +159,23 @@ bool Instance::settable(int idx, std::string& why) const {
   }
 }
 
+bool valueAllowed(const Variable& v, double x, std::string& why) {
+  char buf[512];
+  if (v.type == Type::Boolean) {
+    if (x == 0.0 || x == 1.0) return true;
+    std::snprintf(buf, sizeof buf, "\"%s\" = %.17g is not a Boolean (0 or 1)", v.name.c_str(), x);
+  } else if (!std::isfinite(x)) {
+    if (v.causality == Causality::Input) return true;  // contained by the model (fault output)
+    std::snprintf(buf, sizeof buf, "\"%s\" = %g is not a finite number", v.name.c_str(), x);
+  } else if ((!std::isnan(v.min) && x < v.min) || (!std::isnan(v.max) && x > v.max)) {
+    std::snprintf(buf, sizeof buf, "\"%s\" = %.17g is outside [%g, %g]", v.name.c_str(), x, v.min, v.max);
+  } else {
+    return true;
+  }
+  why = buf;
+  return false;
+}
+
 // ------------------------------------------------------------------------------------------
 // Context
 static const Value* typedValue(const Instance& inst, fmi2ValueReference vr, Type t) {
@@ -218,6 +235,7 @@ bool Context::log_enabled(int category) const { return inst_.logEnabled(category
 const std::string& Context::instance_name() const { return inst_.name; }
 const std::string& Context::resource_location() const { return inst_.resources; }
 double Context::start_time() const { return inst_.startTime; }
+double Context::time() const { return inst_.time; }
 bool Context::stop_time_defined() const { return inst_.stopTimeDefined; }
 double Context::stop_time() const { return inst_.stopTime; }
 bool Context::tolerance_defined() const { return inst_.toleranceDefined; }
@@ -258,6 +276,32 @@ bool StateReader::str(std::string& s, std::size_t max_len) {
   s.assign(reinterpret_cast<const char*>(p_ + pos_), static_cast<size_t>(n));
   pos_ += static_cast<size_t>(n);
   return true;
+}
+
+void FieldReader::operator()(const char* name, double& v) {
+  if (!ok()) return;
+  if (!r.f64(v)) error = std::string(name) + ": truncated";
+  else if (!std::isfinite(v)) error = std::string(name) + ": not a finite number";
+}
+void FieldReader::operator()(const char* name, std::int32_t& v) {
+  if (ok() && !r.i32(v)) error = std::string(name) + ": truncated";
+}
+void FieldReader::operator()(const char* name, std::int64_t& v) {
+  std::uint64_t u = 0;
+  if (!ok()) return;
+  if (!r.u64(u)) error = std::string(name) + ": truncated";
+  else if (u > static_cast<std::uint64_t>(std::numeric_limits<std::int64_t>::max())) error = std::string(name) + ": negative count";
+  else v = static_cast<std::int64_t>(u);
+}
+void FieldReader::operator()(const char* name, std::uint64_t& v) {
+  if (ok() && !r.u64(v)) error = std::string(name) + ": truncated";
+}
+void FieldReader::operator()(const char* name, bool& v) {
+  std::uint32_t u = 0;
+  if (!ok()) return;
+  if (!r.u32(u)) error = std::string(name) + ": truncated";
+  else if (u > 1) error = std::string(name) + ": not a Boolean (" + std::to_string(u) + ")";
+  else v = u == 1;
 }
 
 }  // namespace fmuglue

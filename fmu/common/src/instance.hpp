@@ -2,7 +2,9 @@
 #pragma once
 
 #include <cstdarg>
+#include <memory>
 #include <string>
+#include <unordered_map>
 #include <vector>
 
 #include "fmuglue/glue.hpp"
@@ -26,6 +28,13 @@ struct Value {
   double r = 0.0;
   int i = 0;  // Integer and Boolean
   std::string s;
+};
+
+// An fmi2FMUstate: the serialized bytes of a snapshot (state_format.cpp). Owned by the instance
+// that created it (Instance::states), so fmi2FreeInstance frees the states the importer still
+// holds, and a pointer is only dereferenced after it was found there.
+struct StateSnapshot {
+  std::vector<std::uint8_t> bytes;
 };
 
 class Instance {
@@ -71,11 +80,18 @@ class Instance {
   std::vector<Value> store;
   std::unique_ptr<Model> model;
   Context ctx;
+  std::unordered_map<const void*, std::unique_ptr<StateSnapshot>> states;
 
  private:
   std::vector<int> vrIndex_;
   std::vector<bool> categoryOn_;
 };
+
+// Whether `x` is a legal value of `v` (Real, Integer or Boolean as a double), else `why` names the
+// variable, the value and the rule. The one rule for values set by the importer and values
+// restored from an FMU state: parameters finite and within [min, max]; inputs within [min, max]
+// or non-finite (a sensor fault the model contains and reports); Booleans 0 or 1.
+bool valueAllowed(const Variable& v, double x, std::string& why);
 
 // Serialized-state codec (state_format.cpp).
 std::vector<std::uint8_t> encodeState(Instance& inst);

@@ -7,18 +7,25 @@
 namespace fmuglue {
 
 fmi2Status readFiniteInputs(Context& ctx, double t, int n, const fmi2ValueReference* vrs,
-                            const char* const* names, double* last, double* in) {
-  fmi2Status st = fmi2OK;
+                            const char* const* names, double* last, double* in, fmi2ValueReference fault_vr) {
+  const unsigned before = static_cast<unsigned>(ctx.integer(fault_vr));  // the mask of the last step
+  unsigned held = 0;
   for (int i = 0; i < n; ++i) {
+    const unsigned bit = 1u << i;
     in[i] = ctx.real(vrs[i]);
     if (!std::isfinite(in[i])) {  // contained: hold the last finite value
-      ctx.log(kLogStatusWarning, fmi2Warning, "non-finite input %s ignored at t=%g; holding %g", names[i], t, last[i]);
+      if (!(before & bit))
+        ctx.log(kLogStatusWarning, fmi2Warning, "t=%g: input %s = %g is not finite; holding %g (input_fault bit %d)",
+                t, names[i], in[i], last[i], i);
       in[i] = last[i];
-      st = fmi2Warning;
+      held |= bit;
+    } else if (before & bit) {
+      ctx.log(kLogEvents, fmi2OK, "t=%g: input %s finite again (%g)", t, names[i], in[i]);
     }
     last[i] = in[i];
   }
-  return st;
+  ctx.set_integer(fault_vr, static_cast<int>(held));
+  return held ? fmi2Warning : fmi2OK;
 }
 
 StepResult plantStepResult(Context& ctx, PlantOutcome outcome, fmi2Status ok_status, double fall_time,

@@ -1,5 +1,6 @@
 // Versioned, checked byte format of FMU states (used for in-memory snapshots and serialization).
 // Layout: see fmu/common/README.md section 3 and docs/fmu.md.
+#include <cmath>
 #include <cstring>
 
 #include "instance.hpp"
@@ -139,31 +140,66 @@ bool decodeState(Instance& inst, const std::uint8_t* p, std::size_t n, std::stri
   }
   std::uint64_t mlen = 0;
   if (!ok || !r.u64(mlen) || mlen != r.remaining()) { err = "corrupt state payload (values)"; return false; }
+  // A checksum only catches accidents: a state is validated like the calls that would have made it.
+  const bool stopOk = stopDef == 0 || (std::isfinite(stop) && stop >= start);
+  const bool tolOk = tolDef == 0 || (std::isfinite(tol) && tol > 0.0);
+  if (!std::isfinite(time) || !std::isfinite(start) || time < start || lst != time ||
+      !stopOk || !tolOk || stopDef > 1 || tolDef > 1 || term > 1 || dirty > 1) {
+    err = "corrupt state payload (experiment set-up or time)";
+    return false;
+  }
+  for (size_t k = 0; k < store.size(); ++k) {
+    const Variable& v = inst.info.variables[k];
+    std::string why;
+    if (v.type == Type::String) continue;
+    const double x = v.type == Type::Real ? store[k].r : static_cast<double>(store[k].i);
+    const bool calculated = v.causality == Causality::Output || v.causality == Causality::Local ||
+                            v.causality == Causality::CalculatedParameter;
+    if (!valueAllowed(v, x, why) || (calculated && !std::isfinite(x))) {
+      err = "corrupt state payload: " + (why.empty() ? "\"" + v.name + "\" is not finite" : why);
+      return false;
+    }
+  }
   StateReader mr(p + (n - 8 - r.remaining()), static_cast<size_t>(mlen));
   std::string merr;
   std::vector<std::uint8_t> backup;
   StateWriter bw(backup);
   inst.model->save_state(bw);
-  if (!inst.model->load_state(mr, merr)) { err = "model state rejected: " + merr; return false; }
-  if (!mr.at_end()) {
-    StateReader br(backup.data(), backup.size());
-    std::string ignore;
-    inst.model->load_state(br, ignore);
-    err = "model state has trailing bytes";
+  // The model reads its parameters and checks its time against the restored instance: apply the
+  // glue's part first, and put everything back if the model refuses its part.
+  struct GluePart {
+    State state;
+    double time, startTime, stopTime, tolerance, lastSuccessfulTime;
+    bool stopTimeDefined, toleranceDefined, terminatedFlag, initDirty;
+    std::vector<Value> store;
+  };
+  auto swap = [&inst](GluePart& g) {
+    std::swap(inst.state, g.state);
+    std::swap(inst.time, g.time);
+    std::swap(inst.startTime, g.startTime);
+    std::swap(inst.stopTime, g.stopTime);
+    std::swap(inst.tolerance, g.tolerance);
+    std::swap(inst.lastSuccessfulTime, g.lastSuccessfulTime);
+    std::swap(inst.stopTimeDefined, g.stopTimeDefined);
+    std::swap(inst.toleranceDefined, g.toleranceDefined);
+    std::swap(inst.terminatedFlag, g.terminatedFlag);
+    std::swap(inst.initDirty, g.initDirty);
+    std::swap(inst.store, g.store);
+  };
+  GluePart restored{static_cast<State>(st), time, start, stop, tol, lst, stopDef != 0, tolDef != 0, term != 0,
+                    dirty != 0, std::move(store)};
+  swap(restored);  // `restored` now holds the instance's previous glue part
+  const bool loaded = inst.model->load_state(inst.ctx, mr, merr);
+  if (!loaded || !mr.at_end()) {
+    swap(restored);
+    if (loaded) {  // undo the model's part too
+      StateReader br(backup.data(), backup.size());
+      std::string ignore;
+      inst.model->load_state(inst.ctx, br, ignore);
+    }
+    err = loaded ? "model state has trailing bytes" : "model state rejected: " + merr;
     return false;
   }
-
-  inst.state = static_cast<State>(st);
-  inst.time = time;
-  inst.startTime = start;
-  inst.stopTime = stop;
-  inst.stopTimeDefined = stopDef != 0;
-  inst.tolerance = tol;
-  inst.toleranceDefined = tolDef != 0;
-  inst.lastSuccessfulTime = lst;
-  inst.terminatedFlag = term != 0;
-  inst.initDirty = dirty != 0;
-  inst.store = std::move(store);
   return true;
 }
 

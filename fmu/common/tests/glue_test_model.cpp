@@ -98,7 +98,7 @@ class TestModel final : public Model {
     w.f64(y_);
     w.i32(count_);
   }
-  bool load_state(StateReader& r, std::string& err) override {
+  bool load_state(Context&, StateReader& r, std::string& err) override {
     double y;
     std::int32_t c;
     if (!r.f64(y) || !r.i32(c)) { err = "truncated"; return false; }

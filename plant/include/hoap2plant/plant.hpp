@@ -53,6 +53,36 @@ struct Snapshot {
   Outputs out;
 };
 
+// Every field of a Snapshot (and of its Stats and Outputs), in a fixed order: f(name, field).
+// For field-by-field serialization (FMU states carry no padding bytes and are validated field by
+// field on the way in). Keep in step with the structs: a missing field breaks the bit-for-bit
+// restore test (test_plant_fmu.py).
+template <class S, class F>
+void visit_fields(S& s, F&& f) {
+  f("t", s.t);
+  for (auto& y : s.y) f("y", y);
+  f("mode", s.mode);
+  f("fallen", s.fallen);
+  for (auto& x : s.pivot) f("pivot", x);
+  f("t_fall", s.t_fall);
+  for (auto& x : s.inputs) f("inputs", x);
+  f("rng", s.rng);
+  auto& st = s.stats;
+  f("stats.steps", st.steps);
+  f("stats.rhs_evals", st.rhs_evals);
+  f("stats.root_evals", st.root_evals);
+  f("stats.mode_switches", st.mode_switches);
+  f("stats.impacts", st.impacts);
+  f("stats.reinits", st.reinits);
+  auto& o = s.out;
+  for (auto* x : {&o.t, &o.theta_ankle, &o.theta_hip, &o.dtheta_ankle, &o.dtheta_hip, &o.zmp_x, &o.fz, &o.f_toe,
+                  &o.f_heel, &o.zmp_true, &o.fz_true, &o.fx, &o.moment_ankle, &o.com_x, &o.com_z, &o.foot_pitch,
+                  &o.required_mu, &o.energy, &o.tau_ankle, &o.tau_hip})
+    f("outputs", *x);
+  f("outputs.contact_mode", o.contact_mode);
+  f("outputs.fallen", o.fallen);
+}
+
 struct ModeEvent {
   double t;
   int from, to;

@@ -125,6 +125,46 @@ struct Snapshot {
   Outputs out;
 };
 
+// Every field of a Snapshot, in a fixed order: f(name, field). For field-by-field serialization
+// (no padding bytes in FMU states, every value validated on the way in). Keep in step with the
+// structs: a missing field breaks the bit-for-bit restore test (test_plant3d_fmu.py).
+template <class S, class F>
+void visit_fields(S& s, F&& f) {
+  f("t", s.t);
+  f("t_fall", s.t_fall);
+  f("fallen", s.fallen);
+  f("mode", s.mode);
+  f("limits_near", s.limits_near);
+  for (auto& b : s.body) {
+    for (auto& x : b.pos) f("body.pos", x);
+    for (auto& x : b.quat) f("body.quat", x);
+    for (auto& x : b.rot) f("body.rot", x);
+    for (auto& x : b.lvel) f("body.lvel", x);
+    for (auto& x : b.avel) f("body.avel", x);
+  }
+  for (auto& x : s.in.ref) f("inputs.ref", x);
+  f("inputs.push_x", s.in.push_x);
+  f("inputs.push_y", s.in.push_y);
+  f("rng", s.rng);
+  f("stats.ode_steps", s.stats.ode_steps);
+  f("stats.resolves", s.stats.resolves);
+  f("stats.mode_switches", s.stats.mode_switches);
+  auto& o = s.out;
+  for (auto* x : {&o.theta_ankle, &o.theta_hip, &o.dtheta_ankle, &o.dtheta_hip, &o.zmp_x, &o.zmp_y, &o.fz, &o.f_toe,
+                  &o.f_heel, &o.fx, &o.fy, &o.fz_true, &o.zmp_true_x, &o.zmp_true_y, &o.moment_ankle, &o.com_x,
+                  &o.com_y, &o.com_z, &o.foot_pitch, &o.foot_roll, &o.required_mu, &o.energy, &o.tau_ankle,
+                  &o.tau_hip, &o.feet_x, &o.feet_y, &o.imu_roll, &o.imu_pitch, &o.imu_yaw})
+    f("outputs", *x);
+  for (auto& leg : o.cell) for (auto& x : leg) f("outputs.cell", x);
+  for (auto& x : o.fz_foot) f("outputs.fz_foot", x);
+  for (auto& x : o.slip_speed) f("outputs.slip_speed", x);
+  for (auto& leg : o.joint) for (auto& x : leg) f("outputs.joint", x);
+  for (auto& x : o.gyro) f("outputs.gyro", x);
+  f("outputs.contact_mode", o.contact_mode);
+  f("outputs.contacts", o.contacts);
+  f("outputs.fallen", o.fallen);
+}
+
 // The assembled model, for inspection (tests lump it back into the sagittal numbers).
 struct BodyInfo {
   std::string name;        // "trunk", "left_hip_yaw", ...

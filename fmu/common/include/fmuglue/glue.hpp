@@ -163,6 +163,29 @@ class StateReader {
   std::size_t pos_ = 0;
 };
 
+// Field-by-field codec for model snapshots, used with a visitor that calls f(name, field) for
+// every field of a struct (e.g. hoap2plant::visit_fields): no padding bytes reach the state, and
+// every value is checked on the way in (doubles finite, Booleans 0/1, counters >= 0), so a forged
+// state is refused with the field's name instead of being loaded.
+struct FieldWriter {
+  StateWriter& w;
+  void operator()(const char*, double v) { w.f64(v); }
+  void operator()(const char*, std::int32_t v) { w.i32(v); }
+  void operator()(const char*, std::int64_t v) { w.u64(static_cast<std::uint64_t>(v)); }
+  void operator()(const char*, std::uint64_t v) { w.u64(v); }
+  void operator()(const char*, bool v) { w.u32(v ? 1u : 0u); }
+};
+struct FieldReader {
+  StateReader& r;
+  std::string error;  // first problem: "<field>: <reason>"
+  bool ok() const { return error.empty(); }
+  void operator()(const char* name, double& v);
+  void operator()(const char* name, std::int32_t& v);
+  void operator()(const char* name, std::int64_t& v);  // a counter: >= 0
+  void operator()(const char* name, std::uint64_t& v);
+  void operator()(const char* name, bool& v);
+};
+
 class Instance;  // the glue's instance (opaque to models)
 
 // What a model sees of its instance: the variable store, logging and the experiment set-up.
@@ -189,6 +212,7 @@ class Context {
   const std::string& instance_name() const;
   const std::string& resource_location() const;  // fmuResourceLocation as given (may be "")
   double start_time() const;                     // from fmi2SetupExperiment
+  double time() const;                           // the current communication point
   bool stop_time_defined() const;
   double stop_time() const;
   bool tolerance_defined() const;
@@ -226,15 +250,23 @@ class Model {
   // Advance from t to t + h. Inputs are in the store; write outputs into it.
   virtual StepResult do_step(Context& ctx, double t, double h, bool no_set_prior_state) = 0;
 
+  // The largest communication step the model accepts [s] (called after initialization). A step
+  // costs work proportional to its length (control ticks, integrator steps), so an unbounded h
+  // would hang the importer; fmi2DoStep refuses a longer step with fmi2Error and changes nothing.
+  virtual double max_step_size(const Context& /*ctx*/) const { return std::numeric_limits<double>::infinity(); }
+
   // Called at fmi2Terminate. Default: nothing.
   virtual void terminate(Context& /*ctx*/) {}
 
   // FMU state: everything of the model that is not in the variable store (internal states,
   // integrator state, counters). The glue saves the store, the time and its own state itself.
-  // load_state must check what it reads (StateReader returns false on a short read), return
-  // false with a message in `err` on malformed data, and must leave the model unchanged then.
+  // load_state runs with the restored store in `ctx` (its values already checked like fmi2Set*
+  // values, so parameters are read from there, not from the bytes). It must validate what it
+  // reads as untrusted input (StateReader returns false on a short read; FieldReader checks
+  // finiteness and Booleans), return false with a message in `err` on malformed data, and must
+  // leave the model unchanged then.
   virtual void save_state(StateWriter& w) const = 0;
-  virtual bool load_state(StateReader& r, std::string& err) = 0;
+  virtual bool load_state(Context& ctx, StateReader& r, std::string& err) = 0;
   // Increase when the layout written by save_state changes; stored in and checked against
   // serialized FMU states.
   virtual std::uint32_t state_version() const { return 1; }
@@ -245,11 +277,12 @@ const ModelInfo& modelInfo();                  // the variable table etc. (built
 std::unique_ptr<Model> createModel();          // a new model object for a new instance
 
 // ---- Helpers for plant models (the sagittal and the 3D plant share their doStep rules) -------
-// Reads n Real inputs into `in`. A non-finite value is logged with its name and replaced by the
-// last finite one, kept in `last` (the input is contained, never propagated). Returns fmi2Warning
-// if any input was replaced, else fmi2OK.
+// Reads n Real inputs into `in`. A non-finite value is replaced by the last finite one, kept in
+// `last` (the input is contained, never propagated), and bit i of the Integer output `fault_vr`
+// is set while input i is held. One warning when an input goes bad and one event when it is
+// finite again (not one line per step). Returns fmi2Warning while any input is held, else fmi2OK.
 fmi2Status readFiniteInputs(Context& ctx, double t, int n, const fmi2ValueReference* vrs,
-                            const char* const* names, double* last, double* in);
+                            const char* const* names, double* last, double* in, fmi2ValueReference fault_vr);
 // How a plant's step ended, and the doStep result for it: Ok gives `ok_status`; Fallen gives
 // fmi2Discard with fmi2Terminated at fall_time, the message logged; Error gives fmi2Error.
 enum class PlantOutcome { Ok, Fallen, Error };

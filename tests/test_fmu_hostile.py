@@ -1,0 +1,296 @@
+"""Hostile callers: the defects an independent audit found in the FMI boundary (issue 12), each
+reproduced through the raw C API (ctypes, every status visible) and kept as a regression test.
+
+What this establishes, per FMU the project ships:
+- a communication step longer than the FMU's largest step is refused at once with fmi2Error and
+  changes nothing (the controller used to run 1e8 ticks for h = 1e5 s, and for h >= 1.85e16 s
+  overflowed its tick counter and returned fmi2OK having run nothing);
+- forged FMU states with a correct checksum are either refused or, when accepted, behave: the
+  following steps return OK/Warning (or Discard for a fallen plant) with finite outputs (the
+  audit had 12 of 5 000 accepted forged controller blobs produce NaN with fmi2OK);
+- a state pointer the instance did not create (another instance's, a freed one) is an error,
+  not a dereference; states still held at fmi2FreeInstance are freed (checked by the sanitizer
+  and Valgrind runs, docs/reliability.md);
+- parameters outside their physical range are refused at set time naming the variable
+  (sample_period = 2.2e-310 was accepted);
+- an implausible normal force raises the controller's fault bit and is logged (fz = 1e300 raised
+  nothing);
+- out-of-range fmi2StatusKind / fmi2Type values are reported errors (undefined behaviour before;
+  the UBSan run of this file checks that no enum is loaded);
+- a plant logs a non-finite input once when it goes bad and once when it recovers, and reports
+  it on its input_fault output (it used to log every step); a push beyond +-1000 N is refused by
+  fmi2SetReal instead of ending in a CVODE failure.
+"""
+from __future__ import annotations
+
+import ctypes
+import math
+import random
+import struct
+
+import pytest
+
+from conftest import RawModel, fmi2Discard, fmi2Error, fmi2OK, fmi2Warning, _unzip
+from test_fmu_glue import _fnv1a64, _restore_bytes, _running, _snapshot_bytes
+
+
+@pytest.fixture(scope="module")
+def raw_plant(plant_unzipped) -> RawModel:
+    return RawModel(plant_unzipped)
+
+
+@pytest.fixture(scope="module")
+def raw_plant3d(fmu_path, tmp_path_factory) -> RawModel:
+    return RawModel(_unzip(fmu_path("Hoap2Plant3D"), tmp_path_factory))
+
+
+@pytest.fixture(params=["controller", "plant", "plant3d"])
+def raw_any(request, raw_controller, raw_plant, raw_plant3d) -> RawModel:
+    return {"controller": raw_controller, "plant": raw_plant, "plant3d": raw_plant3d}[request.param]
+
+
+def _real_outputs(raw: RawModel) -> list[str]:
+    return [n for n, v in raw.vars.items() if v.causality == "output" and v.type == "Real"]
+
+
+def _time(inst) -> float:
+    t = ctypes.c_double()
+    assert inst.fmi2GetRealStatus(2, ctypes.byref(t)) == fmi2OK  # fmi2LastSuccessfulTime
+    return t.value
+
+
+# ---------------------------------------------------------------------------------------------
+# Step size
+
+@pytest.mark.parametrize("h", [1e5, 1.85e16, 1e303])
+def test_controller_refuses_steps_beyond_its_tick_budget(raw_controller, h):
+    inst = _running(raw_controller)
+    assert inst.fmi2DoStep(0.0, 1e-3, 0) == fmi2OK
+    assert inst.fmi2DoStep(1e-3, h, 0) == fmi2Error
+    assert any("longer than this FMU's largest step 1000" in m for m in inst.errors()), inst.log
+    assert _time(inst) == 1e-3  # nothing ran, the time did not jump
+    assert inst.fmi2DoStep(1e-3, 1e-3, 0) == fmi2OK  # and the instance is still usable
+    inst.free()
+
+
+def test_controller_takes_its_largest_step(raw_controller):
+    """1000 s in one step (1e6 ticks at 1 ms) is still accepted and runs every tick."""
+    inst = _running(raw_controller)
+    assert inst.fmi2DoStep(0.0, 1000.0, 0) == fmi2OK
+    assert _time(inst) == 1000.0
+    inst.free()
+
+
+@pytest.mark.parametrize("raw_name,hmax", [("plant", 3600.0), ("plant3d", 50.0)])
+def test_plants_refuse_steps_beyond_their_budget(raw_name, hmax, raw_plant, raw_plant3d):
+    inst = _running({"plant": raw_plant, "plant3d": raw_plant3d}[raw_name])
+    for h in (hmax * 1.01, 1e300):
+        assert inst.fmi2DoStep(0.0, h, 0) == fmi2Error
+        assert any(f"largest step {hmax:.17g}" in m for m in inst.errors()), inst.log
+    assert inst.fmi2DoStep(0.0, 1e-3, 0) == fmi2OK
+    inst.free()
+
+
+def test_step_below_time_resolution_refused(raw_controller):
+    inst = raw_controller.instance()
+    assert inst.fmi2SetupExperiment(0, 0.0, 1e17, 0, 0.0) == fmi2OK
+    assert inst.fmi2EnterInitializationMode() == fmi2OK
+    assert inst.fmi2ExitInitializationMode() == fmi2OK
+    assert inst.fmi2DoStep(1e17, 1e-3, 0) == fmi2Error
+    assert any("below the time resolution" in m for m in inst.errors()), inst.log
+    inst.free()
+
+
+# ---------------------------------------------------------------------------------------------
+# Forged states
+
+def _forge(blob: bytes, rng: random.Random) -> bytes:
+    """One forgery of a serialized state with a recomputed checksum: an 8-byte value in the payload
+    replaced by NaN / +-Inf / +-1e300 / a denormal / random bits, or one byte set at random."""
+    b = bytearray(blob)
+    header = 8 + 4 + 4 + 4 + int.from_bytes(b[16:20], "little") + 16 + 8
+    pos = rng.randrange(header, len(b) - 8 - 8)
+    kind = rng.randrange(3)
+    if kind == 0:
+        b[pos:pos + 8] = struct.pack("<d", rng.choice([math.nan, math.inf, -math.inf, 1e300, -1e300, 5e-324]))
+    elif kind == 1:
+        b[pos:pos + 8] = rng.randbytes(8)
+    else:
+        b[pos] = rng.randrange(256)
+    b[-8:] = _fnv1a64(bytes(b[:-8])).to_bytes(8, "little")
+    return bytes(b)
+
+
+@pytest.mark.parametrize("count", [400])
+def test_forged_states_are_refused_or_harmless(raw_any, count):
+    raw = raw_any
+    donor = _running(raw, name="donor")
+    for k in range(30):
+        assert donor.fmi2DoStep(k * 1e-3, 1e-3, 0) in (fmi2OK, fmi2Warning)
+    blob = _snapshot_bytes(donor)
+    donor.free()
+    outputs = _real_outputs(raw)
+    rng = random.Random(12)
+    accepted = 0
+    victim = _running(raw, name="victim")
+    for _ in range(count):
+        forged = _forge(blob, rng)
+        victim.log.clear()
+        if _restore_bytes(victim, forged) != fmi2OK:
+            assert victim.errors(), "a refused state says why"
+            continue
+        accepted += 1
+        t = _time(victim)
+        for k in range(5):
+            st = victim.fmi2DoStep(t + k * 1e-3, 1e-3, 0)
+            assert st in (fmi2OK, fmi2Warning, fmi2Discard), (st, victim.log[-3:])
+            if st == fmi2Discard:
+                break
+            got, values = victim.get_real(outputs)
+            assert got == fmi2OK and all(math.isfinite(x) for x in values), \
+                [(n, x) for n, x in zip(outputs, values) if not math.isfinite(x)]
+        # back to a clean state for the next forgery
+        assert _restore_bytes(victim, blob) == fmi2OK
+    victim.free()
+    assert accepted < count  # the forgeries exercised the validation
+
+
+def test_state_of_another_instance_or_freed_is_an_error(raw_controller):
+    a, b = _running(raw_controller, name="a"), _running(raw_controller, name="b")
+    s = ctypes.c_void_p()
+    assert a.fmi2GetFMUstate(ctypes.byref(s)) == fmi2OK
+    assert b.fmi2SetFMUstate(s) == fmi2Error
+    assert any("not created by this instance" in m for m in b.errors()), b.log
+    assert b.fmi2FreeFMUstate(ctypes.byref(s)) == fmi2Error  # b must not free a's state
+    stale = ctypes.c_void_p(s.value)
+    assert a.fmi2FreeFMUstate(ctypes.byref(s)) == fmi2OK
+    assert a.fmi2SetFMUstate(stale) == fmi2Error  # freed: found nowhere, never dereferenced
+    # states still held when the instance is freed are freed with it (sanitizer/Valgrind runs)
+    for _ in range(3):
+        held = ctypes.c_void_p()
+        assert a.fmi2GetFMUstate(ctypes.byref(held)) == fmi2OK
+    a.free()
+    b.free()
+
+
+# ---------------------------------------------------------------------------------------------
+# Parameters, inputs and enums
+
+def test_meaningless_sample_period_refused_at_set_time(raw_controller):
+    inst = raw_controller.instance()
+    assert inst.set_real({"sample_period": 2.2e-310}) == fmi2Error
+    assert any('"sample_period" = 2.19' in m and "is outside [1e-05, 0.1]" in m for m in inst.errors()), inst.log
+    inst.free()
+
+
+def test_every_positive_parameter_has_a_positive_minimum(raw_any):
+    """No parameter has a minimum of 0 that is really 'excluded' (FMI bounds are closed): every
+    bound the FMU declares is accepted at set time, and initialization succeeds with it or names it."""
+    for name, v in raw_any.vars.items():
+        if v.causality != "parameter" or v.type != "Real" or v.min is None:
+            continue
+        inst = raw_any.instance()
+        assert inst.set_real({name: float(v.min)}) == fmi2OK, (name, inst.log)
+        assert inst.set_real({name: math.nextafter(float(v.min), -math.inf)}) == fmi2Error, name
+        inst.free()
+
+
+def test_implausible_fz_raises_and_logs_the_fault(raw_controller):
+    inst = _running(raw_controller)
+    assert inst.fmi2DoStep(0.0, 1e-3, 0) == fmi2OK
+    assert inst.set_real({"fz": 1e300}) == fmi2OK
+    assert inst.fmi2DoStep(1e-3, 1e-3, 0) == fmi2OK
+    assert inst.get_integer(["fault"])[1] == [0x200]
+    assert any("fz_implausible" in m for _, _, m in inst.log), inst.log
+    assert inst.set_real({"fz": 70.0}) == fmi2OK
+    assert inst.fmi2DoStep(2e-3, 1e-3, 0) == fmi2OK
+    assert inst.get_integer(["fault"])[1] == [0]
+    inst.free()
+
+
+@pytest.mark.parametrize("fn,kind", [("fmi2GetRealStatus", 99), ("fmi2GetBooleanStatus", -7),
+                                     ("fmi2GetStringStatus", 1 << 30), ("fmi2GetIntegerStatus", 42)])
+def test_out_of_range_status_kind(raw_any, fn, kind):
+    inst = _running(raw_any)
+    assert inst.fmi2DoStep(0.0, 1e-3, 0) in (fmi2OK, fmi2Warning)
+    value = {"fmi2GetRealStatus": ctypes.c_double, "fmi2GetStringStatus": ctypes.c_char_p}.get(fn, ctypes.c_int)()
+    assert getattr(inst, fn)(kind, ctypes.byref(value)) == fmi2Error
+    assert any(f"status kind {kind}" in m or "no integer status" in m for m in inst.errors()), inst.log
+    inst.free()
+
+
+def test_out_of_range_fmu_type(raw_controller):
+    inst = raw_controller.instance(fmu_type=7)
+    assert not inst.c
+    assert any("fmuType 7" in m for _, _, m in inst.log), inst.log
+
+
+@pytest.mark.parametrize("raw_name", ["plant", "plant3d"])
+def test_plant_nonfinite_input_logged_once_and_reported(raw_name, raw_plant, raw_plant3d):
+    raw = {"plant": raw_plant, "plant3d": raw_plant3d}[raw_name]
+    inst = _running(raw)
+    assert inst.set_real({"theta_hip_ref": math.nan}) == fmi2OK
+    for k in range(100):
+        assert inst.fmi2DoStep(k * 1e-3, 1e-3, 0) == fmi2Warning
+    assert inst.get_integer(["input_fault"])[1] == [2]
+    warnings = [m for s, _, m in inst.log if s == fmi2Warning and "theta_hip_ref" in m]
+    assert len(warnings) == 1, warnings
+    assert inst.set_real({"theta_hip_ref": 0.0}) == fmi2OK
+    assert inst.fmi2DoStep(0.1, 1e-3, 0) == fmi2OK
+    assert inst.get_integer(["input_fault"])[1] == [0]
+    assert any("finite again" in m for _, _, m in inst.log), inst.log
+    inst.free()
+
+
+@pytest.mark.parametrize("raw_name", ["plant", "plant3d"])
+def test_plant_push_beyond_range_refused_and_largest_push_is_a_fall(raw_name, raw_plant, raw_plant3d):
+    raw = {"plant": raw_plant, "plant3d": raw_plant3d}[raw_name]
+    inst = _running(raw)
+    assert inst.set_real({"push_force": 1e308}) == fmi2Error
+    assert any('"push_force" = 1e+308 is outside [-1000, 1000]' in m for m in inst.errors())
+    inst.log.clear()
+    assert inst.set_real({"push_force": -1000.0}) == fmi2OK
+    st = fmi2OK
+    for k in range(2000):
+        st = inst.fmi2DoStep(k * 1e-3, 1e-3, 0)
+        if st != fmi2OK:
+            break
+    assert st == fmi2Discard, inst.log[-3:]  # fallen, reported as a fall, not a solver error
+    assert not inst.errors(), inst.errors()
+    inst.free()
+
+
+# ---------------------------------------------------------------------------------------------
+# Load and unload
+
+def test_load_unload_cycles_do_not_leak(raw_any, tmp_path):
+    """An importer that loads and unloads the binary (FMPy does for every simulate_fmu call) used
+    to lose 72 704 bytes per cycle: the statically linked libstdc++'s exception pool. The heap in
+    use (glibc mallinfo2) must not grow with the number of cycles."""
+    import _ctypes
+    import shutil
+
+    so = tmp_path / "copy.so"  # a path of its own, so each dlopen really loads and dlclose unloads
+    shutil.copy(raw_any.lib._name, so)
+    libc = ctypes.CDLL(None)
+
+    class MallInfo2(ctypes.Structure):
+        _fields_ = [(n, ctypes.c_size_t) for n in ("arena", "ordblks", "smblks", "hblks", "hblkhd", "usmblks",
+                                                   "fsmblks", "uordblks", "fordblks", "keepcost")]
+
+    libc.mallinfo2.restype = MallInfo2
+
+    def cycle():
+        lib = ctypes.CDLL(str(so))
+        assert lib.fmi2GetVersion  # resolved: the binary is really loaded
+        _ctypes.dlclose(lib._handle)
+
+    for _ in range(5):
+        cycle()
+    before = libc.mallinfo2().uordblks
+    for _ in range(50):
+        cycle()
+    growth = (libc.mallinfo2().uordblks - before) / 50
+    # ctypes itself keeps ~1.8 kB per CDLL object (the same for a one-function C library); the
+    # defect was 72 704 bytes per cycle
+    assert growth < 10_000, f"{growth:.0f} bytes of heap lost per load/unload cycle"
