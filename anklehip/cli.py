@@ -315,8 +315,11 @@ def cmd_plot(a) -> int:
             params = None
     std = all(c in data.dtype.names for c in ("theta_ankle", "theta_hip", "zmp_x", "com_x"))
     if std:
-        files = make_figures(name, data, out, animate=a.animate, params=params,
-                             anim_args=dict(fps=a.fps, speed=a.speed, t_start=a.anim_start, t_stop=a.anim_stop))
+        try:
+            files = make_figures(name, data, out, animate=a.animate, params=params,
+                                 anim_args=dict(fps=a.fps, speed=a.speed, t_start=a.anim_start, t_stop=a.anim_stop))
+        except ValueError as e:       # e.g. an animation window outside the result
+            return _err(f"{csv}: {e}")
     else:
         from . import plots
         files = [plots.overview(data, out / f"{name}_overview.png", title=name)]

@@ -309,6 +309,9 @@ def animate(d: np.ndarray, out: Path, geom: Geometry | None = None, fps: float =
     a = t[0] if t_start is None else t_start
     b = t[-1] if t_stop is None else t_stop
     frames = np.arange(a, b + 1e-9, speed / fps)
+    if not len(frames) or a > t[-1] or b < t[0]:
+        raise ValueError(f"no animation frames: the window {a:g}..{b:g} s (--anim-start/--anim-stop) is outside "
+                         f"the result's {t[0]:g}..{t[-1]:g} s")
     idx = np.clip(np.searchsorted(t, frames), 0, len(t) - 1)
     names = d.dtype.names
     fmax = max(1.0, float(np.max(np.abs(d["push_force"])))) if "push_force" in names else 1.0
