@@ -12,11 +12,13 @@ case "${1:-}" in
     ;;
   test)
     # The suite includes the Windows binaries under Wine (tests/test_win64.py): build them, and
-    # fail rather than skip if any piece is missing.
-    bash scripts/setup.sh --win64
+    # fail rather than skip if any piece is missing. Then the reliability checks on the sanitizer
+    # build: sanitized CTest, FMI fuzzing, a sanitized closed loop, Valgrind (docs/reliability.md).
+    bash scripts/setup.sh --win64 --sanitize
     export PATH="$root/.venv/bin:$PATH" ANKLEHIP_REQUIRE_WIN64=1
     ctest --test-dir "${ANKLEHIP_BUILD_DIR:-build}" --output-on-failure --no-tests=error
     .venv/bin/python -m pytest -q tests
+    bash scripts/reliability.sh
     ;;
   *)
     echo "usage: bash run.sh main|test" >&2; exit 2 ;;

@@ -49,9 +49,16 @@ function(_add_fmu_binary name link include_dirs)
     file(WRITE "${vscript}" "{\n  global:\n    fmi2*;\n  local:\n    *;\n};\n")
     set_target_properties(${name} PROPERTIES SUFFIX ".so" LINK_DEPENDS "${vscript}"
       LIBRARY_OUTPUT_DIRECTORY "${CMAKE_BINARY_DIR}/binaries")
-    target_link_options(${name} PRIVATE -static-libstdc++ -static-libgcc
-      "LINKER:--version-script=${vscript}" "LINKER:--no-undefined" "LINKER:--exclude-libs,ALL"
-      "LINKER:--as-needed" "LINKER:--gc-sections" $<$<CONFIG:Release,MinSizeRel>:-s>)
+    if(ANKLEHIP_SANITIZE)
+      # sanitized binaries resolve the sanitizer runtime (and the C++ runtime it wraps) from the
+      # process: no static libstdc++, undefined __asan_* symbols, symbols kept for the reports
+      target_link_options(${name} PRIVATE "LINKER:--version-script=${vscript}")
+    else()
+      target_compile_definitions(${name} PRIVATE FMUGLUE_STATIC_LIBSTDCXX)  # fmi2_api.cpp frees its pool
+      target_link_options(${name} PRIVATE -static-libstdc++ -static-libgcc
+        "LINKER:--version-script=${vscript}" "LINKER:--no-undefined" "LINKER:--exclude-libs,ALL"
+        "LINKER:--as-needed" "LINKER:--gc-sections" $<$<CONFIG:Release,MinSizeRel>:-s>)
+    endif()
   endif()
 endfunction()
 
@@ -88,6 +95,16 @@ function(add_fmu)
 
   # The FMU binary.
   _add_fmu_binary(${name} "${FMU_LINK}" "" $<TARGET_OBJECTS:${name}_objs>)
+
+  # The coverage-guided FMI fuzzer of this FMU (fmu/fuzz/fmi_fuzz.cpp, docs/reliability.md).
+  if(ANKLEHIP_FUZZ)
+    target_compile_options(${name}_objs PRIVATE -fsanitize=fuzzer-no-link)
+    add_executable(${name}_fuzz "${_ADD_FMU_GLUE_SRC}/../../fuzz/fmi_fuzz.cpp" "${_ADD_FMU_GLUE_SRC}/fmi2_api.cpp"
+                   $<TARGET_OBJECTS:${name}_objs>)
+    target_link_libraries(${name}_fuzz PRIVATE fmuglue ${FMU_LINK})
+    target_compile_options(${name}_fuzz PRIVATE -fsanitize=fuzzer)
+    target_link_options(${name}_fuzz PRIVATE -fsanitize=fuzzer)
+  endif()
 
   # The generator of modelDescription.xml / documentation.
   add_executable(${name}_gen "${_ADD_FMU_GLUE_SRC}/gen_main.cpp" $<TARGET_OBJECTS:${name}_objs>)

@@ -2,14 +2,19 @@
 # One-time (and idempotent) set-up: Debian packages, the Python virtual environment .venv with the
 # project installed in editable mode, and the native build in build/ (libraries, tests, FMUs).
 # Fast and silent when everything is already there; prints what it does otherwise.
-#   --win64   also the Windows 64-bit binaries of every FMU (mingw-w64 cross build, packed next to
-#             linux64) and Wine to run them (tests/test_win64.py); kept on for later runs.
+#   --win64     also the Windows 64-bit binaries of every FMU (mingw-w64 cross build, packed next to
+#               linux64) and Wine to run them (tests/test_win64.py); kept on for later runs.
+#   --sanitize  also the reliability build in <build>/sanitize: every native target with clang,
+#               AddressSanitizer + UndefinedBehaviorSanitizer and a libFuzzer harness per FMU, and
+#               Valgrind (scripts/reliability.sh, docs/reliability.md).
 set -euo pipefail
 win64=0
+sanitize=0
 for arg in "$@"; do
   case "$arg" in
     --win64) win64=1 ;;
-    *) echo "usage: bash scripts/setup.sh [--win64]" >&2; exit 2 ;;
+    --sanitize) sanitize=1 ;;
+    *) echo "usage: bash scripts/setup.sh [--win64] [--sanitize]" >&2; exit 2 ;;
   esac
 done
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -63,6 +68,9 @@ fi
 debs=(build-essential cmake dpkg-dev libeigen3-dev libsundials-dev libode-dev python3 python3-venv python3-dev)
 # --win64: the posix-thread mingw-w64 C/C++ cross compilers (with binutils, objdump) and Wine.
 [ "$win64" -eq 1 ] && debs+=(gcc-mingw-w64-x86-64-posix g++-mingw-w64-x86-64-posix wine64)
+# --sanitize: clang with its sanitizer and libFuzzer runtimes, the OpenMP runtime SUNDIALS' CMake
+# package asks clang for, llvm-symbolizer for readable reports, and Valgrind.
+[ "$sanitize" -eq 1 ] && debs+=(clang libclang-rt-dev libomp-dev llvm valgrind)
 missing=()
 for p in "${debs[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
@@ -104,3 +112,14 @@ elif [ "$win64" -eq 1 ] && ! grep -q '^ANKLEHIP_WIN64:BOOL=ON' "$build/CMakeCach
   cmake -S . -B "$build" -DANKLEHIP_WIN64=ON >/dev/null
 fi
 cmake --build "$build" -j"$(nproc)" >"$build/last-build.log" 2>&1 || { cat "$build/last-build.log"; exit 1; }
+
+# --- Reliability build (--sanitize) -----------------------------------------------------------
+if [ "$sanitize" -eq 1 ]; then
+  sbuild="$build/sanitize"
+  if [ ! -f "$sbuild/CMakeCache.txt" ]; then
+    echo "setup: configuring the sanitizer and fuzzing build in $sbuild"
+    CC=clang CXX=clang++ cmake -S . -B "$sbuild" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DANKLEHIP_FUZZ=ON \
+      -DPython3_EXECUTABLE="$root/.venv/bin/python" >/dev/null
+  fi
+  cmake --build "$sbuild" -j"$(nproc)" >"$sbuild/last-build.log" 2>&1 || { cat "$sbuild/last-build.log"; exit 1; }
+fi

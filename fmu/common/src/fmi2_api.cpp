@@ -151,7 +151,7 @@ bool checkNumber(Instance* inst, const char* fn, int i, double v) {
 
 }  // namespace
 
-#if defined(__GLIBCXX__) && !defined(_WIN32)
+#if defined(FMUGLUE_STATIC_LIBSTDCXX)
 // The statically linked libstdc++ allocates its exception emergency pool (72 704 bytes) when the
 // binary is loaded and never frees it, so an importer that loads and unloads the FMU repeatedly
 // lost that much every time. __gnu_cxx::__freeres(), libstdc++'s hook for memory checkers, frees

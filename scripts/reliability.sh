@@ -1,0 +1,64 @@
+#!/usr/bin/env bash
+# The reliability checks (issue 12, docs/reliability.md), on the build `setup.sh --sanitize` makes
+# in <build>/sanitize. Any sanitizer report, fuzzer finding, Valgrind error or leak in our FMUs
+# fails the script.
+#   1. the whole CTest suite built with AddressSanitizer + UndefinedBehaviorSanitizer;
+#   2. each shipped FMU's libFuzzer harness for ANKLEHIP_FUZZ_SECONDS (default 60) from the
+#      committed seed corpus (fmu/fuzz/corpus), leaks and slow inputs (> 10 s) included;
+#   3. one closed-loop scenario from Python through both sanitized FMUs (ASan runtime preloaded);
+#   4. a Valgrind memcheck of a closed-loop run through the shipped FMUs.
+# Usage: bash scripts/reliability.sh            (after bash scripts/setup.sh --sanitize)
+set -euo pipefail
+root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+cd "$root"
+build="${ANKLEHIP_BUILD_DIR:-build}"
+sbuild="$build/sanitize"
+seconds="${ANKLEHIP_FUZZ_SECONDS:-60}"
+[ -f "$sbuild/CMakeCache.txt" ] || { echo "reliability: no sanitizer build in $sbuild (bash scripts/setup.sh --sanitize)" >&2; exit 1; }
+asan_rt="$(clang -print-file-name=libclang_rt.asan-x86_64.so)"
+# Every report is fatal; the symbolizer makes the stacks readable.
+export ASAN_OPTIONS="abort_on_error=1:detect_leaks=1:strict_string_checks=1:check_initialization_order=1"
+export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1"
+export ASAN_SYMBOLIZER_PATH="${ASAN_SYMBOLIZER_PATH:-$(command -v llvm-symbolizer || true)}"
+
+echo "== 1/4 CTest, sanitized"
+ctest --test-dir "$sbuild" --output-on-failure --no-tests=error -j"$(nproc)"
+
+echo "== 2/4 FMI fuzzing, ${seconds} s per FMU"
+work="$sbuild/fuzz"
+for fmu in AnkleHipController Hoap2Plant Hoap2Plant3D; do
+  exe="$(find "$sbuild/fmu" -name "${fmu}_fuzz" -type f | head -n1)"
+  [ -x "$exe" ] || { echo "reliability: ${fmu}_fuzz not built" >&2; exit 1; }
+  corpus="$work/corpus-$fmu"   # grows across runs on this machine; the seeds are the committed ones
+  mkdir -p "$corpus" "$work/findings"
+  log="$work/$fmu.log"
+  if ! LD_PRELOAD="$asan_rt" "$exe" -max_total_time="$seconds" -timeout=10 -rss_limit_mb=4096 -print_final_stats=1 \
+      -artifact_prefix="$work/findings/$fmu-" "$corpus" fmu/fuzz/corpus >"$log" 2>&1; then
+    tail -n 60 "$log"
+    echo "reliability: the $fmu fuzzer found a defect (input in $work/findings/)" >&2
+    exit 1
+  fi
+  runs="$(sed -n 's/^stat::number_of_executed_units: *//p' "$log")"
+  cov="$(grep -Eo 'cov: [0-9]+' "$log" | tail -n1)"
+  echo "   $fmu: $runs inputs, $cov edges, no finding"
+done
+
+echo "== 3/4 closed loop through the sanitized FMUs from Python"
+out="$(mktemp -d)"
+trap 'rm -rf "$out"' EXIT
+# The interpreter's own allocations at exit are not ours: leak checking is the fuzzers' and
+# Valgrind's job here; every other report aborts the run.
+if ! ANKLEHIP_FMU_DIR="$root/$sbuild/fmus" LD_PRELOAD="$asan_rt" ASAN_OPTIONS="abort_on_error=1:detect_leaks=0" \
+    .venv/bin/anklehip run hip_saves_push --out "$out/run" --no-progress >"$out/log" 2>&1; then
+  tail -n 60 "$out/log"
+  echo "reliability: the sanitized closed loop failed" >&2
+  exit 1
+fi
+if grep -Eq 'AddressSanitizer|runtime error|LeakSanitizer' "$out/log"; then
+  cat "$out/log"; echo "reliability: sanitizer report in the closed loop" >&2; exit 1
+fi
+echo "   hip_saves_push: $(grep -Eo 'scenario hip_saves_push: [^(]*' "$out/log" | head -n1)"
+
+echo "== 4/4 Valgrind memcheck of a closed loop"
+.venv/bin/python scripts/valgrind_closed_loop.py hip_saves_push --stop-time 1.5
+echo "reliability: all checks passed"
