@@ -235,29 +235,21 @@ class PlantFmu : public Model {
   // The parameters are not in the model's part of the state: load_state rebuilds them from the
   // restored (and checked) parameter variables, as exit_initialization does.
   void save_state(StateWriter& w) const override {
-    w.u32(plant_ ? 1u : 0u);
-    if (!plant_) return;
-    const hoap2plant::Snapshot snap = plant_->snapshot();
-    visit_fields(snap, FieldWriter{w});
-    for (double x : last_in_) w.f64(x);
+    const hoap2plant::Snapshot snap = plant_ ? plant_->snapshot() : hoap2plant::Snapshot();
+    writePlantState(w, plant_ ? &snap : nullptr, last_in_, 3);
   }
 
   bool load_state(Context& ctx, StateReader& r, std::string& err) override {
-    std::uint32_t has = 0;
-    if (!r.u32(has) || has > 1) return err = "bad plant state header", false;
+    bool has = false;
+    hoap2plant::Snapshot s;
+    double li[3];
+    Params p;
+    if (!readPlantState(ctx, r, has, s, li, 3, err)) return false;
     if (!has) {
       plant_.reset();
       return true;
     }
-    Params p;
     if (!paramsFromStore(ctx, p, err)) return false;
-    hoap2plant::Snapshot s;
-    FieldReader fr{r};
-    visit_fields(s, fr);
-    double li[3];
-    for (double& x : li) fr("last_inputs", x);
-    if (!fr.ok()) return err = "plant snapshot: " + fr.error, false;
-    if (s.t != ctx.time()) return err = "plant snapshot: its time is not the instance's", false;
     auto fresh = std::make_unique<Plant>(p);
     if (!fresh->restore(s)) return err = "invalid plant snapshot (contact mode, flags or state out of range)", false;
     plant_ = std::move(fresh);  // CVODE is re-initialized from the snapshot at the next step

@@ -317,29 +317,21 @@ class Plant3DFmu : public Model {
   // The parameters are not in the model's part of the state: load_state rebuilds them from the
   // restored (and checked) parameter variables, as exit_initialization does.
   void save_state(StateWriter& w) const override {
-    w.u32(plant_ ? 1u : 0u);
-    if (!plant_) return;
-    const Snapshot snap = plant_->snapshot();
-    visit_fields(snap, FieldWriter{w});
-    for (double x : last_in_) w.f64(x);
+    const Snapshot snap = plant_ ? plant_->snapshot() : Snapshot();
+    writePlantState(w, plant_ ? &snap : nullptr, last_in_, kInputs);
   }
 
   bool load_state(Context& ctx, StateReader& r, std::string& err) override {
-    std::uint32_t has = 0;
-    if (!r.u32(has) || has > 1) return err = "bad plant state header", false;
+    bool has = false;
+    Snapshot s;
+    double li[kInputs];
+    if (!readPlantState(ctx, r, has, s, li, kInputs, err)) return false;
     if (!has) {
       plant_.reset();
       return true;
     }
     const Params p = paramsFromStore(ctx);
     if (!paramsConsistent(p, err)) return false;
-    Snapshot s;
-    FieldReader fr{r};
-    visit_fields(s, fr);
-    double li[kInputs];
-    for (double& x : li) fr("last_inputs", x);
-    if (!fr.ok()) return err = "plant snapshot: " + fr.error, false;
-    if (s.t != ctx.time()) return err = "plant snapshot: its time is not the instance's", false;
     std::unique_ptr<Plant3D> fresh;
     try {
       fresh = std::make_unique<Plant3D>(p);

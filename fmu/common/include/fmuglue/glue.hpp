@@ -223,6 +223,33 @@ class Context {
   Instance& inst_;
 };
 
+// The model part of a plant FMU's state, shared by both plants: a presence flag, the plant's
+// snapshot field by field (visit_fields, found by argument-dependent lookup) and the n last
+// finite inputs. The plant's parameters are not in it: they come from the restored variables.
+template <class Snap>
+void writePlantState(StateWriter& w, const Snap* snap, const double* last_in, int n) {
+  w.u32(snap ? 1u : 0u);
+  if (!snap) return;
+  visit_fields(*snap, FieldWriter{w});
+  for (int i = 0; i < n; ++i) w.f64(last_in[i]);
+}
+// Reads what writePlantState wrote, validated; has = false when the state holds no plant. The
+// snapshot's time must be the instance's (ctx.time()). False with the reason in `err`.
+template <class Snap>
+bool readPlantState(const Context& ctx, StateReader& r, bool& has, Snap& snap, double* last_in, int n,
+                    std::string& err) {
+  std::uint32_t flag = 0;
+  if (!r.u32(flag) || flag > 1) return err = "bad plant state header", false;
+  has = flag == 1;
+  if (!has) return true;
+  FieldReader fr{r};
+  visit_fields(snap, fr);
+  for (int i = 0; i < n; ++i) fr("last_inputs", last_in[i]);
+  if (!fr.ok()) return err = "plant snapshot: " + fr.error, false;
+  if (snap.t != ctx.time()) return err = "plant snapshot: its time is not the instance's", false;
+  return true;
+}
+
 // The behaviour of one FMU. One object per fmi2Instantiate; never shared between instances.
 // Exceptions thrown by any hook are caught by the glue (fmi2Error + log; fatal from doStep).
 class Model {
