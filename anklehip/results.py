@@ -36,15 +36,15 @@ def _publish(tmp: str, path: Path) -> None:
     os.replace(tmp, path)
 
 
-def atomic_write_csv(path: Path, data: np.ndarray, columns: list[str] | None = None) -> None:
-    """FMPy write_csv layout, written to a temporary file in the same folder and renamed, so a
-    reader never sees a half-written file."""
+@contextmanager
+def _atomic(path: Path):
+    """Yields (fd, temporary path) in the folder of `path`; the temporary file replaces `path` when
+    the block succeeds and is removed when it fails, so a reader never sees a half-written file."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    os.close(fd)
     try:
-        write_csv(tmp, data, columns=[c for c in columns if c != "time"] if columns else None)
+        yield fd, tmp
         _publish(tmp, path)
     except BaseException:
         try:
@@ -52,22 +52,19 @@ def atomic_write_csv(path: Path, data: np.ndarray, columns: list[str] | None = N
         except OSError:
             pass
         raise
+
+
+def atomic_write_csv(path: Path, data: np.ndarray, columns: list[str] | None = None) -> None:
+    """FMPy write_csv layout, written atomically (_atomic)."""
+    with _atomic(path) as (fd, tmp):
+        os.close(fd)
+        write_csv(tmp, data, columns=[c for c in columns if c != "time"] if columns else None)
 
 
 def atomic_write_text(path: Path, text: str) -> None:
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    try:
+    with _atomic(path) as (fd, tmp):
         with os.fdopen(fd, "w") as f:
             f.write(text)
-        _publish(tmp, path)
-    except BaseException:
-        try:
-            os.unlink(tmp)
-        except OSError:
-            pass
-        raise
 
 
 def result_paths(out_dir: Path, name: str) -> dict[str, Path]:
