@@ -199,6 +199,9 @@ def _scenario_and_models(a):
             info.check_overrides({k: v}, f"--set {fmu}.{k}, scenario {_rel(sc.path)}")
     sc.controller.update(c_set)
     sc.plant.update(p_set)
+    if getattr(a, "fault", None):
+        from .scenario import parse_fault_options
+        sc.faults = parse_fault_options(a.fault, sc.faults)
     return sc, models
 
 
@@ -236,9 +239,9 @@ def _run(a, sc, models, out: Path) -> int:
     cmp = None
     warnings: list[str] = []
     # overrides change the reference; an interrupted or failed run is not a result to compare
-    changed = a.set or a.controller_config
+    changed = a.set or a.controller_config or a.fault
     if changed and sc.reference is not None and not a.no_compare:
-        print("anklehip: note: --set / --controller-config change the run, so it is not compared with "
+        print("anklehip: note: --set / --controller-config / --fault change the run, so it is not compared with "
               f"{_rel(sc.reference.file)}", file=sys.stderr)
     if not a.no_compare and a.stop_time is None and not changed and res.outcome not in ("error", "interrupted"):
         try:
@@ -467,6 +470,49 @@ def cmd_sweep(a) -> int:
     return EXIT_OK
 
 
+def cmd_robustness(a) -> int:
+    from .faults import KEY_BY_NAME
+    from .paths import MissingFileError, find_scenario
+    from .robustness import STUDIES, run_studies, study_by_label, summarize, table_markdown, write_points
+    from .scenario import ScenarioError, faults_from, load_scenario
+    from .sweep import parse_grid
+    try:
+        path = find_scenario(a.scenario)
+        sc = load_scenario(path)
+        studies = [study_by_label(x) for x in a.study] if a.study else list(STUDIES)
+        grids = {}
+        for g in a.grid or []:
+            key, eq, spec = g.partition("=")
+            if not eq or key not in KEY_BY_NAME:
+                raise ValueError(f"--grid {g}: expected KEY=GRID with KEY one of {', '.join(KEY_BY_NAME)}")
+            grids[key] = parse_grid(spec, f"--grid {key}")
+        plan = []
+        for st in studies:
+            levels = grids.get(st.key) or parse_grid(KEY_BY_NAME[st.key].grid, f"the default grid of {st.key}")
+            for x in (levels[0], levels[-1]):    # a level out of range is an error here, not in a worker
+                faults_from({**st.base, st.key: int(x) if KEY_BY_NAME[st.key].integer else x}, sc.faults,
+                            f"--grid {st.key}")
+            plan.append((st, levels))
+    except (ScenarioError, MissingFileError, ValueError) as e:
+        return _err(str(e))
+    out = check_output_folder(a.out if a.out else Path("results") / f"robustness_{sc.name}", "--out")
+    rows = run_studies(str(path), plan, a.fmu_dir, workers=a.workers)
+    summary = summarize(rows)
+    table = table_markdown(summary)
+    from .results import atomic_write_text
+    pts = write_points(rows, out / "points.csv")
+    atomic_write_text(out / "table.md", table)
+    print(table)
+    print(f"points {pts}\ntable  {out / 'table.md'}")
+    bad = [r for r in rows if not r["invariants_ok"]]
+    for r in bad:
+        print(f"anklehip: invariant violated: {r['study']} at {r['level']:g}: {r['outcome']} {r['message']} "
+              f"(non-finite outputs {r['nonfinite_outputs']}, unflagged rows {r['unflagged_rows']}, "
+              f"fault changes {r['fault_changes']} / logged {r['fault_logs']}, non-finite episodes "
+              f"{r['nonfinite_episodes']} / warned {r['nonfinite_warnings']})", file=sys.stderr)
+    return EXIT_OK if not bad else EXIT_FAIL
+
+
 CONTROLLER_CONFIG_HELP = ("a named controller configuration (default: the scenario's controller_config or "
                           "'default'; e.g. paper); --set overrides still apply on top")
 
@@ -623,6 +669,9 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--set", action="append", metavar="FMU.NAME=VALUE",
                    help="parameter override, e.g. controller.Ka=30 (repeatable)")
     s.add_argument("--controller-config", metavar="NAME", help=CONTROLLER_CONFIG_HELP)
+    s.add_argument("--fault", action="append", metavar="NAME=VALUE",
+                   help="inject a fault on top of the scenario's [faults] (repeatable), e.g. zmp_noise=0.002 "
+                        "drop_rate=0.1 delay_steps=2 mass_mismatch=-0.2; the keys: docs/scenarios.md")
     s.add_argument("--plant", choices=("sagittal", "3d"),
                    help="the plant model (default: the scenario's plant_model, else sagittal)")
     s.add_argument("--stop-time", type=FINITE, help="stop at this time instead of the scenario's stop_time (no outcome "
@@ -693,6 +742,17 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--workers", type=_number(ge=1, integer=True), default=2)
     s.add_argument("--out", help="output folder (default results/sweep_<scenario>)")
     s.set_defaults(fn=cmd_sweep)
+
+    s = sub.add_parser("robustness", help="each fault (docs/scenarios.md) swept over its levels on a scenario "
+                                          "-> the largest level that still completes every push cycle (Dask)")
+    s.add_argument("scenario")
+    s.add_argument("--study", action="append", metavar="NAME",
+                   help="only this study (a fault key or a study label; repeatable; default: all)")
+    s.add_argument("--grid", action="append", metavar="KEY=GRID",
+                   help="levels of a fault key instead of its default grid: start:stop:step or a,b,c (repeatable)")
+    s.add_argument("--workers", type=_number(ge=1, integer=True), default=2)
+    s.add_argument("--out", help="output folder (default results/robustness_<scenario>)")
+    s.set_defaults(fn=cmd_robustness)
 
     s = sub.add_parser("export", help="the closed loop of a scenario as an SSP file or as one container FMU")
     s.add_argument("kind", choices=("ssp", "container"))

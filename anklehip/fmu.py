@@ -188,7 +188,7 @@ class Slave:
     """
 
     def __init__(self, info: FMUInfo, instance_name: str | None = None, logging: bool = False,
-                 logger=None):
+                 logger=None, log_categories: list[str] | None = None):
         self.info = info
         self.fmu = FMU2Slave(guid=info.md.guid, unzipDirectory=info.unzipdir,
                              modelIdentifier=info.model_identifier,
@@ -203,6 +203,8 @@ class Slave:
             callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
             callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
         self.fmu.instantiate(loggingOn=logging, callbacks=callbacks)
+        if log_categories:     # only these categories (e.g. logEvents, logStatusWarning), not logCalls
+            self.fmu.setDebugLogging(True, list(log_categories))
         self.c = self.fmu.component
         dll = self.fmu.dll
         self.get_real = _proto(("fmi2GetReal", dll))

@@ -16,6 +16,7 @@ outputs straight into preallocated numpy arrays (no per-step allocation or dicti
 """
 from __future__ import annotations
 
+import math
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -23,9 +24,10 @@ from typing import Any, Callable
 
 import numpy as np
 
+from .faults import SENSED_PREFIX, Faults, SensorChannel, TransitionPush, parameter_faults
 from .fmu import DISCARD, STATUS_NAMES, FMUError, FMUInfo, Slave, vr_array
 from .paths import CONTROLLER_FMU, PLANT_FMUS, find_fmu
-from .scenario import PushProfile, Scenario, ScenarioError, time_grid_problem
+from .scenario import PushProfile, PushSegment, Scenario, ScenarioError, time_grid_problem
 
 CONTROLLER_INPUTS = ("theta_ankle", "theta_hip", "zmp_x", "fz")
 CONTROLLER_REFS = ("theta_ankle_ref", "theta_hip_ref")
@@ -53,6 +55,8 @@ class RunResult:
     controller_columns: dict[str, str] = field(default_factory=dict)   # column -> FMU variable
     controller_inputs: tuple[str, ...] = CONTROLLER_INPUTS
     column_units: dict[str, str] = field(default_factory=dict)
+    faults: dict[str, Any] = field(default_factory=dict)     # the injected faults (non-default keys)
+    transition_pushes: list[float] = field(default_factory=list)   # start times of the transition pushes
 
     @property
     def complete(self) -> bool:
@@ -161,27 +165,39 @@ class _Layout:
 
 
 def scenario_parameters(scenario: Scenario, models: Models, controller_overrides: dict | None = None,
-                        plant_overrides: dict | None = None) -> tuple[dict[str, Any], dict[str, Any]]:
+                        plant_overrides: dict | None = None, faults: Faults | None = None
+                        ) -> tuple[dict[str, Any], dict[str, Any]]:
     """The controller's and the plant's parameter values a scenario sets (checked against the
     FMUs). Precedence: the named configuration < the scenario's [controller] / [plant] tables <
-    the caller's overrides."""
+    the caller's overrides < the parameter faults (torque_scale, mass/length_mismatch: scaled
+    from the values so far)."""
     origin = str(scenario.path) if scenario.path else scenario.name
     c_over = {**models.controller.configuration(scenario.controller_config, f"{origin}: controller_config"),
               **scenario.controller, **(controller_overrides or {})}
     p_over = dict(scenario.plant, **(plant_overrides or {}))
     check_overrides(models, c_over, p_over, origin)
+    faults = faults if faults is not None else scenario.faults
+    fc, fp = parameter_faults(faults, {**models.controller.start_values(), **c_over},
+                              {**models.plant.start_values(), **p_over})
+    if fc or fp:
+        c_over, p_over = {**c_over, **fc}, {**p_over, **fp}
+        check_overrides(models, fc, fp, f"{origin} [faults]")
     return c_over, p_over
 
 
 def simulate(scenario: Scenario, models: Models | None = None, *, fmu_dir=None,
              controller_overrides: dict | None = None, plant_overrides: dict | None = None,
              push: PushProfile | None = None, stop_time: float | None = None,
-             progress: bool | None = None, logger: Callable | None = None) -> RunResult:
+             progress: bool | None = None, logger: Callable | None = None,
+             faults: Faults | None = None, log_categories: list[str] | None = None) -> RunResult:
     """Run one closed-loop scenario; never raises for a fall (outcome 'fell'). Raises ScenarioError
     for a stop time the run cannot have (scenario.time_grid_problem) and FMUError for FMUs that
-    do not fit together or a parameter they do not have."""
+    do not fit together or a parameter they do not have. `faults` replaces the scenario's
+    [faults]; `log_categories` switches those log categories of both FMUs on (for `logger`; by
+    default only errors are logged)."""
     models = models or Models.load(fmu_dir)
-    c_over, p_over = scenario_parameters(scenario, models, controller_overrides, plant_overrides)
+    faults = faults if faults is not None else scenario.faults
+    c_over, p_over = scenario_parameters(scenario, models, controller_overrides, plant_overrides, faults)
     L = _Layout(models)
     h = scenario.step
     T = stop_time if stop_time is not None else scenario.stop_time
@@ -200,6 +216,19 @@ def simulate(scenario: Scenario, models: Models | None = None, *, fmu_dir=None,
     elif scenario.push_y.peak() != 0:
         raise FMUError(f"{scenario.path or scenario.name}: push_y needs a plant with the input {PUSH_Y!r} ({models.plant.name} has none)")
     R[N, L.off_push:L.off_cother] = R[N - 1, L.off_push:L.off_cother] if N else 0.0
+    push_starts = [a for a, _ in push.events()]
+    sensors = (SensorChannel(faults, [v.name for v in L.c_in], R, h, N, push_starts)
+               if faults.sensor_active else None)
+    extra_push = None
+    if faults.transition_push:
+        if "phase" not in [v.name for v in L.c_int]:
+            raise FMUError(f"faults.transition_push needs a controller with a 'phase' output")
+        pulse = PushProfile.from_segments([PushSegment("pulse", t=0.0, force=faults.transition_push,
+                                                       duration=faults.transition_push_duration,
+                                                       rise=faults.transition_push_rise)])
+        m = int(math.ceil(faults.transition_push_duration / h - 1e-9))
+        extra_push = TransitionPush(R, L.off_push, pulse.step_averages(0.0, h, m), faults.transition_phase, N)
+        i_phase = L.off_cint + [v.name for v in L.c_int].index("phase")
 
     ctrl = plant = None
     outcome, message, fell_at = "completed", "", None
@@ -210,8 +239,8 @@ def simulate(scenario: Scenario, models: Models | None = None, *, fmu_dir=None,
     j = 0
     bar = None
     try:
-        ctrl = Slave(models.controller, "controller", logger=logger)
-        plant = Slave(models.plant, "plant", logger=logger)
+        ctrl = Slave(models.controller, "controller", logger=logger, log_categories=log_categories)
+        plant = Slave(models.plant, "plant", logger=logger, log_categories=log_categories)
         ctrl.initialize(t0, T, c_over)
         plant.initialize(t0, T, p_over)
         c_init = ctrl.get_values([v.name for v in L.c_feed + L.c_other + L.c_int + L.c_bool])
@@ -234,6 +263,8 @@ def simulate(scenario: Scenario, models: Models | None = None, *, fmu_dir=None,
         baseI, sI = I.ctypes.data, I.strides[0]
         oF, oO = 8 * L.off_feed, 8 * L.off_cother
         oPB, oCI, oCB = 4 * L.off_pbool, 4 * L.off_cint, 4 * L.off_cbool
+        if sensors is not None:     # the controller reads the faulty channel's rows, not the plant's
+            inject, baseS, sS = sensors.apply, sensors.S.ctypes.data, sensors.S.strides[0]
 
         if progress is None:
             progress = T >= 5.0
@@ -254,7 +285,11 @@ def simulate(scenario: Scenario, models: Models | None = None, *, fmu_dir=None,
                     st |= p_getI(pc, vr_pI, n_pI, rI)
                 if n_pB:
                     st |= p_getB(pc, vr_pB, n_pB, rI + oPB)
-                st |= c_setR(cc, vr_cin, n_cin, rR)
+                if sensors is None:
+                    st |= c_setR(cc, vr_cin, n_cin, rR)
+                else:
+                    inject(j)
+                    st |= c_setR(cc, vr_cin, n_cin, baseS + j * sS)
                 sc = c_step(cc, t, h, 1)
                 st |= c_getR(cc, vr_cF, n_cF, rR + oF)
                 if n_cO:
@@ -263,6 +298,8 @@ def simulate(scenario: Scenario, models: Models | None = None, *, fmu_dir=None,
                     st |= c_getI(cc, vr_cI, n_cI, rI + oCI)
                 if n_cB:
                     st |= c_getB(cc, vr_cB, n_cB, rI + oCB)
+                if extra_push is not None:
+                    extra_push.after_controller(j, int(I[j, i_phase]))
                 st |= p_setR(pc, vr_pin, n_pin, rR + oF)
                 sp = p_step(pc, t, h, 1)
                 if sp > 1 or sc > 1 or st > 1:
@@ -335,14 +372,23 @@ def simulate(scenario: Scenario, models: Models | None = None, *, fmu_dir=None,
     times = t0 + h * np.arange(last + 1)
     if failed_at >= 0 and last == failed_at + 1:      # closed by the plant's outputs after a discard
         times[-1] = max(t_end, times[-2])
-    data = _structured(L, times, R[:last + 1], I[:last + 1])
+    extra: dict[str, np.ndarray] = {}
+    if sensors is not None:        # the last row repeats the controller side, like its outputs
+        if last > 0:
+            sensors.S[last] = sensors.S[last - 1]
+        extra = {SENSED_PREFIX + v.name: sensors.S[:last + 1, i] for i, v in enumerate(L.c_in)}
+        for v in L.c_in:
+            L.units[SENSED_PREFIX + v.name] = L.units.get(v.name, "")
+    data = _structured(L, times, R[:last + 1], I[:last + 1], extra)
     res = RunResult(name=scenario.name, data=data, outcome=outcome, end_time=float(times[-1]),
                     stop_time=T, step=h, wall_time=wall, message=message, fell_at=fell_at,
                     controller_initial=c_init,
                     controller_parameters={**models.controller.start_values(), **c_over},
                     controller_config=scenario.controller_config, controller_overrides=c_over,
                     plant_parameters={**models.plant.start_values(), **p_over},
-                    controller_columns=L.controller_columns, column_units=L.units)
+                    controller_columns=L.controller_columns, column_units=L.units,
+                    faults=faults.non_default(),
+                    transition_pushes=[t0 + j * h for j in extra_push.starts] if extra_push is not None else [])
     # a plant that signals a fall only through its 'fallen' output
     if outcome == "completed" and "fallen" in data.dtype.names and data["fallen"].any():
         i = int(np.argmax(data["fallen"] != 0))
@@ -351,10 +397,15 @@ def simulate(scenario: Scenario, models: Models | None = None, *, fmu_dir=None,
     return res
 
 
-def _structured(L: _Layout, times, R, I) -> np.ndarray:
-    dt = [("time", np.float64)] + [(c, np.float64) for c in L.real_cols] + [(c, np.int32) for c in L.int_cols]
+def _structured(L: _Layout, times, R, I, extra: dict[str, np.ndarray] | None = None) -> np.ndarray:
+    """The result table: time, the real columns, `extra` real columns (e.g. sensed.*), the integers."""
+    extra = extra or {}
+    dt = ([("time", np.float64)] + [(c, np.float64) for c in L.real_cols] + [(c, np.float64) for c in extra]
+          + [(c, np.int32) for c in L.int_cols])
     out = np.empty(len(times), dtype=dt)
     out["time"] = times
+    for c, x in extra.items():
+        out[c] = x
     for j, c in enumerate(L.real_cols):
         out[c] = R[:, j]
     for j, c in enumerate(L.int_cols):

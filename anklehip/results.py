@@ -331,6 +331,8 @@ def summary_dict(sc: Scenario, res: RunResult, pushes: list[PushSummary], checks
         "comparison": comparison,
         "controller_config": sc.controller_config,
         "overrides": {"controller": sc.controller, "plant": sc.plant},
+        "faults": res.faults,
+        "transition_pushes": res.transition_pushes,
         "files": files,
     }
 

@@ -12,6 +12,7 @@ from typing import Any
 
 import numpy as np
 
+from .faults import Faults, parse_faults
 from .files import read_toml
 
 
@@ -238,6 +239,7 @@ class Scenario:
     expect: Expect = field(default_factory=Expect)
     reference: Reference | None = None
     tags: list[str] = field(default_factory=list)
+    faults: Faults = field(default_factory=Faults)   # [faults]: anklehip.faults
 
     @property
     def n_steps(self) -> int:
@@ -310,7 +312,7 @@ def _tname(v: Any) -> str:
 
 
 TOP_KEYS = {"name", "description", "stop_time", "step", "push", "push_y", "plant_model", "controller_config",
-            "controller", "plant",
+            "controller", "plant", "faults",
             "expect", "reference", "tags"}
 PUSH_KEYS = {
     "step": ({"kind", "t", "to"}, {"to"}),
@@ -500,6 +502,8 @@ def parse_scenario(data: dict, where: str = "<scenario>", path: Path | None = No
     for k in ("controller", "plant"):
         if k in data:
             setattr(sc, k, _parse_overrides(v, data[k], k))
+    if "faults" in data:
+        sc.faults = parse_faults(v, data["faults"])
     if "expect" in data:
         sc.expect = _parse_expect(v, data["expect"], sc.stop_time)
     if "reference" in data:
@@ -520,6 +524,41 @@ def _display(path: Path) -> str:
         return str(path.resolve().relative_to(Path.cwd()))
     except ValueError:
         return str(path)
+
+
+def parse_fault_options(items: list[str], base: Faults | None = None, where: str = "--fault") -> Faults:
+    """``--fault zmp_noise=0.002 --fault drop_mode=repeat`` on top of `base` (a scenario's faults)."""
+    d: dict[str, Any] = {}
+    for it in items:
+        name, eq, val = it.partition("=")
+        if not eq or not name.strip():
+            raise ScenarioError(f"{where} {it}: expected NAME=VALUE (e.g. zmp_noise=0.002)")
+        val = val.strip()
+        if name.strip() == "stuck_at":
+            value: Any = [_number(x, f"{where} {it}") for x in val.split(",") if x.strip()]
+        else:
+            try:
+                value = int(val)
+            except ValueError:
+                try:
+                    value = float(val)
+                except ValueError:
+                    value = val
+        d[name.strip()] = value
+    return faults_from(d, base, where)
+
+
+def faults_from(d: dict[str, Any], base: Faults | None = None, where: str = "fault options") -> Faults:
+    """Fault options (a dict like a [faults] table) on top of `base`; ScenarioError naming `where`
+    and the key."""
+    return parse_faults(_V(where), d, "faults", base)
+
+
+def _number(x: str, where: str) -> float:
+    try:
+        return float(x)
+    except ValueError:
+        raise ScenarioError(f"{where}: {x!r} is not a number") from None
 
 
 def parse_set(items: list[str]) -> tuple[dict[str, Any], dict[str, Any]]:

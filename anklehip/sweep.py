@@ -84,7 +84,13 @@ def _one(scenario_path: str, fmu_dir: str | None, peak: float, variant: Variant)
 def run_sweep(scenario_path: str, forces: list[float], variants: list[Variant], fmu_dir: str | None = None,
               workers: int = 2) -> list[dict[str, Any]]:
     import dask
-    tasks = [dask.delayed(_one)(str(scenario_path), fmu_dir, float(f), v) for v in variants for f in forces]
+    return _compute([dask.delayed(_one)(str(scenario_path), fmu_dir, float(f), v) for v in variants for f in forces],
+                    workers)
+
+
+def _compute(tasks: list, workers: int) -> list[dict[str, Any]]:
+    """Dask: in this process (workers <= 1) or on a local cluster of `workers` processes."""
+    import dask
     if workers <= 1:
         return list(dask.compute(*tasks, scheduler="synchronous"))
     from dask.distributed import Client, LocalCluster
