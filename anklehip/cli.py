@@ -488,7 +488,7 @@ def cmd_robustness(a) -> int:
             grids[key] = parse_grid(spec, f"--grid {key}")
         plan = []
         for st in studies:
-            levels = grids.get(st.key) or parse_grid(KEY_BY_NAME[st.key].grid, f"the default grid of {st.key}")
+            levels = grids.get(st.key) or parse_grid(st.levels_spec, f"the grid of study {st.label!r}")
             for x in (levels[0], levels[-1]):    # a level out of range is an error here, not in a worker
                 faults_from({**st.base, st.key: int(x) if KEY_BY_NAME[st.key].integer else x}, sc.faults,
                             f"--grid {st.key}")
@@ -511,6 +511,34 @@ def cmd_robustness(a) -> int:
               f"fault changes {r['fault_changes']} / logged {r['fault_logs']}, non-finite episodes "
               f"{r['nonfinite_episodes']} / warned {r['nonfinite_warnings']})", file=sys.stderr)
     return EXIT_OK if not bad else EXIT_FAIL
+
+
+def cmd_soak(a) -> int:
+    import json
+    from .paths import MissingFileError
+    from .fmu import FMUError
+    from .results import atomic_write_csv, atomic_write_text
+    from .soak import soak
+    try:
+        out = check_output_folder(a.out if a.out else Path("results") / "soak", "--out")
+        rep = soak(a.duration, a.seed, a.fmu_dir, progress=not a.no_progress)
+    except (MissingFileError, FMUError) as e:
+        return _err(str(e))
+    f = rep.figures()
+    atomic_write_csv(out / "soak_per_second.csv", rep.per_second)
+    atomic_write_text(out / "soak.json", json.dumps(
+        {"duration": rep.duration, "seed": rep.seed, "message": rep.message, "figures": f,
+         "posture_before_pushes": [[float(t), float(x)] for t, x in rep.posture], "problems": rep.problems},
+        indent=2) + "\n")
+    print(f"soak: {f['simulated_s']:g} s simulated ({rep.outcome}) with {f['pushes']} seeded random pushes "
+          f"(seed {rep.seed}) in {f['wall_s']:g} s wall (real-time factor {f['real_time_factor']:g})")
+    for k, v in f.items():
+        if k not in ("simulated_s", "pushes", "outcome", "wall_s", "real_time_factor"):
+            print(f"  {k:<40} {v:.6g}" if isinstance(v, float) else f"  {k:<40} {v}")
+    print(f"  files: {out / 'soak_per_second.csv'}, {out / 'soak.json'}")
+    for p in rep.problems:
+        print(f"anklehip: soak: {p}", file=sys.stderr)
+    return EXIT_OK if not rep.problems else EXIT_FAIL
 
 
 CONTROLLER_CONFIG_HELP = ("a named controller configuration (default: the scenario's controller_config or "
@@ -625,18 +653,20 @@ class _Parser(argparse.ArgumentParser):
         self.exit(EXIT_ERROR, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
 
 
-def _number(ge: float | None = None, gt: float | None = None, integer: bool = False):
-    """An argparse type: a finite number (an integer with `integer`), >= ge, > gt; the error names
-    the value (argparse adds the option)."""
+def _number(ge: float | None = None, gt: float | None = None, integer: bool = False, le: float | None = None):
+    """An argparse type: a finite number (an integer with `integer`), >= ge, > gt, <= le; the error
+    names the value (argparse adds the option)."""
     what = "an integer" if integer else "a finite number"
     what += f" >= {ge:g}" if ge is not None else f" > {gt:g}" if gt is not None else ""
+    what += f" and <= {le:g}" if le is not None else ""
 
     def convert(text: str):
         try:
             v = int(text) if integer else float(text)
         except ValueError:
             raise argparse.ArgumentTypeError(f"must be {what}, got {text!r}") from None
-        if not math.isfinite(v) or (ge is not None and v < ge) or (gt is not None and not v > gt):
+        if (not math.isfinite(v) or (ge is not None and v < ge) or (gt is not None and not v > gt)
+                or (le is not None and v > le)):
             raise argparse.ArgumentTypeError(f"must be {what}, got {text!r}")
         return v
     return convert
@@ -753,6 +783,14 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--workers", type=_number(ge=1, integer=True), default=2)
     s.add_argument("--out", help="output folder (default results/robustness_<scenario>)")
     s.set_defaults(fn=cmd_robustness)
+
+    s = sub.add_parser("soak", help="one pair of FMU instances for a long time under seeded random pushes: "
+                                    "posture drift, memory growth, solver statistics (docs/reliability.md)")
+    s.add_argument("--duration", type=_number(gt=0, le=86400), default=3600.0, help="simulated seconds (default 3600)")
+    s.add_argument("--seed", type=_number(ge=0, integer=True), default=1, help="seed of the push schedule")
+    s.add_argument("--out", help="output folder (default results/soak)")
+    s.add_argument("--no-progress", action="store_true")
+    s.set_defaults(fn=cmd_soak)
 
     s = sub.add_parser("export", help="the closed loop of a scenario as an SSP file or as one container FMU")
     s.add_argument("kind", choices=("ssp", "container"))

@@ -48,31 +48,31 @@ class FaultKey:
 
 
 KEYS: tuple[FaultKey, ...] = (
-    FaultKey("zmp_noise", "m", 0.0, 0.1, "std deviation of white noise on zmp_x", "0:0.02:0.0025"),
-    FaultKey("zmp_bias", "m", -0.1, 0.1, "constant offset on zmp_x", "-0.03:0.03:0.005"),
+    FaultKey("zmp_noise", "m", 0.0, 0.1, "std deviation of white noise on zmp_x", "0:0.03:0.0025"),
+    FaultKey("zmp_bias", "m", -0.1, 0.1, "constant offset on zmp_x", "-0.03:0.03:0.0025"),
     FaultKey("angle_noise", "rad", 0.0, 0.5, "std deviation of white noise on theta_ankle and theta_hip",
-             "0:0.04:0.005"),
+             "0:0.15:0.01"),
     FaultKey("ankle_bias", "rad", -0.5, 0.5, "constant offset on theta_ankle", "-0.1:0.1:0.0125"),
-    FaultKey("hip_bias", "rad", -0.5, 0.5, "constant offset on theta_hip", "-0.2:0.2:0.025"),
+    FaultKey("hip_bias", "rad", -0.5, 0.5, "constant offset on theta_hip", "-0.3:0.5:0.05"),
     FaultKey("drop_rate", "", 0.0, 1.0, "probability that a sensor packet (all four inputs) is lost; "
              "see drop_mode", "0:0.8:0.1"),
     FaultKey("stuck_for", "s", 0.0, 3600.0, "each stuck-sensor episode lasts this long; see stuck_signal, stuck_at",
              "0:1.5:0.25"),
     FaultKey("delay_steps", "steps", 0, 1000, "every input arrives this many communication steps late",
-             "0,1,2,5,10,20,40,80", integer=True),
+             "0,1,2,5,10,20,50,100,200,500,1000", integer=True),
     FaultKey("torque_scale", "", 0.01, 10.0, "the plant's servo torque limits (every tau_max* parameter) times this",
-             "1,0.8,0.6,0.5,0.4,0.3,0.2,0.15,0.1"),
+             "1,0.8,0.6,0.4,0.3,0.25,0.2,0.175,0.15,0.125,0.1"),
     FaultKey("mass_mismatch", "", -0.5, 0.5, "the controller's model masses m1, m2, feet_mass (and I1, I2) "
-             "times (1 + this)", "-0.4:0.4:0.05"),
+             "times (1 + this)", "-0.5:0.5:0.05"),
     FaultKey("length_mismatch", "", -0.5, 0.5, "the controller's model lengths l1, lg1, lg2 times (1 + this) "
-             "(I1, I2 times its square)", "-0.4:0.4:0.05"),
+             "(I1, I2 times its square)", "-0.5:0.5:0.05"),
     FaultKey("transition_push", "N", -1000.0, 1000.0, "peak of an extra pulse (+ = on the back) that starts when "
              "the phase enters transition_phase", "0:10:1"),
     FaultKey("transition_push_duration", "s", 0.002, 10.0, "total duration of the transition push"),
     FaultKey("transition_push_rise", "s", 0.0, 5.0, "rise (and fall) time of the transition push"),
     FaultKey("transition_phase", "", 1, 3, "the phase whose entry triggers the transition push "
              "(1 ankle->hip, 2 hip, 3 hip->ankle)", integer=True),
-    FaultKey("seed", "", 0, 2**63 - 1, "seed of the noise and packet-loss draws", integer=True),
+    FaultKey("seed", "", 0, 2147483647, "seed of the noise and packet-loss draws", integer=True),
 )
 KEY_BY_NAME = {k.name: k for k in KEYS}
 STRING_KEYS = {"drop_mode": DROP_MODES, "stuck_signal": CONTROLLER_SIGNALS}

@@ -25,23 +25,8 @@ echo "== 1/4 CTest, sanitized"
 ctest --test-dir "$sbuild" --output-on-failure --no-tests=error -j"$(nproc)"
 
 echo "== 2/4 FMI fuzzing, ${seconds} s per FMU"
-work="$sbuild/fuzz"
-for fmu in AnkleHipController Hoap2Plant Hoap2Plant3D; do
-  exe="$(find "$sbuild/fmu" -name "${fmu}_fuzz" -type f | head -n1)"
-  [ -x "$exe" ] || { echo "reliability: ${fmu}_fuzz not built" >&2; exit 1; }
-  corpus="$work/corpus-$fmu"   # grows across runs on this machine; the seeds are the committed ones
-  mkdir -p "$corpus" "$work/findings"
-  log="$work/$fmu.log"
-  if ! LD_PRELOAD="$asan_rt" "$exe" -max_total_time="$seconds" -timeout=10 -rss_limit_mb=4096 -print_final_stats=1 \
-      -artifact_prefix="$work/findings/$fmu-" "$corpus" fmu/fuzz/corpus >"$log" 2>&1; then
-    tail -n 60 "$log"
-    echo "reliability: the $fmu fuzzer found a defect (input in $work/findings/)" >&2
-    exit 1
-  fi
-  runs="$(sed -n 's/^stat::number_of_executed_units: *//p' "$log")"
-  cov="$(grep -Eo 'cov: [0-9]+' "$log" | tail -n1)"
-  echo "   $fmu: $runs inputs, $cov edges, no finding"
-done
+# the corpus under build/sanitize/fuzz grows across runs on this machine; the seeds are the committed ones
+bash scripts/fuzz.sh "$seconds" "$sbuild/fuzz"
 
 echo "== 3/4 closed loop through the sanitized FMUs from Python"
 out="$(mktemp -d)"

@@ -228,7 +228,7 @@ def test_robustness_summary_interval_and_first_failures():
 
     def row(level, ok, outcome="completed", cycles=5):
         return {"study": "ZMP bias", "key": "zmp_bias", "level": level, "survived": ok, "outcome": outcome,
-                "cycles": cycles, "cycles_needed": 5, "fell_at": 20.5 if outcome == "fell" else math.nan,
+                "cycles": cycles, "cycles_needed": 5, "cycles_most": 5, "fell_at": 20.5 if outcome == "fell" else math.nan,
                 "invariants_ok": True, "fault_bits": 0}
     rows = [row(-0.02, False, "fell"), row(-0.01, True), row(0.0, True), row(0.01, True), row(0.02, False, cycles=4),
             row(0.03, True)]
