@@ -77,7 +77,6 @@ KEYS: tuple[FaultKey, ...] = (
 KEY_BY_NAME = {k.name: k for k in KEYS}
 STRING_KEYS = {"drop_mode": DROP_MODES, "stuck_signal": CONTROLLER_SIGNALS}
 ALL_KEYS = set(KEY_BY_NAME) | set(STRING_KEYS) | {"stuck_at"}
-SWEPT = tuple(k.name for k in KEYS if k.grid)
 
 
 @dataclass
@@ -107,17 +106,9 @@ class Faults:
         return bool(self.zmp_noise or self.zmp_bias or self.angle_noise or self.ankle_bias or self.hip_bias
                     or self.drop_rate or self.stuck_for or self.delay_steps)
 
-    @property
-    def active(self) -> bool:
-        return (self.sensor_active or self.torque_scale != 1.0 or bool(self.mass_mismatch)
-                or bool(self.length_mismatch) or bool(self.transition_push))
-
     def non_default(self) -> dict[str, Any]:
         d = Faults()
         return {f.name: getattr(self, f.name) for f in fields(self) if getattr(self, f.name) != getattr(d, f.name)}
-
-    def with_(self, **kw) -> "Faults":
-        return replace(self, **kw)
 
 
 def parse_faults(v, d: Any, key: str = "faults", base: Faults | None = None) -> Faults:

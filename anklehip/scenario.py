@@ -537,13 +537,8 @@ def parse_fault_options(items: list[str], base: Faults | None = None, where: str
         if name.strip() == "stuck_at":
             value: Any = [_number(x, f"{where} {it}") for x in val.split(",") if x.strip()]
         else:
-            try:
-                value = int(val)
-            except ValueError:
-                try:
-                    value = float(val)
-                except ValueError:
-                    value = val
+            value = _int_or_float(val)
+            value = val if value is None else value
         d[name.strip()] = value
     return faults_from(d, base, where)
 
@@ -552,6 +547,17 @@ def faults_from(d: dict[str, Any], base: Faults | None = None, where: str = "fau
     """Fault options (a dict like a [faults] table) on top of `base`; ScenarioError naming `where`
     and the key."""
     return parse_faults(_V(where), d, "faults", base)
+
+
+def _int_or_float(text: str) -> int | float | None:
+    """The number a command-line value spells (an int when it is one), None if it is none."""
+    try:
+        return int(text)
+    except ValueError:
+        try:
+            return float(text)
+        except ValueError:
+            return None
 
 
 def _number(x: str, where: str) -> float:
@@ -576,12 +582,8 @@ def parse_set(items: list[str]) -> tuple[dict[str, Any], dict[str, Any]]:
         if low in ("true", "false"):
             value: Any = low == "true"
         else:
-            try:
-                value = int(val)
-            except ValueError:
-                try:
-                    value = float(val)
-                except ValueError:
-                    raise ScenarioError(f"--set {it}: value {val!r} is not a number or true/false") from None
+            value = _int_or_float(val)
+            if value is None:
+                raise ScenarioError(f"--set {it}: value {val!r} is not a number or true/false")
         (ctrl if fmu == "controller" else plant)[name] = value
     return ctrl, plant
