@@ -13,7 +13,7 @@ pulse falls from 9.75 N on the back and -6.75 N on the chest, docs/scenarios.md)
 Checks (SoakReport.problems): no fall, no error, the controller's fault output stays 0 and its
 outputs finite; in the 0.5 s before every push and at the end, |theta_ankle| and |theta_hip| stay
 below `erect_tol` (0.005 rad: no drift of the erect posture); the process's resident memory does not
-grow after a warm-up minute; CVODE's work per quiet simulated second (phase 0, no push for 5 s) in
+grow after a warm-up minute (by more than 32 KiB: eight pages); CVODE's work per quiet simulated second (phase 0, no push for 5 s) in
 the last quarter of the run is within 10 % of the first quarter (medians).
 """
 from __future__ import annotations
@@ -98,7 +98,7 @@ class SoakReport:
             "mode_switches": int(s["mode_switches"].sum()) if len(s) else 0,
         }
 
-    def check(self, rss_tol_kib: int = 1024, solver_tol: float = 0.10) -> list[str]:
+    def check(self, rss_tol_kib: int = 32, solver_tol: float = 0.10) -> list[str]:
         f = self.figures()
         p = []
         if self.outcome != "completed":
@@ -150,7 +150,10 @@ def soak(duration: float = 3600.0, seed: int = 1, fmu_dir=None, step: float = 1e
     per_s = int(round(1.0 / step))
     force = push.step_averages(0.0, step, n)
     starts = [a for a, _ in push.events()]
+    # every array the loop writes is written once here, so that its pages are resident before
+    # the memory baseline (np.zeros maps pages lazily: they would count as growth)
     in_window = np.zeros(n, bool)
+    in_window.fill(False)
     for a in starts[1:] + [duration]:
         in_window[int(round((a - PRE_PUSH) / step)):int(round(a / step))] = True
     window_end_steps = {int(round(a / step)) - 1: a for a in starts[1:] + [duration]}
@@ -173,7 +176,10 @@ def soak(duration: float = 3600.0, seed: int = 1, fmu_dir=None, step: float = 1e
     ia, ih = c_in.index("theta_ankle"), c_in.index("theta_hip")
 
     rows = np.zeros(n // per_s + 1, dtype=PER_SECOND_DTYPE)
-    posture: list[tuple[float, float]] = []
+    rows.fill(0)
+    posture_t = np.full(len(window_end_steps), np.nan)
+    posture_th = np.full(len(window_end_steps), np.nan)
+    n_posture = 0
     outcome, message = "completed", ""
     ctrl = Slave(ci, "controller")
     plant = Slave(pi, "plant")
@@ -219,7 +225,8 @@ def soak(duration: float = 3600.0, seed: int = 1, fmu_dir=None, step: float = 1e
             if in_window[k]:
                 win_theta = max(win_theta, th)
                 if k in window_end_steps:
-                    posture.append((window_end_steps[k], win_theta))
+                    posture_t[n_posture], posture_th[n_posture] = window_end_steps[k], win_theta
+                    n_posture += 1
                     win_theta = 0.0
             if (k + 1) % per_s == 0:
                 p_getI(pc, vr_counters, len(COUNTERS), cnt)
@@ -242,6 +249,7 @@ def soak(duration: float = 3600.0, seed: int = 1, fmu_dir=None, step: float = 1e
             s.free(terminate=outcome == "completed")
     rep = SoakReport(duration=duration, seed=seed, end_time=k * step, outcome=outcome, message=message,
                      pushes=len(starts), wall_time=time.perf_counter() - wall0, per_second=rows[:row],
-                     posture=posture, erect_tol=erect_tol)
+                     posture=list(zip(posture_t[:n_posture].tolist(), posture_th[:n_posture].tolist())),
+                     erect_tol=erect_tol)
     rep.check()
     return rep

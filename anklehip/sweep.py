@@ -41,7 +41,7 @@ def parse_grid(spec: str, what: str = "grid") -> list[float]:
             raise ValueError(f"{what} {spec}: need start <= stop and step > 0")
         if (b - a) / s > MAX_GRID:
             raise ValueError(f"{what} {spec}: more than {MAX_GRID} grid points")
-        return [float(round(x, 9)) for x in np.arange(a, b + s / 2, s)]
+        return [float(round(x, 9)) + 0.0 for x in np.arange(a, b + s / 2, s)]   # + 0.0: no -0
     return vals
 
 

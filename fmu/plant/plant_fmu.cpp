@@ -260,6 +260,9 @@ class PlantFmu : public Model {
  private:
   void attach(Context& ctx) {
     ctx_ = &ctx;
+    // no mode-switch history: it would grow the memory of a long run with every contact switch
+    // (found by the soak, docs/reliability.md); the switches are logged under logEvents
+    plant_->history_limit = 0;
     plant_->logger = [this](const std::string& s) {
       if (!ctx_) return;
       if (s.rfind("CVODE", 0) == 0) ctx_->log(kFirstModelCategory, fmi2Warning, "%s", s.c_str());

@@ -145,7 +145,7 @@ bool Plant::cvode_reinit() {
 
 void Plant::set_mode(ContactMode m, const char* why) {
   if (m == mode_) return;
-  if (history.size() < 100000) history.push_back({t_, static_cast<int>(mode_), static_cast<int>(m), why});
+  if (history.size() < history_limit) history.push_back({t_, static_cast<int>(mode_), static_cast<int>(m), why});
   char buf[160];
   std::snprintf(buf, sizeof buf, "t=%.6f s: contact %s -> %s (%s)", t_, mode_name(mode_),
                 mode_name(m), why);

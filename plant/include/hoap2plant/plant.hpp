@@ -119,7 +119,8 @@ class Plant {
   bool restore(const Snapshot& s);
 
   std::function<void(const std::string&)> logger;  // events (mode switches, falls)
-  std::vector<ModeEvent> history;  // diagnostics (first 100000 switches), not in the snapshot
+  std::vector<ModeEvent> history;  // diagnostics (the first history_limit switches), not in the snapshot
+  std::size_t history_limit = 100000;  // the FMU keeps none: a history grows with every switch
 
   // CVODE callbacks
   int rhs(double t, const double* y, double* ydot);
