@@ -168,61 +168,52 @@ int main(void)
         }
     }
 
-    /* specific messages */
-    q = p;
-    q.m1 = -1;
-    rc = ahc_params_validate(&q, msg, sizeof msg);
-    CHECK(rc == AHC_ERR_RANGE && strcmp(msg, "m1 = -1 must be >= 0.01") == 0, "m1 message: %s", msg);
-    q = p;
-    q.zmp_limit_front = 0.07;
-    rc = ahc_params_validate(&q, msg, sizeof msg);
-    CHECK(rc == AHC_ERR_INCONSISTENT && strcmp(msg, "zmp_limit_front = 0.07 lies outside the foot (toe at 0.0575)") == 0,
-          "zmp front message: %s", msg);
-    q = p;
-    q.zmp_limit_back = -0.05;
-    rc = ahc_params_validate(&q, msg, sizeof msg);
-    CHECK(rc == AHC_ERR_INCONSISTENT && contains(msg, "zmp_limit_back = -0.05") && contains(msg, "heel at -0.0375"),
-          "zmp back message: %s", msg);
-    q = p;
-    q.Ca = -3;
-    rc = ahc_params_validate(&q, msg, sizeof msg);
-    CHECK(rc == AHC_ERR_RANGE && contains(msg, "Ca = -3"), "negative gain: %s", msg);
-    q = p;
-    q.sample_period = 0;
-    rc = ahc_params_validate(&q, msg, sizeof msg);
-    CHECK(rc == AHC_ERR_RANGE && contains(msg, "sample_period = 0"), "sample period: %s", msg);
-    q = p;
-    q.sample_period = 2.2e-310; /* audit: a denormal period made fmi2DoStep run ~1e9 ticks */
-    rc = ahc_params_validate(&q, msg, sizeof msg);
-    CHECK(rc == AHC_ERR_RANGE && contains(msg, "sample_period = 2.2e-310 must be >= 1e-05"), "denormal period: %s", msg);
-    q = p;
-    q.sample_period = 0.2;
-    rc = ahc_params_validate(&q, msg, sizeof msg);
-    CHECK(rc == AHC_ERR_RANGE && contains(msg, "sample_period = 0.2"), "period beyond 100 ms: %s", msg);
-    q = p;
-    q.sample_period = 0.05;
-    rc = ahc_params_validate(&q, msg, sizeof msg);
-    CHECK(rc == AHC_ERR_INCONSISTENT && contains(msg, "sample_period = 0.05"), "unstable period: %s", msg);
-    q = p;
-    q.fz_max = 5.0;
-    rc = ahc_params_validate(&q, msg, sizeof msg);
-    CHECK(rc == AHC_ERR_INCONSISTENT && contains(msg, "fz_lifted = 10 must be < fz_max = 5"), "fz_max: %s", msg);
-    q = p;
-    q.Ka = INFINITY;
-    rc = ahc_params_validate(&q, msg, sizeof msg);
-    CHECK(rc == AHC_ERR_NONFINITE && contains(msg, "Ka = inf"), "inf: %s", msg);
-    q = p;
-    q.hip_strategy_enabled = 2;
-    rc = ahc_params_validate(&q, msg, sizeof msg);
-    CHECK(rc == AHC_ERR_RANGE && contains(msg, "hip_strategy_enabled = 2"), "int range: %s", msg);
-    q = p;
-    q.hip_min = 0.5; /* violates hip_min <= 0 */
-    rc = ahc_params_validate(&q, msg, sizeof msg);
-    CHECK(rc == AHC_ERR_RANGE && contains(msg, "hip_min = 0.5"), "hip_min: %s", msg);
-    q = p;
-    q.lg1 = 0.3;
-    rc = ahc_params_validate(&q, msg, sizeof msg);
-    CHECK(rc == AHC_ERR_INCONSISTENT && contains(msg, "lg1 = 0.3"), "lg1 > l1: %s", msg);
+    /* specific messages: one field set to a bad value, the code and a message naming it */
+    {
+        static const struct {
+            const char *field;
+            double value;
+            int rc;
+            const char *needle[2];
+            const char *what;
+        } cases[] = {
+            { "zmp_limit_back", -0.05, AHC_ERR_INCONSISTENT, { "zmp_limit_back = -0.05", "heel at -0.0375" }, "zmp back" },
+            { "Ca", -3, AHC_ERR_RANGE, { "Ca = -3", "" }, "negative gain" },
+            { "sample_period", 0, AHC_ERR_RANGE, { "sample_period = 0", "" }, "sample period" },
+            /* audit: a denormal period made fmi2DoStep run ~1e9 ticks */
+            { "sample_period", 2.2e-310, AHC_ERR_RANGE, { "sample_period = 2.2e-310 must be >= 1e-05", "" }, "denormal period" },
+            { "sample_period", 0.2, AHC_ERR_RANGE, { "sample_period = 0.2", "" }, "period beyond 100 ms" },
+            { "sample_period", 0.05, AHC_ERR_INCONSISTENT, { "sample_period = 0.05", "" }, "unstable period" },
+            { "fz_max", 5.0, AHC_ERR_INCONSISTENT, { "fz_lifted = 10 must be < fz_max = 5", "" }, "fz_max" },
+            { "Ka", INFINITY, AHC_ERR_NONFINITE, { "Ka = inf", "" }, "inf" },
+            { "hip_strategy_enabled", 2, AHC_ERR_RANGE, { "hip_strategy_enabled = 2", "" }, "int range" },
+            { "hip_min", 0.5, AHC_ERR_RANGE, { "hip_min = 0.5", "" }, "hip_min" }, /* violates hip_min <= 0 */
+            { "lg1", 0.3, AHC_ERR_INCONSISTENT, { "lg1 = 0.3", "" }, "lg1 > l1" },
+        };
+        size_t c;
+        q = p;
+        q.m1 = -1;
+        rc = ahc_params_validate(&q, msg, sizeof msg);
+        CHECK(rc == AHC_ERR_RANGE && strcmp(msg, "m1 = -1 must be >= 0.01") == 0, "m1 message: %s", msg);
+        q = p;
+        q.zmp_limit_front = 0.07;
+        rc = ahc_params_validate(&q, msg, sizeof msg);
+        CHECK(rc == AHC_ERR_INCONSISTENT &&
+                  strcmp(msg, "zmp_limit_front = 0.07 lies outside the foot (toe at 0.0575)") == 0,
+              "zmp front message: %s", msg);
+        for (c = 0; c < sizeof cases / sizeof cases[0]; ++c) {
+            const ahc_param_info *e = NULL;
+            for (i = 0; i < count; ++i)
+                if (strcmp(t[i].name, cases[c].field) == 0) e = &t[i];
+            CHECK(e != NULL, "%s is in the parameter table", cases[c].field);
+            if (!e) continue;
+            q = p;
+            set_field(&q, e, cases[c].value);
+            rc = ahc_params_validate(&q, msg, sizeof msg);
+            CHECK(rc == cases[c].rc && contains(msg, cases[c].needle[0]) && contains(msg, cases[c].needle[1]),
+                  "%s message: %s", cases[c].what, msg);
+        }
+    }
     /* ahc_update_params: validated, state kept */
     {
         ahc_controller c;
