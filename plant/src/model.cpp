@@ -53,11 +53,13 @@ void Model::kinematics(const Vec5& q, const Vec5& qd, Kinematics& k) const {
   const Vec2 A(q[0], q[1]);
   const double a0 = q[2], a1 = q[2] + q[3], a2 = a1 + q[4];
   const double w0 = qd[2], w1 = qd[2] + qd[3], w2 = w1 + qd[4];
+  const double c0 = std::cos(a0), s0 = std::sin(a0), c1 = std::cos(a1), s1 = std::sin(a1);
+  const double c2 = std::cos(a2), s2 = std::sin(a2);  // one sine and cosine per absolute angle
   // foot CoM (relative to the ankle axis: forward feet_com_x, up feet_com_z - ankle_height)
-  const Vec2 rf = rot(a0, P.feet_com_x, P.feet_com_z - P.ankle_height);
-  const Vec2 r1 = rot(a1, 0.0, P.lg1);
-  const Vec2 rh = rot(a1, 0.0, P.l1);
-  const Vec2 r2 = rot(a2, 0.0, P.lg2);
+  const double fx = P.feet_com_x, fz = P.feet_com_z - P.ankle_height;
+  const Vec2 rf(fx * c0 + fz * s0, -fx * s0 + fz * c0);
+  const Vec2 u1(s1, c1), u2(s2, c2);  // unit vectors along links 1 and 2 (rot(a, 0, 1))
+  const Vec2 r1 = P.lg1 * u1, rh = P.l1 * u1, r2 = P.lg2 * u2;
   for (auto& J : k.J) {
     J.setZero();
     J(0, 0) = 1.0;
@@ -80,25 +82,43 @@ void Model::kinematics(const Vec5& q, const Vec5& qd, Kinematics& k) const {
     for (int j = 0; j < 5; ++j) k.s[i][j] = S[i][j];
 }
 
+// M = sum_i m_i Jv_i^T Jv_i + I_i s_i s_i^T and h = sum_i m_i Jv_i^T (b_i + g e_z), written out
+// for the structure of the chain: every Jv_i is [I_2 | c_i2 c_i3 c_i4] with 2-vector columns
+// (zero where body i does not move with that angle) and s_i = (0, 0, 1, [1], [1]).
 void Model::mass_bias(const Vec5& q, const Vec5& qd, Mat5& M, Vec5& h) const {
   Kinematics k;
   kinematics(q, qd, k);
   const double m[3] = {P.feet_mass, P.m1, P.m2};
   const double I[3] = {P.feet_inertia, P.I1, P.I2};
+  const int last[3] = {2, 3, 4};  // body i moves with the angles 2 .. last[i]
   M.setZero();
   h.setZero();
   for (int i = 0; i < 3; ++i) {
-    Eigen::Map<const Eigen::Matrix<double, 5, 1>> s(k.s[i]);
-    M.noalias() += m[i] * k.J[i].transpose() * k.J[i] + I[i] * s * s.transpose();
     const Vec2 acc = k.b[i] + Vec2(0.0, P.g);
-    h.noalias() += m[i] * k.J[i].transpose() * acc;
+    M(0, 0) += m[i];
+    M(1, 1) += m[i];
+    h[0] += m[i] * acc.x();
+    h[1] += m[i] * acc.y();
+    for (int j = 2; j <= last[i]; ++j) {
+      const Vec2 cj = k.J[i].col(j);
+      M(0, j) += m[i] * cj.x();
+      M(1, j) += m[i] * cj.y();
+      h[j] += m[i] * cj.dot(acc);
+      for (int l = 2; l <= j; ++l) M(l, j) += m[i] * cj.dot(k.J[i].col(l)) + I[i];
+    }
   }
+  for (int j = 0; j < 5; ++j)
+    for (int l = j + 1; l < 5; ++l) M(l, j) = M(j, l);
 }
 
 Vec2 Model::com(const Vec5& q) const {
-  Kinematics k;
-  kinematics(q, Vec5::Zero(), k);
-  return (P.feet_mass * k.p[0] + P.m1 * k.p[1] + P.m2 * k.p[2]) / P.mass();
+  const double a0 = q[2], a1 = q[2] + q[3], a2 = a1 + q[4];
+  const double fx = P.feet_com_x, fz = P.feet_com_z - P.ankle_height;
+  const double c0 = std::cos(a0), s0 = std::sin(a0), c1 = std::cos(a1), s1 = std::sin(a1);
+  const double c2 = std::cos(a2), s2 = std::sin(a2);
+  const Vec2 pf(fx * c0 + fz * s0, -fx * s0 + fz * c0);
+  const Vec2 p1 = P.lg1 * Vec2(s1, c1), p2 = P.l1 * Vec2(s1, c1) + P.lg2 * Vec2(s2, c2);
+  return Vec2(q[0], q[1]) + (P.feet_mass * pf + P.m1 * p1 + P.m2 * p2) / P.mass();
 }
 
 double Model::kinetic_energy(const Vec5& q, const Vec5& qd) const {
