@@ -1,7 +1,7 @@
-# Builds SUNDIALS (CVODE, serial N_Vector, dense matrix and linear solver; static) from Debian's
+# Builds SUNDIALS (ARKODE, CVODE, serial N_Vector, dense matrix and linear solver; static) from Debian's
 # source package for a target that has no SUNDIALS package here: the Windows binaries cross-built
 # with mingw-w64 (cmake/Win64Fmus.cmake). Defines the same imported targets as Debian's
-# find_package(SUNDIALS) (SUNDIALS::cvode_static, ...), so plant/ links either without change.
+# find_package(SUNDIALS) (SUNDIALS::arkode_static, SUNDIALS::cvode_static, ...), so plant/ links either without change.
 #
 # Source: -DANKLEHIP_SUNDIALS_SOURCE_DIR=<extracted tree>, or Debian's source package at the version
 # of the installed libsundials-dev (cmake/DebianSource.cmake), the same code the Linux FMU links.
@@ -22,7 +22,7 @@ anklehip_debian_source(sundials VERSION_OF libsundials-dev MARKER include/cvode/
 anklehip_fresh_build_on_new_source(sundials "${_sun_origin}"
                                    "${_sun_deps}/sundials-build" "${_sun_deps}/sundials-ep" "${_sun_install}")
 
-set(_sun_modules cvode nvecserial sunmatrixdense sunlinsoldense)
+set(_sun_modules arkode cvode nvecserial sunmatrixdense sunlinsoldense)
 set(_sun_libs "")
 foreach(m IN LISTS _sun_modules)
   list(APPEND _sun_libs
@@ -42,7 +42,7 @@ ExternalProject_Add(sundials_ext
     -DBUILD_STATIC_LIBS=ON
     -DSUNDIALS_PRECISION=double
     -DSUNDIALS_INDEX_SIZE=64
-    -DBUILD_ARKODE=OFF -DBUILD_CVODE=ON -DBUILD_CVODES=OFF -DBUILD_IDA=OFF -DBUILD_IDAS=OFF
+    -DBUILD_ARKODE=ON -DBUILD_CVODE=ON -DBUILD_CVODES=OFF -DBUILD_IDA=OFF -DBUILD_IDAS=OFF
     -DBUILD_KINSOL=OFF
     -DBUILD_FORTRAN_MODULE_INTERFACE=OFF
     -DEXAMPLES_ENABLE_C=OFF -DEXAMPLES_ENABLE_CXX=OFF -DEXAMPLES_INSTALL=OFF

@@ -36,7 +36,7 @@ enum : fmi2ValueReference {
   cvode_steps = 40, rhs_evals = 41, root_evals = 42, mode_switches = 43, impacts = 44,
   // parameters: 100 + index into kParams; then the non-Real ones
   first_real_param = 100,
-  servo_on = 190, seed = 191, lock_joints_at_impact = 192
+  servo_on = 190, seed = 191, lock_joints_at_impact = 192, integrator = 193
 };
 }
 
@@ -85,8 +85,8 @@ const RealParam kParams[] = {
     {"sensor_fmin", &Params::sensor_fmin, "N", "Below this total load the sensor ZMP reads 0", 0.0, 1e4},
     {"theta_ankle_init", &Params::theta_ankle_init, "rad", "Initial ankle set-point (starts at rest in static equilibrium under it)", HOAP2_ANKLE_MIN, HOAP2_ANKLE_MAX},
     {"theta_hip_init", &Params::theta_hip_init, "rad", "Initial hip set-point (starts at rest in static equilibrium under it)", HOAP2_HIP_MIN, HOAP2_HIP_MAX},
-    {"rtol", &Params::rtol, "", "CVODE relative tolerance", 1e-14, 1e-2},
-    {"atol", &Params::atol, "", "CVODE absolute tolerance (all states)", 1e-16, 1e-2},
+    {"rtol", &Params::rtol, "", "Relative tolerance of the integrator", 1e-14, 1e-2},
+    {"atol", &Params::atol, "", "Absolute tolerance of the integrator (all states)", 1e-16, 1e-2},
 };
 constexpr int kNumParams = sizeof(kParams) / sizeof(kParams[0]);
 
@@ -95,11 +95,11 @@ ModelInfo makeInfo() {
   ModelInfo m;
   m.model_name = "Hoap2Plant";
   m.description =
-      "HOAP-2 humanoid in the sagittal plane: foot (flat / toe / heel / airborne contact, CVODE root "
+      "HOAP-2 humanoid in the sagittal plane: foot (flat / toe / heel / airborne contact, SUNDIALS root "
       "functions), legs and upper body, PD joint servos, sole load cells, push on the back, fall detection";
   m.default_experiment = {0.0, 5.0, 1e-6, 1e-3};
   m.outputs_depend_on_inputs = false;
-  m.extra_log_categories = {{"logSolver", "CVODE messages"}};
+  m.extra_log_categories = {{"logSolver", "Integrator (ARKODE / CVODE) messages"}};
   auto add = [&](const char* n, fmi2ValueReference r, Type t, Causality c, Variability v, const char* unit,
                  const char* d, double start = 0.0, double mn = kNoBound, double mx = kNoBound) {
     Variable x;
@@ -138,7 +138,7 @@ ModelInfo makeInfo() {
   add("input_fault", vr::input_fault, Type::Integer, Out, Disc, "",
       "Inputs held at their last finite value because they are NaN/Inf: bit 0 theta_ankle_ref, 1 theta_hip_ref, "
       "2 push_force (0 = healthy)");
-  add("cvode_steps", vr::cvode_steps, Type::Integer, Out, Disc, "", "CVODE internal steps so far");
+  add("cvode_steps", vr::cvode_steps, Type::Integer, Out, Disc, "", "Integrator steps so far (ARKODE ERKStep or CVODE, per the integrator parameter)");
   add("rhs_evals", vr::rhs_evals, Type::Integer, Out, Disc, "", "Right-hand-side evaluations so far (incl. Jacobian)");
   add("root_evals", vr::root_evals, Type::Integer, Out, Disc, "", "Root-function evaluations so far");
   add("mode_switches", vr::mode_switches, Type::Integer, Out, Disc, "", "Contact mode switches so far");
@@ -153,6 +153,10 @@ ModelInfo makeInfo() {
       "Impact law: true = servos hold the joints rigid through an impact (rigid-body rocking, for servos much "
       "faster than the contact); false = no impulsive joint torque (for slow servos)", def.lock_joints_at_impact ? 1 : 0);
   add("seed", vr::seed, Type::Integer, Par, Fix, "", "Seed of the sensor-noise generator (splitmix64)", double(def.seed), 0, 2147483647);
+  add("integrator", vr::integrator, Type::Integer, Par, Fix, "",
+      "0: explicit Runge-Kutta (ARKODE ERKStep, Cash-Karp 6(4)5; fast where the inputs change at every "
+      "communication point); 1: BDF (CVODE, dense Newton; for stiff settings such as very high servo gains)",
+      double(static_cast<int>(def.integrator)), 0, 1);
   return m;
 }
 
@@ -166,6 +170,7 @@ bool paramsFromStore(const Context& ctx, Params& p, std::string& why) {
   p.servo_on = ctx.boolean(vr::servo_on);
   p.lock_joints_at_impact = ctx.boolean(vr::lock_joints_at_impact);
   p.seed = static_cast<std::uint64_t>(ctx.integer(vr::seed));
+  p.integrator = static_cast<hoap2plant::Integrator>(ctx.integer(vr::integrator));
   char buf[160];
   if (!(p.toe_x > p.heel_x)) {
     std::snprintf(buf, sizeof buf, "toe_x (%g) must be > heel_x (%g)", p.toe_x, p.heel_x);
@@ -208,7 +213,7 @@ class PlantFmu : public Model {
     return fmi2OK;
   }
 
-  // CVODE adapts its steps (1000 s at rest take microseconds), but a step of 1e300 s breaks its
+  // The integrator adapts its steps (1000 s at rest take microseconds), but a step of 1e300 s breaks its
   // time arithmetic: communication steps are bounded at a simulated hour.
   double max_step_size(const Context&) const override { return 3600.0; }
 
@@ -252,7 +257,7 @@ class PlantFmu : public Model {
     if (!paramsFromStore(ctx, p, err)) return false;
     auto fresh = std::make_unique<Plant>(p);
     if (!fresh->restore(s)) return err = "invalid plant snapshot (contact mode, flags or state out of range)", false;
-    plant_ = std::move(fresh);  // CVODE is re-initialized from the snapshot at the next step
+    plant_ = std::move(fresh);  // the integrator restarts from the snapshot at the next step
     std::memcpy(last_in_, li, sizeof li);
     return true;
   }
@@ -265,7 +270,7 @@ class PlantFmu : public Model {
     plant_->history_limit = 0;
     plant_->logger = [this](const std::string& s) {
       if (!ctx_) return;
-      if (s.rfind("CVODE", 0) == 0) ctx_->log(kFirstModelCategory, fmi2Warning, "%s", s.c_str());
+      if (s.rfind("SUNDIALS", 0) == 0) ctx_->log(kFirstModelCategory, fmi2Warning, "%s", s.c_str());
       else ctx_->log(kLogEvents, fmi2OK, "%s", s.c_str());
     };
   }

@@ -1,9 +1,19 @@
-// HOAP-2 plant simulator: CVODE (BDF, dense direct solver) integrates y = (q, qd) of the current
-// contact mode; root functions locate every mode change; discrete changes re-initialize CVODE.
-// CVODE is re-initialized at every communication point too: the inputs are piecewise constant
-// (the RHS jumps there anyway), and a restored snapshot then continues bit for bit.
+// HOAP-2 plant simulator: a SUNDIALS integrator advances y = (q, qd) of the current contact mode;
+// its root functions locate every mode change; discrete changes restart it. Two integrators
+// (Params::integrator, docs/plant.md section 5):
+//   ERK (default): ARKODE's explicit Runge-Kutta, Cash-Karp 6(4)5 pair. A one-step method: a
+//       restart costs one RHS evaluation, so the servo set-points may jump at every communication
+//       point (the closed loop) at no extra cost.
+//   BDF: CVODE's variable-order BDF with a dense Newton solver, for stiff settings (very high servo
+//       gains). A restart drops it to order 1 with a fresh Jacobian, which costs 20-50 RHS
+//       evaluations at rtol 1e-8.
+// Either is restarted only where the right-hand side jumps or the state is changed from outside:
+// an input that changed at a communication point, a mode switch or impact, a restore, and a
+// snapshot (so that the original and any restored copy continue bit for bit). Between restarts
+// they keep their step size (and BDF its order and Jacobian) across communication points.
 #include "hoap2plant/plant.hpp"
 
+#include <arkode/arkode_erkstep.h>
 #include <cvode/cvode.h>
 #include <nvector/nvector_serial.h>
 #include <sunlinsol/sunlinsol_dense.h>
@@ -21,17 +31,17 @@ namespace {
 constexpr double kPi = 3.14159265358979323846;
 constexpr int kNumRoots = 5;
 
-int cv_rhs(realtype t, N_Vector y, N_Vector yd, void* ud) {
+int solver_rhs(realtype t, N_Vector y, N_Vector yd, void* ud) {
   return static_cast<Plant*>(ud)->rhs(t, N_VGetArrayPointer(y), N_VGetArrayPointer(yd));
 }
-int cv_roots(realtype t, N_Vector y, realtype* g, void* ud) {
+int solver_roots(realtype t, N_Vector y, realtype* g, void* ud) {
   return static_cast<Plant*>(ud)->roots(t, N_VGetArrayPointer(y), g);
 }
-void cv_err(int code, const char* module, const char* function, char* msg, void* ud) {
+void solver_err(int code, const char* module, const char* function, char* msg, void* ud) {
   auto* p = static_cast<Plant*>(ud);
   if (p->logger) {
     char buf[512];
-    std::snprintf(buf, sizeof buf, "CVODE %s/%s (%d): %s", module, function, code, msg);
+    std::snprintf(buf, sizeof buf, "SUNDIALS %s/%s (%d): %s", module, function, code, msg);
     p->logger(buf);
   }
 }
@@ -56,7 +66,8 @@ const char* mode_name(ContactMode m) {
 Plant::Plant(const Params& p) : model_(p) {}
 
 Plant::~Plant() {
-  if (cvode_) CVodeFree(&cvode_);
+  if (solver_ && model_.P.integrator == Integrator::Bdf) CVodeFree(&solver_);
+  if (solver_ && model_.P.integrator == Integrator::Erk) ERKStepFree(&solver_);
   if (ls_) SUNLinSolFree(static_cast<SUNLinearSolver>(ls_));
   if (mat_) SUNMatDestroy(static_cast<SUNMatrix>(mat_));
   if (nv_) N_VDestroy(static_cast<N_Vector>(nv_));
@@ -77,6 +88,7 @@ double Plant::gauss() {
 }
 
 int Plant::rhs(double, const double* y, double* yd) {
+  ++stats_.rhs_evals;
   const Vec5 q = Eigen::Map<const Vec5>(y), qd = Eigen::Map<const Vec5>(y + 5);
   const auto d = model_.dynamics(mode_, q, qd, in_[0], in_[1], in_[2], pivot_);
   for (int i = 0; i < 5; ++i) {
@@ -90,6 +102,7 @@ int Plant::rhs(double, const double* y, double* yd) {
 }
 
 int Plant::roots(double, const double* y, double* g) {
+  ++stats_.root_evals;
   const Params& P = model_.P;
   const Vec5 q = Eigen::Map<const Vec5>(y), qd = Eigen::Map<const Vec5>(y + 5);
   for (int i = 0; i < kNumRoots; ++i) g[i] = 1.0;
@@ -123,28 +136,63 @@ int Plant::roots(double, const double* y, double* g) {
   return 0;
 }
 
+// Integrator steps (CVODE counts from its last restart, ARKODE from its creation): add what they
+// gained since the last call. RHS and root-function evaluations are counted in the callbacks.
 void Plant::accumulate_stats() {
-  if (!cvode_) return;
+  if (!solver_) return;
   long int n = 0;
-  if (CVodeGetNumSteps(cvode_, &n) == CV_SUCCESS) stats_.steps += n;
-  if (CVodeGetNumRhsEvals(cvode_, &n) == CV_SUCCESS) stats_.rhs_evals += n;
-  if (CVodeGetNumLinRhsEvals(cvode_, &n) == CV_SUCCESS) stats_.rhs_evals += n;
-  if (CVodeGetNumGEvals(cvode_, &n) == CV_SUCCESS) stats_.root_evals += n;
+  if (model_.P.integrator == Integrator::Bdf) CVodeGetNumSteps(solver_, &n);
+  else ERKStepGetNumSteps(solver_, &n);
+  stats_.steps += n - solver_steps_counted_;
+  solver_steps_counted_ = n;
 }
 
-bool Plant::cvode_reinit() {
+// Restart the integrator from (t_, y_): BDF at order 1 with a new Jacobian and CVODE's initial
+// step estimate. ERK after an input change with the step size its error controller last proposed
+// (h_next_, also in the snapshot, so a restored copy restarts with the same step); after a mode
+// switch or impact with ARKODE's initial step estimate, like CVODE: a rocking mode entered at rest
+// starts with its landing root (foot pitch) at zero, where ARKODE switches that root off until it
+// moves away from zero; a full-length first step could carry the foot's brief excursion and its
+// landing unseen.
+bool Plant::solver_restart() {
   N_Vector y = static_cast<N_Vector>(nv_);
   std::memcpy(N_VGetArrayPointer(y), y_, sizeof y_);
-  if (CVodeReInit(cvode_, t_, y) != CV_SUCCESS) return false;
   int dir[kNumRoots] = {-1, -1, -1, -1, -1};
   if (mode_ == ContactMode::Heel) dir[0] = +1;
-  if (CVodeSetRootDirection(cvode_, dir) != CV_SUCCESS) return false;
+  if (model_.P.integrator == Integrator::Bdf) {
+    if (CVodeReInit(solver_, t_, y) != CV_SUCCESS) return false;
+    if (CVodeSetRootDirection(solver_, dir) != CV_SUCCESS) return false;
+    solver_steps_counted_ = 0;
+  } else {
+    if (ERKStepSetInitStep(solver_, event_ ? 0.0 : h_next_) != ARK_SUCCESS) return false;
+    if (ERKStepReset(solver_, t_, y) != ARK_SUCCESS) return false;
+    if (ERKStepSetRootDirection(solver_, dir) != ARK_SUCCESS) return false;
+  }
   ++stats_.reinits;
+  restart_ = event_ = false;
   return true;
+}
+
+// Advance towards tout (never past it); returns 0 at tout, 1 at a root, < 0 on failure.
+int Plant::solver_advance(double tout, double& tret) {
+  N_Vector y = static_cast<N_Vector>(nv_);
+  int flag;
+  if (model_.P.integrator == Integrator::Bdf) {
+    CVodeSetStopTime(solver_, tout);
+    flag = CVode(solver_, tout, y, &tret, CV_NORMAL);
+    if (flag == CV_ROOT_RETURN) return 1;
+  } else {
+    ERKStepSetStopTime(solver_, tout);
+    flag = ERKStepEvolve(solver_, tout, y, &tret, ARK_NORMAL);
+    ERKStepGetCurrentStep(solver_, &h_next_);
+    if (flag == ARK_ROOT_RETURN) return 1;
+  }
+  return flag < 0 ? flag : 0;
 }
 
 void Plant::set_mode(ContactMode m, const char* why) {
   if (m == mode_) return;
+  restart_ = event_ = true;
   if (history.size() < history_limit) history.push_back({t_, static_cast<int>(mode_), static_cast<int>(m), why});
   char buf[160];
   std::snprintf(buf, sizeof buf, "t=%.6f s: contact %s -> %s (%s)", t_, mode_name(mode_),
@@ -174,6 +222,7 @@ ContactMode Plant::land_flat() {
   }
   if (next == ContactMode::Flat) qd2 = model_.impact(ContactMode::Flat, q, qd);
   if (qd2 != qd) ++stats_.impacts;
+  restart_ = event_ = true;
   for (int i = 0; i < 5; ++i) y_[5 + i] = qd2[i];
   y_[2] = 0.0;
   y_[1] = P.ankle_height;
@@ -220,31 +269,50 @@ void Plant::resolve_mode(const char* why) {
   }
 }
 
-bool Plant::ensure_cvode() {
+bool Plant::ensure_solver() {
   const Params& P = model_.P;
-  if (!cvode_) {
+  if (!solver_) {
     SUNContext ctx = nullptr;
     if (SUNContext_Create(nullptr, &ctx) != 0) return msg_ = "SUNContext_Create failed", false;
     sunctx_ = ctx;
     N_Vector y = N_VNew_Serial(10, ctx);
     nv_ = y;
+    N_VEnableFusedOps_Serial(y, SUNTRUE);  // one loop per linear combination of stages
     std::memcpy(N_VGetArrayPointer(y), y_, sizeof y_);
-    cvode_ = CVodeCreate(CV_BDF, ctx);
-    if (!cvode_) return msg_ = "CVodeCreate failed", false;
-    CVodeSetErrHandlerFn(cvode_, cv_err, this);
-    if (CVodeInit(cvode_, cv_rhs, t_, y) != CV_SUCCESS) return msg_ = "CVodeInit failed", false;
-    SUNMatrix A = SUNDenseMatrix(10, 10, ctx);
-    mat_ = A;
-    SUNLinearSolver LS = SUNLinSol_Dense(y, A, ctx);
-    ls_ = LS;
-    CVodeSetLinearSolver(cvode_, LS, A);
-    CVodeSetUserData(cvode_, this);
-    CVodeRootInit(cvode_, kNumRoots, cv_roots);
-    CVodeSetNoInactiveRootWarn(cvode_);
-    CVodeSetMaxNumSteps(cvode_, 100000);
+    if (P.integrator == Integrator::Bdf) {
+      solver_ = CVodeCreate(CV_BDF, ctx);
+      if (!solver_) return msg_ = "CVodeCreate failed", false;
+      CVodeSetErrHandlerFn(solver_, solver_err, this);
+      if (CVodeInit(solver_, solver_rhs, t_, y) != CV_SUCCESS) return msg_ = "CVodeInit failed", false;
+      SUNMatrix A = SUNDenseMatrix(10, 10, ctx);
+      mat_ = A;
+      SUNLinearSolver LS = SUNLinSol_Dense(y, A, ctx);
+      ls_ = LS;
+      CVodeSetLinearSolver(solver_, LS, A);
+      CVodeSetUserData(solver_, this);
+      CVodeRootInit(solver_, kNumRoots, solver_roots);
+      CVodeSetNoInactiveRootWarn(solver_);
+      CVodeSetMaxNumSteps(solver_, 100000);
+    } else {
+      solver_ = ERKStepCreate(solver_rhs, t_, y, ctx);
+      if (!solver_) return msg_ = "ERKStepCreate failed", false;
+      ERKStepSetErrHandlerFn(solver_, solver_err, this);
+      ERKStepSetTableNum(solver_, ARKODE_CASH_KARP_6_4_5);
+      // Cubic Hermite dense output for root location: needs no RHS beyond the step's own (degree
+      // 4 and 5 cost 2 more per step); error O(h^4), far below the tolerances at 1 ms steps.
+      ERKStepSetInterpolantDegree(solver_, 3);
+      ERKStepSetUserData(solver_, this);
+      ERKStepRootInit(solver_, kNumRoots, solver_roots);
+      ERKStepSetNoInactiveRootWarn(solver_);
+      // No step-count limit: at rest the explicit method takes stability-limited steps (about
+      // 3 / 423 s with the default servos), so a long communication step needs many; the work per
+      // call stays bounded by the step's length.
+      ERKStepSetMaxNumSteps(solver_, -1);
+    }
   }
-  if (CVodeSStolerances(cvode_, P.rtol, P.atol) != CV_SUCCESS)
-    return msg_ = "bad tolerances", false;
+  const int tol = P.integrator == Integrator::Bdf ? CVodeSStolerances(solver_, P.rtol, P.atol)
+                                                  : ERKStepSStolerances(solver_, P.rtol, P.atol);
+  if (tol != 0) return msg_ = "bad tolerances", false;
   return true;
 }
 
@@ -258,6 +326,7 @@ bool Plant::initialize(double t0) {
   rng_ = P.seed;
   stats_ = Stats{};
   history.clear();
+  restart_ = true;
   in_[0] = P.theta_ankle_init;
   in_[1] = P.theta_hip_init;
   // Static equilibrium under the initial set-points (Newton, finite-difference Jacobian).
@@ -293,13 +362,18 @@ bool Plant::initialize(double t0) {
     msg_ = "initial equilibrium failed";
     return false;
   }
-  if (!ensure_cvode()) return false;
+  if (!ensure_solver()) return false;
   resolve_mode("initial state");
   evaluate_outputs();
   return true;
 }
 
 void Plant::set_inputs(double a, double b, double push) {
+  // A changed input makes the RHS jump (bitwise comparison: -0.0 vs 0.0 or a NaN count as changes).
+  if (std::memcmp(&in_[0], &a, sizeof a) || std::memcmp(&in_[1], &b, sizeof b) ||
+      std::memcmp(&in_[2], &push, sizeof push)) {
+    restart_ = true;
+  }
   in_[0] = a;
   in_[1] = b;
   in_[2] = push;
@@ -360,6 +434,7 @@ bool Plant::handle_roots(double t, const int* found) {
       }
       for (int i = 0; i < 5; ++i) y_[5 + i] = qd2[i];
       ++stats_.impacts;
+      restart_ = event_ = true;
       set_mode(m, "edge touched down (plastic impact)");
       break;
     }
@@ -370,22 +445,22 @@ bool Plant::handle_roots(double t, const int* found) {
 
 Plant::Result Plant::do_step(double h) {
   if (fallen_) return Result::Fallen;
-  if (!cvode_) return msg_ = "not initialized", Result::Error;
+  if (!solver_) return msg_ = "not initialized", Result::Error;
   for (double v : in_)
     if (!std::isfinite(v)) return msg_ = "non-finite input", Result::Error;
   const double tout = t_ + h;
-  resolve_mode("inputs changed");
-  if (!cvode_reinit()) return msg_ = "CVodeReInit failed", Result::Error;
+  if (restart_) resolve_mode("inputs changed");
+  if (restart_ && !solver_restart()) return msg_ = "integrator restart failed", Result::Error;
   N_Vector y = static_cast<N_Vector>(nv_);
   int guard = 0;
   while (true) {
-    CVodeSetStopTime(cvode_, tout);
-    realtype tret = t_;
-    const int flag = CVode(cvode_, tout, y, &tret, CV_NORMAL);
+    double tret = t_;
+    const int flag = solver_advance(tout, tret);
     if (flag < 0) {
       accumulate_stats();
       char buf[120];
-      std::snprintf(buf, sizeof buf, "CVode failed with flag %d at t=%.9f", flag, tret);
+      std::snprintf(buf, sizeof buf, "%s failed with flag %d at t=%.9f",
+                    model_.P.integrator == Integrator::Bdf ? "CVode" : "ERKStepEvolve", flag, tret);
       msg_ = buf;
       return Result::Error;
     }
@@ -399,16 +474,17 @@ Plant::Result Plant::do_step(double h) {
       }
     }
     t_ = tret;
-    if (flag == CV_ROOT_RETURN) {
+    if (flag == 1) {
       int found[kNumRoots] = {};
-      CVodeGetRootInfo(cvode_, found);
+      if (model_.P.integrator == Integrator::Bdf) CVodeGetRootInfo(solver_, found);
+      else ERKStepGetRootInfo(solver_, found);
       accumulate_stats();
       if (handle_roots(tret, found)) {
         evaluate_outputs();
         return Result::Fallen;
       }
       if (++guard > 1000) return msg_ = "too many events in one step (Zeno?)", Result::Error;
-      if (!cvode_reinit()) return msg_ = "CVodeReInit failed", Result::Error;
+      if (!solver_restart()) return msg_ = "integrator restart failed", Result::Error;
       if (t_ >= tout) break;
       continue;
     }
@@ -471,6 +547,7 @@ void Plant::evaluate_outputs() {
 }
 
 Snapshot Plant::snapshot() const {
+  restart_ = true;  // the original restarts at its next step exactly as a restored copy will
   Snapshot s;
   s.t = t_;
   std::memcpy(s.y, y_, sizeof y_);
@@ -481,6 +558,7 @@ Snapshot Plant::snapshot() const {
   s.t_fall = t_fall_;
   std::memcpy(s.inputs, in_, sizeof in_);
   s.rng = rng_;
+  s.h_next = h_next_;
   s.stats = stats_;
   s.out = out_;
   return s;
@@ -504,10 +582,11 @@ bool Plant::restore(const Snapshot& s) {
   t_fall_ = s.t_fall;
   std::memcpy(in_, s.inputs, sizeof in_);
   rng_ = s.rng;
+  h_next_ = s.h_next;
   stats_ = s.stats;
   out_ = s.out;
-  // CVODE is re-initialized at the start of every step, so nothing else to restore.
-  return ensure_cvode();
+  restart_ = true;  // the integrator's history is not in the snapshot: the next step restarts
+  return ensure_solver();
 }
 
 }  // namespace hoap2plant

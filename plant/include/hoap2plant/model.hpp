@@ -21,6 +21,8 @@ using Mat5 = Eigen::Matrix<double, 5, 5>;
 using Vec2 = Eigen::Vector2d;
 
 enum class ContactMode : int { Flat = 0, Toe = 1, Heel = 2, Airborne = 3 };
+// The integrator (plant.cpp): ARKODE explicit Runge-Kutta or CVODE BDF (stiff settings).
+enum class Integrator : int { Erk = 0, Bdf = 1 };
 
 struct Params {
   // --- model (defaults from hoap2/nominal.h, the nominal numbers shared with the controller) ---
@@ -63,6 +65,7 @@ struct Params {
   //     equilibrium under them, foot flat) ---
   double theta_ankle_init = 0.0, theta_hip_init = 0.0;
   // --- integrator ---
+  Integrator integrator = Integrator::Erk;
   double rtol = 1e-8, atol = 1e-10;
   bool force_flat = false;  // hold the foot flat whatever the reaction (tests only)
 

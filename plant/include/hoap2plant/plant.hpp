@@ -12,7 +12,7 @@
 namespace hoap2plant {
 
 struct Stats {
-  std::int64_t steps = 0;      // CVODE internal steps
+  std::int64_t steps = 0;      // integrator steps
   std::int64_t rhs_evals = 0;  // RHS evaluations (incl. finite-difference Jacobian)
   std::int64_t root_evals = 0; // root-function evaluations
   std::int64_t mode_switches = 0;
@@ -40,7 +40,7 @@ struct Outputs {
 // Plain-old-data snapshot: everything that determines the future (bit for bit).
 struct Snapshot {
   std::uint32_t magic = 0x48325053u;  // "H2PS"
-  std::uint32_t version = 1;
+  std::uint32_t version = 2;  // 2: h_next
   double t = 0;
   double y[10] = {};
   std::int32_t mode = 0;
@@ -49,6 +49,7 @@ struct Snapshot {
   double t_fall = 0;
   double inputs[3] = {};
   std::uint64_t rng = 0;
+  double h_next = 0;
   Stats stats;
   Outputs out;
 };
@@ -67,6 +68,7 @@ void visit_fields(S& s, F&& f) {
   f("t_fall", s.t_fall);
   for (auto& x : s.inputs) f("inputs", x);
   f("rng", s.rng);
+  f("h_next", s.h_next);
   auto& st = s.stats;
   f("stats.steps", st.steps);
   f("stats.rhs_evals", st.rhs_evals);
@@ -120,9 +122,9 @@ class Plant {
 
   std::function<void(const std::string&)> logger;  // events (mode switches, falls)
   std::vector<ModeEvent> history;  // diagnostics (the first history_limit switches), not in the snapshot
-  std::size_t history_limit = 100000;  // the FMU keeps none: a history grows with every switch
+  std::size_t history_limit = 100000;
 
-  // CVODE callbacks
+  // integrator callbacks
   int rhs(double t, const double* y, double* ydot);
   int roots(double t, const double* y, double* g);
 
@@ -132,8 +134,9 @@ class Plant {
   ContactMode land_flat();
   void set_mode(ContactMode m, const char* why);
   bool handle_roots(double t, const int* found);
-  bool cvode_reinit();
-  bool ensure_cvode();
+  bool solver_restart();
+  int solver_advance(double tout, double& tret);
+  bool ensure_solver();
   void accumulate_stats();
   void log(const std::string& s) {
     if (logger) logger(s);
@@ -152,9 +155,15 @@ class Plant {
   Stats stats_;
   Outputs out_;
   std::string msg_;
-  // CVODE
+  // Restart the integrator at the next step: the RHS jumped or the state changed from outside. Mutable:
+  // taking a snapshot marks a restart point (const snapshot(), bit-for-bit restores).
+  mutable bool restart_ = true;
+  bool event_ = false;  // a mode switch or impact since the last restart (plant.cpp, solver_restart)
+  long int solver_steps_counted_ = 0;  // the integrator's step count already in stats_.steps
+  double h_next_ = 0;  // ERK: the step size its controller proposed last (0: estimate one)
+  // SUNDIALS
   void* sunctx_ = nullptr;
-  void* cvode_ = nullptr;
+  void* solver_ = nullptr;  // CVODE (Integrator::Bdf) or ARKODE ERKStep (Integrator::Erk) memory
   void* nv_ = nullptr;
   void* mat_ = nullptr;
   void* ls_ = nullptr;
