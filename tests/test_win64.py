@@ -37,6 +37,8 @@ import pytest
 
 from conftest import REPO_ROOT, read_csv_exact
 
+SOLVER_COUNTERS = ("cvode_steps", "rhs_evals", "root_evals")   # integrator statistics, not physics
+
 SHIPPED = ["AnkleHipController", "Hoap2Plant", "Hoap2Plant3D"]
 # Windows' own DLLs (present on every Windows 10/11): all a shipped binary may import.
 WINDOWS_SYSTEM_DLLS = {"kernel32.dll", "msvcrt.dll", "user32.dll", "advapi32.dll", "ws2_32.dll",
@@ -171,13 +173,14 @@ def test_windows_binaries_replay_a_closed_loop_like_the_linux_ones(win64_fmus, w
         # The Linux replay is the closed loop: a controller's outputs after step k are row k of
         # the run (bit for bit); a plant's outputs after step k are row k + 1. The plant's agree
         # to 1e-9 of their scale, not bit for bit: the runner steps by t_{k+1} - t_k (FMPy's
-        # simulate_fmu rule), which differs from the master's constant h in the last bit.
+        # simulate_fmu rule), which differs from the master's constant h in the last bit (and so
+        # may move one of the integrator's step-size decisions: its counters are not compared).
         for name in lin.dtype.names[1:]:
             if role == "controller":
                 col = next((c for c, v in res.controller_columns.items() if v == name), None)
                 if col is not None:
                     assert np.array_equal(lin[name][1:], np.asarray(d[col][:n], float)), (role, name)
-            elif name in d.dtype.names:
+            elif name in d.dtype.names and name not in SOLVER_COUNTERS:
                 ref = np.asarray(d[name][1:n + 1], float)
                 err = float(np.max(np.abs(lin[name][1:] - ref)))
                 assert err <= 1e-9 * (np.max(np.abs(ref)) + 1e-3), (role, name, err)
@@ -187,6 +190,9 @@ def test_windows_binaries_replay_a_closed_loop_like_the_linux_ones(win64_fmus, w
             a, b = lin[name], win[name]
             if name in DISCRETE:
                 assert np.array_equal(a, b), f"{role} {name}: discrete output differs on Windows"
+                continue
+            if name in SOLVER_COUNTERS:   # libm's last bits may move one step-size decision
+                assert np.max(np.abs(a - b)) <= 1e-3 * np.max(np.abs(a)) + 2, f"{role} {name}"
                 continue
             tol = 1e-12 if role == "controller" else 1e-8 * float(np.max(np.abs(a))) + 1e-12
             err = float(np.max(np.abs(a - b)))
