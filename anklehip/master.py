@@ -34,6 +34,7 @@ CONTROLLER_REFS = ("theta_ankle_ref", "theta_hip_ref")
 PUSH = "push_force"
 PUSH_Y = "push_force_y"     # the 3D plant's sideways push (scenario key push_y)
 CLASH_PREFIX = "controller."
+ENGINES = ("fmpy", "native")
 
 
 @dataclass
@@ -189,12 +190,17 @@ def simulate(scenario: Scenario, models: Models | None = None, *, fmu_dir=None,
              controller_overrides: dict | None = None, plant_overrides: dict | None = None,
              push: PushProfile | None = None, stop_time: float | None = None,
              progress: bool | None = None, logger: Callable | None = None,
-             faults: Faults | None = None, log_categories: list[str] | None = None) -> RunResult:
+             faults: Faults | None = None, log_categories: list[str] | None = None,
+             engine: str = "fmpy") -> RunResult:
     """Run one closed-loop scenario; never raises for a fall (outcome 'fell'). Raises ScenarioError
     for a stop time the run cannot have (scenario.time_grid_problem) and FMUError for FMUs that
     do not fit together or a parameter they do not have. `faults` replaces the scenario's
     [faults]; `log_categories` switches those log categories of both FMUs on (for `logger`; by
-    default only errors are logged)."""
+    default only errors are logged). `engine`: "fmpy" (this module's loop on FMPy) or "native"
+    (the same loop in C++, anklehip.native: bit-identical rows; no sensor faults, transition
+    pushes, log categories or progress bar)."""
+    if engine not in ENGINES:
+        raise ValueError(f"engine {engine!r}: one of {', '.join(ENGINES)}")
     models = models or Models.load(fmu_dir)
     faults = faults if faults is not None else scenario.faults
     c_over, p_over = scenario_parameters(scenario, models, controller_overrides, plant_overrides, faults)
@@ -229,6 +235,10 @@ def simulate(scenario: Scenario, models: Models | None = None, *, fmu_dir=None,
         m = int(math.ceil(faults.transition_push_duration / h - 1e-9))
         extra_push = TransitionPush(R, L.off_push, pulse.step_averages(0.0, h, m), faults.transition_phase, N)
         i_phase = L.off_cint + [v.name for v in L.c_int].index("phase")
+    if engine == "native" and (sensors is not None or extra_push is not None or log_categories):
+        what = "log categories" if log_categories else "the sensor faults and transition pushes of [faults]"
+        raise ScenarioError(f"{scenario.path or scenario.name}: the native engine does not support {what}; "
+                            "run it with the FMPy engine (--engine fmpy)")
 
     ctrl = plant = None
     outcome, message, fell_at = "completed", "", None
@@ -238,81 +248,89 @@ def simulate(scenario: Scenario, models: Models | None = None, *, fmu_dir=None,
     failed_at = -1
     j = 0
     bar = None
+    native_end = None
     try:
-        ctrl = Slave(models.controller, "controller", logger=logger, log_categories=log_categories)
-        plant = Slave(models.plant, "plant", logger=logger, log_categories=log_categories)
-        ctrl.initialize(t0, T, c_over)
-        plant.initialize(t0, T, p_over)
-        c_init = ctrl.get_values([v.name for v in L.c_feed + L.c_other + L.c_int + L.c_bool])
+        if engine == "native":
+            from .native import run_loop
+            native_end = run_loop(models, L, R, I, t0, h, T, N, c_over, p_over)
+            c_init, failed_at = native_end.c_init, native_end.failed_at
+            sc, sp, st = native_end.status_ctrl, native_end.status_plant, native_end.status_io
+            j = failed_at if failed_at >= 0 else N
+        else:
+            ctrl = Slave(models.controller, "controller", logger=logger, log_categories=log_categories)
+            plant = Slave(models.plant, "plant", logger=logger, log_categories=log_categories)
+            ctrl.initialize(t0, T, c_over)
+            plant.initialize(t0, T, p_over)
+            c_init = ctrl.get_values([v.name for v in L.c_feed + L.c_other + L.c_int + L.c_bool])
 
-        pc, cc = plant.c, ctrl.c
-        p_getR, p_getI, p_getB, p_setR, p_step = (plant.get_real, plant.get_integer, plant.get_boolean,
-                                                   plant.set_real, plant.do_step)
-        c_getR, c_getI, c_getB, c_setR, c_step = (ctrl.get_real, ctrl.get_integer, ctrl.get_boolean,
-                                                   ctrl.set_real, ctrl.do_step)
-        vr_pR = vr_array([v.vr for v in L.p_real]); n_pR = len(L.p_real)
-        vr_pI = vr_array([v.vr for v in L.p_int]); n_pI = len(L.p_int)
-        vr_pB = vr_array([v.vr for v in L.p_bool]); n_pB = len(L.p_bool)
-        vr_cin = vr_array([v.vr for v in L.c_in]); n_cin = len(L.c_in)
-        vr_cF = vr_array([v.vr for v in L.c_feed]); n_cF = len(L.c_feed)
-        vr_cO = vr_array([v.vr for v in L.c_other]); n_cO = len(L.c_other)
-        vr_cI = vr_array([v.vr for v in L.c_int]); n_cI = len(L.c_int)
-        vr_cB = vr_array([v.vr for v in L.c_bool]); n_cB = len(L.c_bool)
-        vr_pin = vr_array([v.vr for v in L.p_in]); n_pin = len(L.p_in)
-        baseR, sR = R.ctypes.data, R.strides[0]
-        baseI, sI = I.ctypes.data, I.strides[0]
-        oF, oO = 8 * L.off_feed, 8 * L.off_cother
-        oPB, oCI, oCB = 4 * L.off_pbool, 4 * L.off_cint, 4 * L.off_cbool
-        if sensors is not None:     # the controller reads the faulty channel's rows, not the plant's
-            inject, baseS, sS = sensors.apply, sensors.S.ctypes.data, sensors.S.strides[0]
+            pc, cc = plant.c, ctrl.c
+            p_getR, p_getI, p_getB, p_setR, p_step = (plant.get_real, plant.get_integer, plant.get_boolean,
+                                                       plant.set_real, plant.do_step)
+            c_getR, c_getI, c_getB, c_setR, c_step = (ctrl.get_real, ctrl.get_integer, ctrl.get_boolean,
+                                                       ctrl.set_real, ctrl.do_step)
+            vr_pR = vr_array([v.vr for v in L.p_real]); n_pR = len(L.p_real)
+            vr_pI = vr_array([v.vr for v in L.p_int]); n_pI = len(L.p_int)
+            vr_pB = vr_array([v.vr for v in L.p_bool]); n_pB = len(L.p_bool)
+            vr_cin = vr_array([v.vr for v in L.c_in]); n_cin = len(L.c_in)
+            vr_cF = vr_array([v.vr for v in L.c_feed]); n_cF = len(L.c_feed)
+            vr_cO = vr_array([v.vr for v in L.c_other]); n_cO = len(L.c_other)
+            vr_cI = vr_array([v.vr for v in L.c_int]); n_cI = len(L.c_int)
+            vr_cB = vr_array([v.vr for v in L.c_bool]); n_cB = len(L.c_bool)
+            vr_pin = vr_array([v.vr for v in L.p_in]); n_pin = len(L.p_in)
+            baseR, sR = R.ctypes.data, R.strides[0]
+            baseI, sI = I.ctypes.data, I.strides[0]
+            oF, oO = 8 * L.off_feed, 8 * L.off_cother
+            oPB, oCI, oCB = 4 * L.off_pbool, 4 * L.off_cint, 4 * L.off_cbool
+            if sensors is not None:     # the controller reads the faulty channel's rows, not the plant's
+                inject, baseS, sS = sensors.apply, sensors.S.ctypes.data, sensors.S.strides[0]
 
-        if progress is None:
-            progress = T >= 5.0
-        if progress:
-            from tqdm import tqdm
-            bar = tqdm(total=round(T, 6), unit="s sim", disable=None, leave=False,
-                       bar_format="{l_bar}{bar}| {n:.1f}/{total:.1f} s sim [{elapsed}<{remaining}]")
-        chunk = 1000
-        k = 0
-        while k < N:
-            kend = min(N, k + chunk)
-            for j in range(k, kend):
-                t = t0 + j * h
-                rR = baseR + j * sR
-                rI = baseI + j * sI
-                st = p_getR(pc, vr_pR, n_pR, rR)
-                if n_pI:
-                    st |= p_getI(pc, vr_pI, n_pI, rI)
-                if n_pB:
-                    st |= p_getB(pc, vr_pB, n_pB, rI + oPB)
-                if sensors is None:
-                    st |= c_setR(cc, vr_cin, n_cin, rR)
-                else:
-                    inject(j)
-                    st |= c_setR(cc, vr_cin, n_cin, baseS + j * sS)
-                sc = c_step(cc, t, h, 1)
-                st |= c_getR(cc, vr_cF, n_cF, rR + oF)
-                if n_cO:
-                    st |= c_getR(cc, vr_cO, n_cO, rR + oO)
-                if n_cI:
-                    st |= c_getI(cc, vr_cI, n_cI, rI + oCI)
-                if n_cB:
-                    st |= c_getB(cc, vr_cB, n_cB, rI + oCB)
-                if extra_push is not None:
-                    extra_push.after_controller(j, int(I[j, i_phase]))
-                st |= p_setR(pc, vr_pin, n_pin, rR + oF)
-                sp = p_step(pc, t, h, 1)
-                if sp > 1 or sc > 1 or st > 1:
-                    failed_at = j
+            if progress is None:
+                progress = T >= 5.0
+            if progress:
+                from tqdm import tqdm
+                bar = tqdm(total=round(T, 6), unit="s sim", disable=None, leave=False,
+                           bar_format="{l_bar}{bar}| {n:.1f}/{total:.1f} s sim [{elapsed}<{remaining}]")
+            chunk = 1000
+            k = 0
+            while k < N:
+                kend = min(N, k + chunk)
+                for j in range(k, kend):
+                    t = t0 + j * h
+                    rR = baseR + j * sR
+                    rI = baseI + j * sI
+                    st = p_getR(pc, vr_pR, n_pR, rR)
+                    if n_pI:
+                        st |= p_getI(pc, vr_pI, n_pI, rI)
+                    if n_pB:
+                        st |= p_getB(pc, vr_pB, n_pB, rI + oPB)
+                    if sensors is None:
+                        st |= c_setR(cc, vr_cin, n_cin, rR)
+                    else:
+                        inject(j)
+                        st |= c_setR(cc, vr_cin, n_cin, baseS + j * sS)
+                    sc = c_step(cc, t, h, 1)
+                    st |= c_getR(cc, vr_cF, n_cF, rR + oF)
+                    if n_cO:
+                        st |= c_getR(cc, vr_cO, n_cO, rR + oO)
+                    if n_cI:
+                        st |= c_getI(cc, vr_cI, n_cI, rI + oCI)
+                    if n_cB:
+                        st |= c_getB(cc, vr_cB, n_cB, rI + oCB)
+                    if extra_push is not None:
+                        extra_push.after_controller(j, int(I[j, i_phase]))
+                    st |= p_setR(pc, vr_pin, n_pin, rR + oF)
+                    sp = p_step(pc, t, h, 1)
+                    if sp > 1 or sc > 1 or st > 1:
+                        failed_at = j
+                        break
+                if failed_at >= 0:
                     break
-            if failed_at >= 0:
-                break
+                if bar is not None:
+                    bar.update(round((kend - k) * h, 9))
+                k = kend
             if bar is not None:
-                bar.update(round((kend - k) * h, 9))
-            k = kend
-        if bar is not None:
-            bar.close()
-            bar = None
+                bar.close()
+                bar = None
 
         if failed_at >= 0:
             k = failed_at
@@ -321,22 +339,27 @@ def simulate(scenario: Scenario, models: Models | None = None, *, fmu_dir=None,
                 raise FMUError(f"{models.controller.name}: fmi2DoStep at t={t:.4f} s returned {STATUS_NAMES[sc]}")
             if st > 1 and sp <= 1:
                 raise FMUError(f"get/set of values failed at t={t:.4f} s (status {st})")
-            term, t_last = plant.terminated_status()
+            if native_end is not None:
+                term, t_last = native_end.plant_terminated, native_end.plant_last_time
+            else:
+                term, t_last = plant.terminated_status()
             if sp == DISCARD:
                 outcome = "fell"
                 fell_at = t_last if t_last is not None else t
                 message = f"fell at t={fell_at:.3f} s" + ("" if term else " (plant discarded the step)")
             else:
                 raise FMUError(f"{models.plant.name}: fmi2DoStep at t={t:.4f} s returned {STATUS_NAMES[sp]}")
-            # the plant's outputs at the last successful time close the record
+            # the plant's outputs at the last successful time close the record (the native engine
+            # has read them)
             last = k + 1
-            R[last, :] = R[k, :]
-            I[last, :] = I[k, :]
-            p_getR(pc, vr_pR, n_pR, baseR + last * sR)
-            if n_pI:
-                p_getI(pc, vr_pI, n_pI, baseI + last * sI)
-            if n_pB:
-                p_getB(pc, vr_pB, n_pB, baseI + last * sI + oPB)
+            if native_end is None:
+                R[last, :] = R[k, :]
+                I[last, :] = I[k, :]
+                p_getR(pc, vr_pR, n_pR, baseR + last * sR)
+                if n_pI:
+                    p_getI(pc, vr_pI, n_pI, baseI + last * sI)
+                if n_pB:
+                    p_getB(pc, vr_pB, n_pB, baseI + last * sI + oPB)
             t_end = fell_at
             if "fallen" in [v.name for v in L.p_bool] and not I[last, L.off_pbool + [v.name for v in L.p_bool].index("fallen")]:
                 # a discard without a fall (e.g. the integrator gave up) is an error, not a fall
@@ -344,14 +367,15 @@ def simulate(scenario: Scenario, models: Models | None = None, *, fmu_dir=None,
                 message = (f"{models.plant.name} discarded the step at t={t:.4f} s without falling "
                            f"(terminated={term}, last successful time {t_last})")
         else:
-            rR, rI = baseR + N * sR, baseI + N * sI
-            R[N, :] = R[N - 1, :]
-            I[N, :] = I[N - 1, :]
-            p_getR(pc, vr_pR, n_pR, rR)
-            if n_pI:
-                p_getI(pc, vr_pI, n_pI, rI)
-            if n_pB:
-                p_getB(pc, vr_pB, n_pB, rI + oPB)
+            if native_end is None:
+                rR, rI = baseR + N * sR, baseI + N * sI
+                R[N, :] = R[N - 1, :]
+                I[N, :] = I[N - 1, :]
+                p_getR(pc, vr_pR, n_pR, rR)
+                if n_pI:
+                    p_getI(pc, vr_pI, n_pI, rI)
+                if n_pB:
+                    p_getB(pc, vr_pB, n_pB, rI + oPB)
             t_end = t0 + N * h
     except KeyboardInterrupt:
         last = max(j - 1, 0)

@@ -54,11 +54,16 @@ def _atomic(path: Path):
         raise
 
 
-def atomic_write_csv(path: Path, data: np.ndarray, columns: list[str] | None = None) -> None:
-    """FMPy write_csv layout, written atomically (_atomic)."""
+def atomic_write_csv(path: Path, data: np.ndarray, columns: list[str] | None = None, native: bool = False) -> None:
+    """FMPy write_csv layout, written atomically (_atomic); `native`: by anklehip.native.write_csv,
+    the same bytes (tests/test_native_engine.py) without Python's per-cell cost."""
     with _atomic(path) as (fd, tmp):
         os.close(fd)
-        write_csv(tmp, data, columns=[c for c in columns if c != "time"] if columns else None)
+        if native:
+            from .native import write_csv as native_write_csv
+            native_write_csv(tmp, data[["time"] + [c for c in columns if c != "time"]] if columns else data)
+        else:
+            write_csv(tmp, data, columns=[c for c in columns if c != "time"] if columns else None)
 
 
 def atomic_write_text(path: Path, text: str) -> None:

@@ -5,6 +5,8 @@ and runs the closed loop in a worker process (each worker extracts the FMUs once
 """
 from __future__ import annotations
 
+import functools
+
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -56,8 +58,15 @@ def parse_variant(spec: str) -> Variant:
     return Variant(name or "default", c, p, configs[0] if configs else None)
 
 
-def _one(scenario_path: str, fmu_dir: str | None, peak: float, variant: Variant) -> dict[str, Any]:
-    from .master import Models, simulate
+@functools.lru_cache(maxsize=4)
+def cached_models(fmu_dir: str | None, plant_model: str):
+    """The FMUs, loaded (unpacked) once per worker process and reused by its runs."""
+    from .master import Models
+    return Models.load(fmu_dir, plant_model=plant_model)
+
+
+def _one(scenario_path: str, fmu_dir: str | None, peak: float, variant: Variant, engine: str = "fmpy") -> dict[str, Any]:
+    from .master import simulate
     from .scenario import load_scenario
     sc = load_scenario(scenario_path)
     if variant.config:
@@ -65,8 +74,8 @@ def _one(scenario_path: str, fmu_dir: str | None, peak: float, variant: Variant)
     base = sc.push.peak()
     if base == 0:
         raise ValueError(f"{scenario_path}: the scenario has no push to scale")
-    res = simulate(sc, Models.load(fmu_dir, plant_model=sc.plant_model), controller_overrides=variant.controller,
-                   plant_overrides=variant.plant, push=sc.push.scaled(peak / base), progress=False)
+    res = simulate(sc, cached_models(fmu_dir, sc.plant_model), controller_overrides=variant.controller,
+                   plant_overrides=variant.plant, push=sc.push.scaled(peak / base), progress=False, engine=engine)
     d = res.data
     return {"variant": variant.name, "peak_force": peak, "outcome": res.outcome,
             "fell_at": res.fell_at if res.fell_at is not None else float("nan"),
@@ -82,10 +91,10 @@ def _one(scenario_path: str, fmu_dir: str | None, peak: float, variant: Variant)
 
 
 def run_sweep(scenario_path: str, forces: list[float], variants: list[Variant], fmu_dir: str | None = None,
-              workers: int = 2) -> list[dict[str, Any]]:
+              workers: int = 2, engine: str = "fmpy") -> list[dict[str, Any]]:
     import dask
-    return _compute([dask.delayed(_one)(str(scenario_path), fmu_dir, float(f), v) for v in variants for f in forces],
-                    workers)
+    return _compute([dask.delayed(_one)(str(scenario_path), fmu_dir, float(f), v, engine)
+                     for v in variants for f in forces], workers)
 
 
 def _compute(tasks: list, workers: int) -> list[dict[str, Any]]:

@@ -14,7 +14,6 @@
 #ifdef _WIN32
 #include <windows.h>
 #else
-#include <dlfcn.h>
 #include <sched.h>
 #include <sys/mman.h>
 #include <time.h>
@@ -33,6 +32,7 @@
 #include <vector>
 
 #include "fmi2Functions.h"
+#include "fmu_library.hpp"
 
 namespace {
 
@@ -139,28 +139,10 @@ int64_t nowNs() {
 }
 
 #ifdef _WIN32
-const char* const kPlatform = "win64";
-const char* const kLibSuffix = ".dll";
-void* openLibrary(const std::string& path, std::string& err) {
-  HMODULE h = LoadLibraryA(path.c_str());
-  if (!h) err = "LoadLibrary error " + std::to_string(GetLastError());
-  return reinterpret_cast<void*>(h);
-}
-void* librarySymbol(void* lib, const char* name) {
-  return reinterpret_cast<void*>(GetProcAddress(static_cast<HMODULE>(lib), name));
-}
 // Paced mode needs absolute-deadline sleeps (clock_nanosleep), which this port does not have.
 constexpr bool kCanPace = false;
 void sleepUntil(int64_t) {}
 #else
-const char* const kPlatform = "linux64";
-const char* const kLibSuffix = ".so";
-void* openLibrary(const std::string& path, std::string& err) {
-  void* h = dlopen(path.c_str(), RTLD_NOW | RTLD_LOCAL);
-  if (!h) err = dlerror();
-  return h;
-}
-void* librarySymbol(void* lib, const char* name) { return dlsym(lib, name); }
 // Absolute deadline on CLOCK_MONOTONIC, the clock steady_clock reads on Linux.
 constexpr bool kCanPace = true;
 void sleepUntil(int64_t ns) {
@@ -193,12 +175,6 @@ void usage(const char* a0) {
                a0);
 }
 
-template <class F>
-bool sym(void* lib, const char* name, F& f) {
-  f = reinterpret_cast<F>(librarySymbol(lib, name));
-  if (!f) std::fprintf(stderr, "error: symbol %s missing in the FMU binary\n", name);
-  return f != nullptr;
-}
 
 }  // namespace
 
@@ -353,22 +329,17 @@ int main(int argc, char** argv) {
   std::vector<fmi2Boolean> bout((nSteps + 1) * obv.size());
 
   // ---- load the FMU ----
-  std::string so = dir + "/binaries/" + kPlatform + "/" + md.id + kLibSuffix;
+  const std::string so = fmuimport::binaryPath(dir, md.id);
   std::string loadErr;
-  void* lib = openLibrary(so, loadErr);
+  void* lib = fmuimport::openLibrary(so, loadErr);
   if (!lib) { std::fprintf(stderr, "error: loading %s: %s\n", so.c_str(), loadErr.c_str()); return 1; }
-  fmi2InstantiateTYPE* instantiate; fmi2FreeInstanceTYPE* freeInstance; fmi2SetupExperimentTYPE* setup;
-  fmi2EnterInitializationModeTYPE* enterInit; fmi2ExitInitializationModeTYPE* exitInit; fmi2TerminateTYPE* terminate;
-  fmi2SetRealTYPE* setReal; fmi2SetIntegerTYPE* setInteger; fmi2SetBooleanTYPE* setBoolean;
-  fmi2GetRealTYPE* getReal; fmi2GetIntegerTYPE* getInteger; fmi2GetBooleanTYPE* getBoolean; fmi2DoStepTYPE* doStep;
-  if (!sym(lib, "fmi2Instantiate", instantiate) || !sym(lib, "fmi2FreeInstance", freeInstance) ||
-      !sym(lib, "fmi2SetupExperiment", setup) || !sym(lib, "fmi2EnterInitializationMode", enterInit) ||
-      !sym(lib, "fmi2ExitInitializationMode", exitInit) || !sym(lib, "fmi2Terminate", terminate) ||
-      !sym(lib, "fmi2SetReal", setReal) || !sym(lib, "fmi2SetInteger", setInteger) ||
-      !sym(lib, "fmi2SetBoolean", setBoolean) || !sym(lib, "fmi2GetReal", getReal) ||
-      !sym(lib, "fmi2GetInteger", getInteger) || !sym(lib, "fmi2GetBoolean", getBoolean) ||
-      !sym(lib, "fmi2DoStep", doStep))
-    return 1;
+  fmuimport::Fmi2Api api;
+  if (!api.load(lib, loadErr)) { std::fprintf(stderr, "error: %s\n", loadErr.c_str()); return 1; }
+  auto* instantiate = api.instantiate; auto* freeInstance = api.freeInstance; auto* setup = api.setupExperiment;
+  auto* enterInit = api.enterInitializationMode; auto* exitInit = api.exitInitializationMode;
+  auto* terminate = api.terminate; auto* setReal = api.setReal; auto* setInteger = api.setInteger;
+  auto* setBoolean = api.setBoolean; auto* getReal = api.getReal; auto* getInteger = api.getInteger;
+  auto* getBoolean = api.getBoolean; auto* doStep = api.doStep;
   fmi2CallbackFunctions cb{};
   cb.logger = logger;
   cb.allocateMemory = calloc;
