@@ -1,10 +1,14 @@
-# Builds SUNDIALS (ARKODE, CVODE, serial N_Vector, dense matrix and linear solver; static) from Debian's
-# source package for a target that has no SUNDIALS package here: the Windows binaries cross-built
-# with mingw-w64 (cmake/Win64Fmus.cmake). Defines the same imported targets as Debian's
-# find_package(SUNDIALS) (SUNDIALS::arkode_static, SUNDIALS::cvode_static, ...), so plant/ links either without change.
+# Builds SUNDIALS (ARKODE, CVODE, serial N_Vector, dense matrix and linear solver; static, PIC,
+# Release) from Debian's source package, and defines the same imported targets as Debian's
+# find_package(SUNDIALS) (SUNDIALS::arkode_static, SUNDIALS::cvode_static, ...), so plant/ links
+# either without change. Used for every build but the sanitizer build (ANKLEHIP_SYSTEM_SUNDIALS):
+#  - Debian's libsundials binaries (6.4.1+dfsg1-3) are compiled without optimization (every
+#    function spills its locals to the stack; N_VLinearCombination_Serial costs 1 200 instructions
+#    for 10-element vectors), which made the integrator's own arithmetic cost more than the model's;
+#  - the Windows binaries cross-built with mingw-w64 (cmake/Win64Fmus.cmake) need it anyway.
 #
 # Source: -DANKLEHIP_SUNDIALS_SOURCE_DIR=<extracted tree>, or Debian's source package at the version
-# of the installed libsundials-dev (cmake/DebianSource.cmake), the same code the Linux FMU links.
+# of the installed libsundials-dev (cmake/DebianSource.cmake), the same code as Debian's binaries.
 # Options as Debian's build where they matter for the numbers (double precision, 64-bit indices);
 # everything the plant does not use is off.
 include_guard(GLOBAL)
@@ -37,6 +41,7 @@ ExternalProject_Add(sundials_ext
     -DCMAKE_INSTALL_PREFIX=<INSTALL_DIR>
     -DCMAKE_INSTALL_LIBDIR=lib
     -DCMAKE_BUILD_TYPE=Release
+    -DCMAKE_POSITION_INDEPENDENT_CODE=ON
     ${ANKLEHIP_EXTERNAL_COMPILER_ARGS}
     -DBUILD_SHARED_LIBS=OFF
     -DBUILD_STATIC_LIBS=ON
@@ -63,4 +68,4 @@ endforeach()
 # The dense linear solver calls the dense matrix module; CVODE the linear-solver interface.
 set_property(TARGET SUNDIALS::sunlinsoldense_static APPEND PROPERTY INTERFACE_LINK_LIBRARIES
              SUNDIALS::sunmatrixdense_static)
-message(STATUS "SUNDIALS (static, double, 64-bit indices): ${_sun_origin}")
+message(STATUS "SUNDIALS (static, PIC, Release, double, 64-bit indices): ${_sun_origin}")

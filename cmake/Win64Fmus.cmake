@@ -3,7 +3,7 @@
 # An external project configures this same source tree a second time, in <build>/win64, with the
 # mingw-w64 toolchain (cmake/toolchains/mingw-w64-x86_64.cmake) and ANKLEHIP_FMU_BINARIES_ONLY=ON:
 # it builds only the FMUs' DLLs, statically linked, with SUNDIALS (cmake/SundialsFromDebianSource)
-# and ODE (cmake/OdeFromDebianSource, over the ODE tree this build already extracted) compiled from
+# and ODE (cmake/OdeFromDebianSource, over the SUNDIALS and ODE trees this build already extracted) compiled from
 # Debian's source packages. The DLLs land in ${ANKLEHIP_WIN64_BINARY_DIR}; add_fmu packs each next
 # to its .so. modelDescription.xml comes from this (Linux) build: same sources, same variable table.
 # Needs g++-mingw-w64-x86-64-posix (scripts/setup.sh --win64 installs it).
@@ -30,7 +30,7 @@ set(_win_args
   "-DFMI2_INCLUDE_DIR=${FMI2_INCLUDE_DIR}"
   "-DEigen3_DIR=${Eigen3_DIR}"
   "-DANKLEHIP_ODE_SOURCE_DIR=${_ode_src}"
-  "-DANKLEHIP_SUNDIALS_SOURCE_DIR=${ANKLEHIP_SUNDIALS_SOURCE_DIR}")
+  "-DANKLEHIP_SUNDIALS_SOURCE_DIR=${_sun_src}")
 ExternalProject_Add(win64_fmus
   SOURCE_DIR "${PROJECT_SOURCE_DIR}"
   PREFIX "${_win_dir}-ep"
