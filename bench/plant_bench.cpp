@@ -6,12 +6,17 @@
 //               loop, where the controller's outputs change in most steps.
 // Prints simulated seconds per wall second, RHS evaluations and CVODE steps per communication
 // step, and the median / p99 wall time of one step.
-//   build/plant/plant_bench [standing|tracking|all] [--repeat N]
+//   replay    - the set-points and push of a closed-loop result CSV (--replay FILE: the columns
+//               theta_ankle_ref, theta_hip_ref, push_force of e.g. results/paper_five_pushes/
+//               paper_five_pushes.csv), so the plant sees what it sees in the closed loop.
+//   build/plant/plant_bench [standing|tracking|all] [--repeat N] [--replay FILE]
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <fstream>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -19,21 +24,48 @@
 
 using namespace hoap2plant;
 
-static int bench(const char* profile, bool tracking) {
+struct Inputs {
+  std::vector<double> ankle, hip, push;
+};
+
+// The three input columns of a closed-loop result CSV (FMPy layout: quoted header names).
+static bool read_replay(const std::string& path, Inputs& in) {
+  std::ifstream f(path);
+  std::string line, cell;
+  if (!f || !std::getline(f, line)) return std::printf("cannot read %s\n", path.c_str()), false;
+  std::vector<std::string> names;
+  std::stringstream hs(line);
+  while (std::getline(hs, cell, ',')) names.push_back(cell.size() > 1 && cell[0] == '"' ? cell.substr(1, cell.size() - 2) : cell);
+  int col[3] = {-1, -1, -1};
+  const char* want[3] = {"theta_ankle_ref", "theta_hip_ref", "push_force"};
+  for (int k = 0; k < 3; ++k)
+    for (size_t c = 0; c < names.size(); ++c)
+      if (names[c] == want[k]) col[k] = static_cast<int>(c);
+  for (int k = 0; k < 3; ++k)
+    if (col[k] < 0) return std::printf("%s: no column %s\n", path.c_str(), want[k]), false;
+  while (std::getline(f, line)) {
+    std::stringstream ls(line);
+    double v[3] = {0, 0, 0};
+    for (int c = 0; std::getline(ls, cell, ','); ++c)
+      for (int k = 0; k < 3; ++k)
+        if (c == col[k]) v[k] = std::strtod(cell.c_str(), nullptr);
+    in.ankle.push_back(v[0]);
+    in.hip.push_back(v[1]);
+    in.push.push_back(v[2]);
+  }
+  return !in.ankle.empty();
+}
+
+static int bench(const char* profile, const Inputs& in) {
   Params P = default_params();
   Plant p(P);
   if (!p.initialize(0.0)) { std::printf("initialize failed: %s\n", p.message().c_str()); return 1; }
-  const double dt = 1e-3, w = 2 * 3.14159265358979323846 * 0.5;
-  const int n = 10000;
+  const double dt = 1e-3;
+  const int n = static_cast<int>(in.ankle.size());
   std::vector<double> us(n);
   const auto t0 = std::chrono::steady_clock::now();
   for (int i = 0; i < n; ++i) {
-    const double t = i * dt;
-    double f = 0;
-    if (t >= 2.0 && t < 2.06) f = 25.0;
-    if (t >= 5.0 && t < 6.0) f = 8.0;
-    const double s = tracking ? std::sin(w * t) : 0.0;
-    p.set_inputs(0.02 * s, 0.05 * s, f);
+    p.set_inputs(in.ankle[i], in.hip[i], in.push[i]);
     const auto a = std::chrono::steady_clock::now();
     if (p.do_step(dt) != Plant::Result::Ok) { std::printf("%s: step failed: %s\n", profile, p.message().c_str()); return 1; }
     us[i] = std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - a).count();
@@ -41,7 +73,8 @@ static int bench(const char* profile, bool tracking) {
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   std::sort(us.begin(), us.end());
   const Stats& st = p.stats();
-  std::printf("plant_bench %s: %.1f s simulated, 1 ms steps, rtol %.0e\n", profile, n * dt, P.rtol);
+  std::printf("plant_bench %s: %.1f s simulated, 1 ms steps, rtol %.0e, %s\n", profile, n * dt, P.rtol,
+              P.integrator == Integrator::Erk ? "ERK (ARKODE)" : "BDF (CVODE)");
   std::printf("  real-time factor     %.1f simulated s / wall s (wall %.3f s)\n", n * dt / wall, wall);
   std::printf("  RHS evals            %.2f per step (%lld)\n", double(st.rhs_evals) / n, (long long)st.rhs_evals);
   std::printf("  CVODE steps          %.2f per step; restarts %lld, root evals %lld, mode switches %lld\n",
@@ -50,17 +83,38 @@ static int bench(const char* profile, bool tracking) {
   return 0;
 }
 
+// 10 s: the pushes of the standing profile, with or without the sway of the set-points.
+static Inputs synthetic(bool tracking) {
+  Inputs in;
+  const double dt = 1e-3, w = 2 * 3.14159265358979323846 * 0.5;
+  for (int i = 0; i < 10000; ++i) {
+    const double t = i * dt;
+    double f = 0;
+    if (t >= 2.0 && t < 2.06) f = 25.0;
+    if (t >= 5.0 && t < 6.0) f = 8.0;
+    const double s = tracking ? std::sin(w * t) : 0.0;
+    in.ankle.push_back(0.02 * s);
+    in.hip.push_back(0.05 * s);
+    in.push.push_back(f);
+  }
+  return in;
+}
+
 int main(int argc, char** argv) {
-  std::string which = "all";
+  std::string which = "all", replay;
   int repeat = 1;
   for (int i = 1; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--repeat") && i + 1 < argc) repeat = std::atoi(argv[++i]);
+    else if (!std::strcmp(argv[i], "--replay") && i + 1 < argc) replay = argv[++i];
     else which = argv[i];
   }
+  Inputs rec;
+  if (!replay.empty() && !read_replay(replay, rec)) return 2;
   int rc = 0;
   for (int r = 0; r < repeat; ++r) {
-    if (which == "all" || which == "standing") rc |= bench("standing", false);
-    if (which == "all" || which == "tracking") rc |= bench("tracking", true);
+    if (which == "all" || which == "standing") rc |= bench("standing", synthetic(false));
+    if (which == "all" || which == "tracking") rc |= bench("tracking", synthetic(true));
+    if (!replay.empty() && (which == "all" || which == "replay")) rc |= bench("replay", rec);
   }
   return rc;
 }

@@ -145,44 +145,51 @@ struct Instance {
 
 // Python's repr of a float (which FMPy's write_csv prints through numpy's str): the shortest
 // digits that round-trip, positional for 1e-4 <= |x| < 1e16 (with ".0" when integral), else
-// d.ddde[+-]XX.
-void append_float(std::string& out, double x) {
-  if (std::isnan(x)) return void(out += "nan");
-  if (std::isinf(x)) return void(out += x < 0 ? "-inf" : "inf");
-  char buf[40];
-  const auto res = std::to_chars(buf, buf + sizeof buf, x, std::chars_format::scientific);
-  std::string s(buf, res.ptr);
-  const size_t e = s.find('e');
-  const int exp10 = std::atoi(s.c_str() + e + 1);
-  std::string digits;  // mantissa digits without sign and point
-  const bool neg = s[0] == '-';
-  for (size_t i = neg ? 1 : 0; i < e; ++i)
-    if (s[i] != '.') digits += s[i];
-  if (neg) out += '-';
+// d.ddde[+-]XX. Writes into p (at least 32 bytes), returns the end.
+char* format_float(char* p, double x) {
+  if (std::isnan(x)) return std::memcpy(p, "nan", 3), p + 3;
+  if (std::isinf(x)) return x < 0 ? (std::memcpy(p, "-inf", 4), p + 4) : (std::memcpy(p, "inf", 3), p + 3);
+  char s[32];
+  char* end = std::to_chars(s, s + sizeof s, x, std::chars_format::scientific).ptr;
+  const char* q = s;
+  if (*q == '-') *p++ = *q++;
+  char digits[20];  // at most 17 significant digits
+  int n = 0;
+  for (; *q != 'e'; ++q)
+    if (*q != '.') digits[n++] = *q;
+  int exp10 = 0;
+  std::from_chars(q[1] == '+' ? q + 2 : q + 1, end, exp10);
   if (exp10 >= -4 && exp10 < 16) {
     if (exp10 < 0) {
-      out += "0.";
-      out.append(static_cast<size_t>(-exp10 - 1), '0');
-      out += digits;
-    } else if (static_cast<int>(digits.size()) <= exp10 + 1) {
-      out += digits;
-      out.append(static_cast<size_t>(exp10 + 1 - static_cast<int>(digits.size())), '0');
-      out += ".0";
-    } else {
-      out.append(digits, 0, static_cast<size_t>(exp10 + 1));
-      out += '.';
-      out.append(digits, static_cast<size_t>(exp10 + 1), std::string::npos);
+      *p++ = '0';
+      *p++ = '.';
+      for (int i = 0; i < -exp10 - 1; ++i) *p++ = '0';
+      std::memcpy(p, digits, static_cast<size_t>(n));
+      return p + n;
     }
-  } else {
-    out += digits[0];
-    if (digits.size() > 1) {
-      out += '.';
-      out.append(digits, 1, std::string::npos);
+    if (n <= exp10 + 1) {
+      std::memcpy(p, digits, static_cast<size_t>(n));
+      p += n;
+      for (int i = n; i < exp10 + 1; ++i) *p++ = '0';
+      return std::memcpy(p, ".0", 2), p + 2;
     }
-    char eb[16];  // |exp10| <= 324
-    std::snprintf(eb, sizeof eb, "e%c%02d", exp10 < 0 ? '-' : '+', exp10 < 0 ? -exp10 : exp10);
-    out += eb;
+    std::memcpy(p, digits, static_cast<size_t>(exp10 + 1));
+    p += exp10 + 1;
+    *p++ = '.';
+    std::memcpy(p, digits + exp10 + 1, static_cast<size_t>(n - exp10 - 1));
+    return p + (n - exp10 - 1);
   }
+  *p++ = digits[0];
+  if (n > 1) {
+    *p++ = '.';
+    std::memcpy(p, digits + 1, static_cast<size_t>(n - 1));
+    p += n - 1;
+  }
+  *p++ = 'e';
+  *p++ = exp10 < 0 ? '-' : '+';
+  const int e = exp10 < 0 ? -exp10 : exp10;
+  if (e < 10) *p++ = '0';
+  return std::to_chars(p, p + 4, e).ptr;
 }
 
 }  // namespace
@@ -270,34 +277,34 @@ int ahn_write_csv(const char* path, int32_t n_cols, const char* const* names, co
     std::snprintf(err, static_cast<size_t>(err_len), "cannot write %s: %s", path, std::strerror(errno));
     return 1;
   }
-  std::string line;
+  std::string head;
   for (int c = 0; c < n_cols; ++c) {
-    if (c) line += ',';
-    line += '"';
-    line += names[c];
-    line += '"';
+    if (c) head += ',';
+    head += '"';
+    head += names[c];
+    head += '"';
   }
-  line += '\n';
-  bool ok = std::fwrite(line.data(), 1, line.size(), f) == line.size();
-  char ib[24];
+  head += '\n';
+  bool ok = std::fwrite(head.data(), 1, head.size(), f) == head.size();
+  std::vector<char> line(static_cast<size_t>(n_cols) * 33 + 2);  // 32 per number, a separator each
   for (int64_t i = 0; i < n_rows && ok; ++i) {
-    line.clear();
+    char* p = line.data();
     for (int c = 0; c < n_cols; ++c) {
-      if (c) line += ',';
-      const char* p = static_cast<const char*>(columns[c]) + i * strides[c];
+      if (c) *p++ = ',';
+      const char* src = static_cast<const char*>(columns[c]) + i * strides[c];
       if (kinds[c] == 'f') {
         double x;
-        std::memcpy(&x, p, sizeof x);
-        append_float(line, x);
+        std::memcpy(&x, src, sizeof x);
+        p = format_float(p, x);
       } else {
         int32_t v;
-        std::memcpy(&v, p, sizeof v);
-        const auto res = std::to_chars(ib, ib + sizeof ib, v);
-        line.append(ib, res.ptr);
+        std::memcpy(&v, src, sizeof v);
+        p = std::to_chars(p, p + 12, v).ptr;
       }
     }
-    line += '\n';
-    ok = std::fwrite(line.data(), 1, line.size(), f) == line.size();
+    *p++ = '\n';
+    const size_t len = static_cast<size_t>(p - line.data());
+    ok = std::fwrite(line.data(), 1, len, f) == len;
   }
   if (std::fclose(f) != 0) ok = false;
   if (!ok) std::snprintf(err, static_cast<size_t>(err_len), "writing %s failed", path);
