@@ -9,7 +9,8 @@
 //   replay    - the set-points and push of a closed-loop result CSV (--replay FILE: the columns
 //               theta_ankle_ref, theta_hip_ref, push_force of e.g. results/paper_five_pushes/
 //               paper_five_pushes.csv), so the plant sees what it sees in the closed loop.
-//   build/plant/plant_bench [standing|tracking|all] [--repeat N] [--replay FILE]
+//   build/plant/plant_bench [standing|tracking|replay|all] [--repeat N] [--replay FILE]
+//                           [--integrator erk|bdf] [--json]   (--json: one JSON object per run)
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -56,8 +57,12 @@ static bool read_replay(const std::string& path, Inputs& in) {
   return !in.ankle.empty();
 }
 
+static Integrator g_integrator = Integrator::Erk;
+static bool g_json = false;
+
 static int bench(const char* profile, const Inputs& in) {
   Params P = default_params();
+  P.integrator = g_integrator;
   Plant p(P);
   if (!p.initialize(0.0)) { std::printf("initialize failed: %s\n", p.message().c_str()); return 1; }
   const double dt = 1e-3;
@@ -73,12 +78,21 @@ static int bench(const char* profile, const Inputs& in) {
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   std::sort(us.begin(), us.end());
   const Stats& st = p.stats();
+  const char* integ = P.integrator == Integrator::Erk ? "erk" : "bdf";
+  if (g_json) {
+    std::printf("{\"profile\": \"%s\", \"integrator\": \"%s\", \"simulated_s\": %.3f, \"wall_s\": %.6f, "
+                "\"real_time_factor\": %.2f, \"rhs_per_step\": %.3f, \"steps_per_step\": %.3f, \"restarts\": %lld, "
+                "\"root_evals_per_step\": %.3f, \"median_us\": %.3f, \"p99_us\": %.3f, \"max_us\": %.1f}\n",
+                profile, integ, n * dt, wall, n * dt / wall, double(st.rhs_evals) / n, double(st.steps) / n,
+                (long long)st.reinits, double(st.root_evals) / n, us[n / 2], us[n * 99 / 100], us[n - 1]);
+    return 0;
+  }
   std::printf("plant_bench %s: %.1f s simulated, 1 ms steps, rtol %.0e, %s\n", profile, n * dt, P.rtol,
               P.integrator == Integrator::Erk ? "ERK (ARKODE)" : "BDF (CVODE)");
   std::printf("  real-time factor     %.1f simulated s / wall s (wall %.3f s)\n", n * dt / wall, wall);
   std::printf("  RHS evals            %.2f per step (%lld)\n", double(st.rhs_evals) / n, (long long)st.rhs_evals);
-  std::printf("  CVODE steps          %.2f per step; restarts %lld, root evals %lld, mode switches %lld\n",
-              double(st.steps) / n, (long long)st.reinits, (long long)st.root_evals, (long long)st.mode_switches);
+  std::printf("  integrator steps     %.2f per step; restarts %lld, root evals %.2f per step, mode switches %lld\n",
+              double(st.steps) / n, (long long)st.reinits, double(st.root_evals) / n, (long long)st.mode_switches);
   std::printf("  per 1 ms step        median %.2f us, p99 %.2f us, max %.1f us\n", us[n / 2], us[n * 99 / 100], us[n - 1]);
   return 0;
 }
@@ -106,6 +120,11 @@ int main(int argc, char** argv) {
   for (int i = 1; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--repeat") && i + 1 < argc) repeat = std::atoi(argv[++i]);
     else if (!std::strcmp(argv[i], "--replay") && i + 1 < argc) replay = argv[++i];
+    else if (!std::strcmp(argv[i], "--integrator") && i + 1 < argc) {
+      const std::string v = argv[++i];
+      if (v != "erk" && v != "bdf") return std::printf("--integrator erk | bdf\n"), 2;
+      g_integrator = v == "bdf" ? Integrator::Bdf : Integrator::Erk;
+    } else if (!std::strcmp(argv[i], "--json")) g_json = true;
     else which = argv[i];
   }
   Inputs rec;
