@@ -13,7 +13,7 @@ pulse falls from 9.75 N on the back and -6.75 N on the chest, docs/scenarios.md)
 Checks (SoakReport.problems): no fall, no error, the controller's fault output stays 0 and its
 outputs finite; in the 0.5 s before every push and at the end, |theta_ankle| and |theta_hip| stay
 below `erect_tol` (0.005 rad: no drift of the erect posture); the process's resident memory does not
-grow after a warm-up minute (by more than 32 KiB: eight pages); CVODE's work per quiet simulated second (phase 0, no push for 5 s) in
+grow after a warm-up minute (by more than 32 KiB: eight pages); the integrator's work per quiet simulated second (phase 0, no push for 5 s) in
 the last quarter of the run is within 10 % of the first quarter (medians).
 """
 from __future__ import annotations
