@@ -106,16 +106,15 @@ fmi2Status guarded(fmi2Component c, const char* fn, F&& body) {
 // Apply a set after all values were checked; calls the tunable hook when needed.
 template <class Store>
 fmi2Status commitSet(Instance* inst, const char* fn, const std::vector<int>& idx, Store store) {
-  std::vector<Value> old;
-  bool tunable = inst->state == State::StepComplete;
+  // After initialization a set that includes a (tunable) parameter may be rejected by the model:
+  // keep the old values for that case only (inputs, set at every step, need no copy).
   bool anyTunable = false;
-  if (tunable) {
-    old.reserve(idx.size());
-    for (int i : idx) {
-      old.push_back(inst->store[i]);
+  if (inst->state == State::StepComplete)
+    for (int i : idx)
       if (inst->info.variables[i].causality == Causality::Parameter) anyTunable = true;
-    }
-  }
+  std::vector<Value> old;
+  if (anyTunable)
+    for (int i : idx) old.push_back(inst->store[i]);
   for (size_t k = 0; k < idx.size(); ++k) store(inst->store[idx[k]], k);
   if (inst->state == State::InitializationMode || inst->state == State::Instantiated) inst->initDirty = true;
   if (anyTunable) {
@@ -311,7 +310,7 @@ fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nv
   return guarded(c, "fmi2GetReal", [&](Instance* inst) {
     CALLLOG(inst, "fmi2GetReal(nvr=%zu)", nvr);
     if (!inst->allowed(kMaskGet, "fmi2GetReal")) return fmi2Error;
-    std::vector<int> idx;
+    std::vector<int>& idx = inst->scratch_idx;  // reused: no allocation per call
     if (!resolve(inst, "fmi2GetReal", vr, nvr, value, Type::Real, idx)) return fmi2Error;
     prepareGet(inst);
     for (size_t k = 0; k < nvr; ++k) value[k] = inst->store[idx[k]].r;
@@ -322,7 +321,7 @@ fmi2Status fmi2GetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t
   return guarded(c, "fmi2GetInteger", [&](Instance* inst) {
     CALLLOG(inst, "fmi2GetInteger(nvr=%zu)", nvr);
     if (!inst->allowed(kMaskGet, "fmi2GetInteger")) return fmi2Error;
-    std::vector<int> idx;
+    std::vector<int>& idx = inst->scratch_idx;  // reused: no allocation per call
     if (!resolve(inst, "fmi2GetInteger", vr, nvr, value, Type::Integer, idx)) return fmi2Error;
     prepareGet(inst);
     for (size_t k = 0; k < nvr; ++k) value[k] = inst->store[idx[k]].i;
@@ -333,7 +332,7 @@ fmi2Status fmi2GetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t
   return guarded(c, "fmi2GetBoolean", [&](Instance* inst) {
     CALLLOG(inst, "fmi2GetBoolean(nvr=%zu)", nvr);
     if (!inst->allowed(kMaskGet, "fmi2GetBoolean")) return fmi2Error;
-    std::vector<int> idx;
+    std::vector<int>& idx = inst->scratch_idx;  // reused: no allocation per call
     if (!resolve(inst, "fmi2GetBoolean", vr, nvr, value, Type::Boolean, idx)) return fmi2Error;
     prepareGet(inst);
     for (size_t k = 0; k < nvr; ++k) value[k] = inst->store[idx[k]].i ? fmi2True : fmi2False;
@@ -344,7 +343,7 @@ fmi2Status fmi2GetString(fmi2Component c, const fmi2ValueReference vr[], size_t 
   return guarded(c, "fmi2GetString", [&](Instance* inst) {
     CALLLOG(inst, "fmi2GetString(nvr=%zu)", nvr);
     if (!inst->allowed(kMaskGet, "fmi2GetString")) return fmi2Error;
-    std::vector<int> idx;
+    std::vector<int>& idx = inst->scratch_idx;  // reused: no allocation per call
     if (!resolve(inst, "fmi2GetString", vr, nvr, value, Type::String, idx)) return fmi2Error;
     prepareGet(inst);
     for (size_t k = 0; k < nvr; ++k) value[k] = inst->store[idx[k]].s.c_str();
@@ -357,7 +356,7 @@ fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nv
   return guarded(c, "fmi2SetReal", [&](Instance* inst) {
     CALLLOG(inst, "fmi2SetReal(nvr=%zu)", nvr);
     if (!inst->allowed(kMaskSet, "fmi2SetReal")) return fmi2Error;
-    std::vector<int> idx;
+    std::vector<int>& idx = inst->scratch_idx;  // reused: no allocation per call
     if (!resolve(inst, "fmi2SetReal", vr, nvr, value, Type::Real, idx)) return fmi2Error;
     if (!checkSettable(inst, "fmi2SetReal", idx)) return fmi2Error;
     for (size_t k = 0; k < nvr; ++k)
@@ -369,7 +368,7 @@ fmi2Status fmi2SetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t
   return guarded(c, "fmi2SetInteger", [&](Instance* inst) {
     CALLLOG(inst, "fmi2SetInteger(nvr=%zu)", nvr);
     if (!inst->allowed(kMaskSet, "fmi2SetInteger")) return fmi2Error;
-    std::vector<int> idx;
+    std::vector<int>& idx = inst->scratch_idx;  // reused: no allocation per call
     if (!resolve(inst, "fmi2SetInteger", vr, nvr, value, Type::Integer, idx)) return fmi2Error;
     if (!checkSettable(inst, "fmi2SetInteger", idx)) return fmi2Error;
     for (size_t k = 0; k < nvr; ++k)
@@ -381,7 +380,7 @@ fmi2Status fmi2SetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t
   return guarded(c, "fmi2SetBoolean", [&](Instance* inst) {
     CALLLOG(inst, "fmi2SetBoolean(nvr=%zu)", nvr);
     if (!inst->allowed(kMaskSet, "fmi2SetBoolean")) return fmi2Error;
-    std::vector<int> idx;
+    std::vector<int>& idx = inst->scratch_idx;  // reused: no allocation per call
     if (!resolve(inst, "fmi2SetBoolean", vr, nvr, value, Type::Boolean, idx)) return fmi2Error;
     if (!checkSettable(inst, "fmi2SetBoolean", idx)) return fmi2Error;
     return commitSet(inst, "fmi2SetBoolean", idx, [&](Value& x, size_t k) { x.i = value[k] != fmi2False; });
@@ -391,7 +390,7 @@ fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t 
   return guarded(c, "fmi2SetString", [&](Instance* inst) {
     CALLLOG(inst, "fmi2SetString(nvr=%zu)", nvr);
     if (!inst->allowed(kMaskSet, "fmi2SetString")) return fmi2Error;
-    std::vector<int> idx;
+    std::vector<int>& idx = inst->scratch_idx;  // reused: no allocation per call
     if (!resolve(inst, "fmi2SetString", vr, nvr, value, Type::String, idx)) return fmi2Error;
     if (!checkSettable(inst, "fmi2SetString", idx)) return fmi2Error;
     for (size_t k = 0; k < nvr; ++k)

@@ -81,6 +81,7 @@ class Instance {
   std::unique_ptr<Model> model;
   Context ctx;
   std::unordered_map<const void*, std::unique_ptr<StateSnapshot>> states;
+  std::vector<int> scratch_idx;  // the store indices of the current get/set call (fmi2_api.cpp)
 
  private:
   std::vector<int> vrIndex_;
