@@ -205,6 +205,34 @@ Model::Dyn Model::dynamics(ContactMode mode, const Vec5& q, const Vec5& qd, doub
   return d;
 }
 
+Vec2 Model::flat_joint_accelerations(const Vec5& q, const Vec5& qd, double ref1, double ref2,
+                                     double push) const {
+  const double a1 = q[2] + q[3], a2 = a1 + q[4];
+  const double w1 = qd[2] + qd[3], w2 = w1 + qd[4];
+  const double s1 = std::sin(a1), c1 = std::cos(a1), s2 = std::sin(a2), c2 = std::cos(a2);
+  // CoM offsets of link 1 and link 2 (and the hip) from the ankle; the columns of their CoM
+  // Jacobians for theta1 and theta2 are drot(r) = (r_z, -r_x) (see kinematics()).
+  const Vec2 r1(P.lg1 * s1, P.lg1 * c1), rh(P.l1 * s1, P.l1 * c1), r2(P.lg2 * s2, P.lg2 * c2);
+  const Vec2 j1(r1.y(), -r1.x());                                // link 1, theta1
+  const Vec2 j23(rh.y() + r2.y(), -rh.x() - r2.x()), j24(r2.y(), -r2.x());  // link 2, theta1 / theta2
+  const Vec2 acc1 = -r1 * (w1 * w1) + Vec2(0.0, P.g);            // bias acceleration + gravity
+  const Vec2 acc2 = -rh * (w1 * w1) - r2 * (w2 * w2) + Vec2(0.0, P.g);
+  const double M33 = P.m1 * j1.dot(j1) + P.I1 + P.m2 * j23.dot(j23) + P.I2;
+  const double M34 = P.m2 * j23.dot(j24) + P.I2;
+  const double M44 = P.m2 * j24.dot(j24) + P.I2;
+  double tau1 = 0, tau2 = 0;
+  joint_torques(q, qd, ref1, ref2, tau1, tau2);
+  double Q3 = tau1 - P.m1 * j1.dot(acc1) - P.m2 * j23.dot(acc2);
+  double Q4 = tau2 - P.m2 * j24.dot(acc2);
+  if (push != 0.0) {  // the push point's Jacobian, x row (push_point())
+    const double d = P.h_push - P.ankle_height - P.l1;
+    Q3 += push * (P.l1 * c1 + d * c2);
+    Q4 += push * d * c2;
+  }
+  const double det = M33 * M44 - M34 * M34;  // M is positive definite
+  return Vec2((M44 * Q3 - M34 * Q4) / det, (M33 * Q4 - M34 * Q3) / det);
+}
+
 Vec5 Model::impact(ContactMode mode, const Vec5& q, const Vec5& qd) const {
   if (mode == ContactMode::Airborne) return qd;
   Mat5 M;

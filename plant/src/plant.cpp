@@ -90,12 +90,20 @@ double Plant::gauss() {
 int Plant::rhs(double, const double* y, double* yd) {
   ++stats_.rhs_evals;
   const Vec5 q = Eigen::Map<const Vec5>(y), qd = Eigen::Map<const Vec5>(y + 5);
-  const auto d = model_.dynamics(mode_, q, qd, in_[0], in_[1], in_[2], pivot_);
-  for (int i = 0; i < 5; ++i) {
-    yd[i] = qd[i];
-    yd[5 + i] = d.qdd[i];
+  if (mode_ == ContactMode::Flat) {  // the foot is fixed: only the joints move
+    const Vec2 a = model_.flat_joint_accelerations(q, qd, in_[0], in_[1], in_[2]);
+    for (int i = 0; i < 10; ++i) yd[i] = 0.0;
+    yd[3] = qd[3];
+    yd[4] = qd[4];
+    yd[8] = a[0];
+    yd[9] = a[1];
+  } else {
+    const auto d = model_.dynamics(mode_, q, qd, in_[0], in_[1], in_[2], pivot_);
+    for (int i = 0; i < 5; ++i) {
+      yd[i] = qd[i];
+      yd[5 + i] = d.qdd[i];
+    }
   }
-  if (mode_ == ContactMode::Flat) yd[0] = yd[1] = yd[2] = 0.0;
   for (int i = 0; i < 10; ++i)
     if (!std::isfinite(yd[i])) return 1;  // recoverable: CVODE retries with a smaller step
   return 0;

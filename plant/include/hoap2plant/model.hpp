@@ -119,6 +119,11 @@ class Model {
   // Constrained dynamics in the given mode. pivot: ground point of the rocking edge.
   Dyn dynamics(ContactMode mode, const Vec5& q, const Vec5& qd, double ref1, double ref2,
                double push, const Vec2& pivot) const;
+  // The joint accelerations (theta1'', theta2'') with the foot flat, as dynamics(Flat, ...).qdd
+  // but without the ground reaction: the right-hand side of the flat mode, where the integrator
+  // spends most of its evaluations. Only links 1 and 2 enter (the foot does not move with the
+  // joints): the 2 x 2 joint block of M, the joints' bias forces and torques.
+  Vec2 flat_joint_accelerations(const Vec5& q, const Vec5& qd, double ref1, double ref2, double push) const;
   // Plastic impact onto the constraint set of `mode` (velocities satisfying J qd = 0); with
   // P.lock_joints_at_impact the joint rates are held too (impulsive joint torques).
   Vec5 impact(ContactMode mode, const Vec5& q, const Vec5& qd) const;
