@@ -230,7 +230,7 @@ def _run(a, sc, models, out: Path) -> int:
     res = simulate(sc, models, stop_time=a.stop_time, progress=None if not a.no_progress else False,
                    engine=a.engine)
     csv = paths["csv"] if res.complete else paths["incomplete_csv"]
-    atomic_write_csv(csv, res.data, native=a.engine == "native")
+    atomic_write_csv(csv, res.data)
     # only now that this run's data are in place: the previous run's files go (its complete CSV
     # must not sit next to this run's incomplete one), the new summary is written last
     clear_previous(out, sc.name, keep=(csv,))

@@ -424,14 +424,16 @@ def simulate(scenario: Scenario, models: Models | None = None, *, fmu_dir=None,
 def _structured(L: _Layout, times, R, I, extra: dict[str, np.ndarray] | None = None) -> np.ndarray:
     """The result table: time, the real columns, `extra` real columns (e.g. sensed.*), the integers."""
     extra = extra or {}
-    dt = ([("time", np.float64)] + [(c, np.float64) for c in L.real_cols] + [(c, np.float64) for c in extra]
-          + [(c, np.int32) for c in L.int_cols])
+    dt = np.dtype([("time", np.float64)] + [(c, np.float64) for c in L.real_cols] + [(c, np.float64) for c in extra]
+                  + [(c, np.int32) for c in L.int_cols])
     out = np.empty(len(times), dtype=dt)
     out["time"] = times
     for c, x in extra.items():
         out[c] = x
-    for j, c in enumerate(L.real_cols):
-        out[c] = R[:, j]
-    for j, c in enumerate(L.int_cols):
-        out[c] = I[:, j]
+    # the real and the integer columns are contiguous in a record: one strided copy each
+    n, nr, ni = len(times), len(L.real_cols), len(L.int_cols)
+    if nr:
+        np.ndarray((n, nr), np.float64, out, dt.fields[L.real_cols[0]][1], (dt.itemsize, 8))[...] = R[:, :nr]
+    if ni:
+        np.ndarray((n, ni), np.int32, out, dt.fields[L.int_cols[0]][1], (dt.itemsize, 4))[...] = I[:, :ni]
     return out
