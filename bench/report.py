@@ -170,9 +170,9 @@ def peers(models, sc, nat_result, tmp: Path, fmi_sim: str | None, repeat: int) -
 SCALING_SCRIPT = r"""
 import json, sys, time
 sys.path.insert(0, sys.argv[1])
-from anklehip import native
 from anklehip.master import Models, simulate
 from anklehip.paths import find_scenario
+from anklehip.results import atomic_write_csv
 from anklehip.scenario import load_scenario
 def status(key):   # kB
     return int(next(l.split()[1] for l in open("/proc/self/status") if l.startswith(key)))
@@ -182,10 +182,7 @@ open("/proc/self/clear_refs", "w").write("5")      # the peak RSS (VmHWM) starts
 base = status("VmRSS:")
 t = time.perf_counter()
 r = simulate(sc, m, stop_time=T, engine=engine, **({} if engine == "native" else {"progress": False}))
-if engine == "native":
-    native.write_csv(out, r.data)
-else:
-    from fmpy.util import write_csv; write_csv(out, r.data)
+atomic_write_csv(out, r.data)    # what `anklehip run` writes with
 w = time.perf_counter() - t
 print(json.dumps({"wall_s": w, "peak_rss_mb": status("VmHWM:") / 1024, "base_rss_mb": base / 1024,
                   "outcome": r.outcome}))
@@ -255,7 +252,7 @@ def fmt_table(R: dict) -> str:
         L.append(f"   {name:<38} " + (f"{v:8.3f}   {v / nat:6.1f}x" if v else f"   -      ({p.get('fmi_sim_error', '')[:90]})"))
     s = R["scaling"]
     L.append("")
-    L.append("4. scaling (fresh process per point; CSV written)")
+    L.append("4. scaling (a fresh process per point; the run and its CSV as `anklehip run` writes it)")
     for e in ("native", "fmpy"):
         d = s[e]
         pts = ", ".join(f"{q['stop_time']:g} s: {q['wall_s']:.2f} s/{q['peak_rss_mb'] - q['base_rss_mb']:.0f} MB"
