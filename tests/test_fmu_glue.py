@@ -289,6 +289,13 @@ def test_unknown_value_reference_and_type_mismatch(raw_controller):
     assert inst.fmi2GetReal(vr, 10**9, out) == fmi2Error  # absurd array length: rejected up front
     assert any("nvr" in m for m in inst.errors())
     assert inst.fmi2GetReal(vr, 0, None) == fmi2OK  # nvr = 0 with NULL arrays is fine
+    # ... also right after a set of some values: nothing of that call is set again (found by the
+    # fuzzer when the glue began to reuse its index buffer between calls)
+    inp = (ctypes.c_uint * 1)(inst.vr("zmp_x"))
+    one = (ctypes.c_double * 1)(0.01)
+    assert inst.fmi2SetReal(inp, 1, one) == fmi2OK
+    assert inst.fmi2SetReal(inp, 0, None) == fmi2OK
+    assert inst.fmi2SetInteger(inp, 0, None) == fmi2OK and inst.fmi2SetBoolean(inp, 0, None) == fmi2OK
     assert inst.fmi2GetReal(vr, 1, None) == fmi2Error  # NULL value array
     assert inst.fmi2GetReal(None, 1, out) == fmi2Error  # NULL vr array
     assert inst.fmi2DoStep(0.0, 1e-3, 1) == fmi2OK  # the instance is still usable

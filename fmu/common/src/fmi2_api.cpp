@@ -58,6 +58,7 @@ int enumValue(const Enum& e) {
 // Common checks of fmi2Get*/fmi2Set* arguments; returns the store indices in `idx`.
 bool resolve(Instance* inst, const char* fn, const fmi2ValueReference vr[], size_t nvr, const void* values,
              Type t, std::vector<int>& idx) {
+  idx.clear();  // a reused buffer: never leave the previous call's indices in it
   if (nvr == 0) return true;
   if (vr == nullptr) { inst->error("%s: vr is NULL with nvr = %zu", fn, nvr); return false; }
   if (values == nullptr) { inst->error("%s: value array is NULL with nvr = %zu", fn, nvr); return false; }
