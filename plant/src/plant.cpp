@@ -1,6 +1,6 @@
 // HOAP-2 plant simulator: a SUNDIALS integrator advances y = (q, qd) of the current contact mode;
 // its root functions locate every mode change; discrete changes restart it. Two integrators
-// (Params::integrator, docs/plant.md section 5):
+// (Params::integrator, docs/plant.md section 7):
 //   ERK (default): ARKODE's explicit Runge-Kutta, Cash-Karp 6(4)5 pair. A one-step method: a
 //       restart costs one RHS evaluation, so the servo set-points may jump at every communication
 //       point (the closed loop) at no extra cost.
@@ -105,7 +105,7 @@ int Plant::rhs(double, const double* y, double* yd) {
     }
   }
   for (int i = 0; i < 10; ++i)
-    if (!std::isfinite(yd[i])) return 1;  // recoverable: CVODE retries with a smaller step
+    if (!std::isfinite(yd[i])) return 1;  // recoverable: the integrator retries with a smaller step
   return 0;
 }
 
