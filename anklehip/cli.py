@@ -441,10 +441,13 @@ def cmd_record(a) -> int:
 
 def cmd_sweep(a) -> int:
     from .paths import MissingFileError, find_scenario
+    from .points import JournalMismatch
     from .scenario import ScenarioError, load_scenario
     from .fmu import FMUError
     from .master import Models, check_overrides
-    from .sweep import parse_grid, parse_variant, plot_sweep, run_sweep, write_table
+    from .native import default_engine
+    from .results import output_lock
+    from .sweep import parse_grid, parse_variant, plot_sweep, run_sweep, sweep_key, write_points_table
     try:
         path = find_scenario(a.scenario)
         sc = load_scenario(path)
@@ -458,24 +461,42 @@ def cmd_sweep(a) -> int:
         return _err(str(e))
     if sc.push.peak() == 0:
         return _err(f"{path}: the scenario has no push to scale")
-    from .native import default_engine
-    rows = run_sweep(str(path), forces, variants, a.fmu_dir, workers=a.workers, engine=a.engine or default_engine())
-    out = Path(a.out) if a.out else Path("results") / f"sweep_{sc.name}"
-    t = write_table(rows, out / "sweep.csv")
-    p = plot_sweep(rows, out / "sweep.png", title=f"{sc.name}: outcome vs peak push force")
-    for v in dict.fromkeys(r["variant"] for r in rows):
-        rr = [r for r in rows if r["variant"] == v]
-        ok = [r["peak_force"] for r in rr if r["outcome"] != "fell"]
+    out = check_output_folder(a.out if a.out else Path("results") / f"sweep_{sc.name}", "--out")
+    with output_lock(out):
+        try:
+            res = run_sweep(str(path), forces, variants, a.fmu_dir, workers=a.workers,
+                            engine=a.engine or default_engine(), scheduler=a.scheduler,
+                            journal=out / "sweep.points.jsonl", key=sweep_key(path, models), restart=a.restart)
+        except JournalMismatch as e:
+            return _err(str(e))
+        rows = res.rows
+        if not rows:
+            print(f"anklehip sweep: interrupted before any point finished; nothing written", file=sys.stderr)
+            return 130
+        t = write_points_table(rows, out, "sweep", complete=res.complete)
+        p = plot_sweep([r for r in rows if r.get("outcome") != "error"], out / "sweep.png",
+                       title=f"{sc.name}: outcome vs peak push force")
+    for v in dict.fromkeys(r["variant"] for r in rows if "variant" in r):
+        rr = [r for r in rows if r.get("variant") == v]
+        ok = [r["peak_force"] for r in rr if r["outcome"] not in ("fell", "error")]
         print(f"{v:<16} " + "  ".join(f"{r['peak_force']:g}N:{'FELL' if r['outcome'] == 'fell' else 'ok/' + str(r['max_phase'])}"
-                                       for r in rr) + (f"   largest survived {max(ok, key=abs):g} N" if ok else ""))
-    print(f"table {t}\nplot  {p}")
-    return EXIT_OK
+                                       for r in rr if r["outcome"] != "error") + (f"   largest survived {max(ok, key=abs):g} N" if ok else ""))
+    print(f"table {t[0]}\n      {t[1]}\nplot  {p}")
+    print(f"{len(rows)} of {res.total} points ({res.resumed} from an earlier run), {res.wall:.1f} s", file=sys.stderr)
+    for r in rows:
+        if r.get("outcome") == "error":
+            print(f"anklehip sweep: point {r['id']}: {r.get('error', '?')}", file=sys.stderr)
+    if res.interrupted:
+        print(f"anklehip sweep: interrupted: {len(rows)} of {res.total} points done, kept in "
+              f"{out / 'sweep.points.jsonl'}; run the same command again to finish the rest", file=sys.stderr)
+        return 130
+    return EXIT_FAIL if res.errors else EXIT_OK
 
 
 def cmd_robustness(a) -> int:
     from .faults import KEY_BY_NAME
     from .paths import MissingFileError, find_scenario
-    from .robustness import STUDIES, run_studies, study_by_label, summarize, table_markdown, write_points
+    from .robustness import STUDIES, run_studies, study_by_label, summarize, table_markdown
     from .scenario import ScenarioError, faults_from, load_scenario
     from .sweep import parse_grid
     try:
@@ -497,22 +518,44 @@ def cmd_robustness(a) -> int:
             plan.append((st, levels))
     except (ScenarioError, MissingFileError, ValueError) as e:
         return _err(str(e))
+    from .master import Models
+    from .points import JournalMismatch
+    from .results import atomic_write_text, output_lock
+    from .sweep import sweep_key, write_points_table
     out = check_output_folder(a.out if a.out else Path("results") / f"robustness_{sc.name}", "--out")
-    rows = run_studies(str(path), plan, a.fmu_dir, workers=a.workers)
-    summary = summarize(rows)
-    table = table_markdown(summary)
-    from .results import atomic_write_text
-    pts = write_points(rows, out / "points.csv")
-    atomic_write_text(out / "table.md", table)
+    with output_lock(out):
+        try:
+            res = run_studies(str(path), plan, a.fmu_dir, workers=a.workers, scheduler=a.scheduler,
+                              journal=out / "points.jsonl",
+                              key=sweep_key(path, Models.load(a.fmu_dir, plant_model=sc.plant_model)),
+                              restart=a.restart)
+        except JournalMismatch as e:
+            return _err(str(e))
+        rows = res.rows
+        if not rows:
+            print("anklehip robustness: interrupted before any point finished; nothing written", file=sys.stderr)
+            return 130
+        pts, _ = write_points_table(rows, out, "points", complete=res.complete)
+        if res.interrupted:
+            (out / "table.md").unlink(missing_ok=True)
+            print(f"points {pts}", file=sys.stderr)
+            print(f"anklehip robustness: interrupted: {len(res.rows)} of {res.total} points done, kept in "
+                  f"{out / 'points.jsonl'}; run the same command again to finish the rest", file=sys.stderr)
+            return 130
+        table = table_markdown(summarize([r for r in rows if "study" in r]))   # not the points that raised
+        atomic_write_text(out / "table.md", table)
     print(table)
     print(f"points {pts}\ntable  {out / 'table.md'}")
-    bad = [r for r in rows if not r["invariants_ok"]]
+    failed = [r for r in rows if "study" not in r]
+    for r in failed:
+        print(f"anklehip robustness: point {r['id']}: {r.get('error', '?')}", file=sys.stderr)
+    bad = [r for r in rows if "study" in r and not r["invariants_ok"]]
     for r in bad:
         print(f"anklehip: invariant violated: {r['study']} at {r['level']:g}: {r['outcome']} {r['message']} "
               f"(non-finite outputs {r['nonfinite_outputs']}, unflagged rows {r['unflagged_rows']}, "
               f"fault changes {r['fault_changes']} / logged {r['fault_logs']}, non-finite episodes "
               f"{r['nonfinite_episodes']} / warned {r['nonfinite_warnings']})", file=sys.stderr)
-    return EXIT_OK if not bad else EXIT_FAIL
+    return EXIT_OK if not bad and not failed else EXIT_FAIL
 
 
 def cmd_soak(a) -> int:
@@ -777,7 +820,13 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--workers", type=_number(ge=1, integer=True), default=2)
     s.add_argument("--engine", choices=("fmpy", "native"),
                    help="the closed-loop master of each run (default: native when it is built, else fmpy)")
-    s.add_argument("--out", help="output folder (default results/sweep_<scenario>)")
+    s.add_argument("--scheduler", metavar="ADDRESS",
+                   help="run on the Dask scheduler at ADDRESS (e.g. tcp://host:8786; default: "
+                        "$DASK_SCHEDULER_ADDRESS, else a local cluster of --workers processes)")
+    s.add_argument("--restart", action="store_true",
+                   help="discard the points an earlier (interrupted) run of this sweep left in --out")
+    s.add_argument("--out", help="output folder (default results/sweep_<scenario>); a rerun into the same "
+                                 "folder skips the points already done")
     s.set_defaults(fn=cmd_sweep)
 
     s = sub.add_parser("robustness", help="each fault (docs/scenarios.md) swept over its levels on a scenario "
@@ -788,7 +837,11 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--grid", action="append", metavar="KEY=GRID",
                    help="levels of a fault key instead of its default grid: start:stop:step or a,b,c (repeatable)")
     s.add_argument("--workers", type=_number(ge=1, integer=True), default=2)
-    s.add_argument("--out", help="output folder (default results/robustness_<scenario>)")
+    s.add_argument("--scheduler", metavar="ADDRESS",
+                   help="run on the Dask scheduler at ADDRESS (default: $DASK_SCHEDULER_ADDRESS, else a local cluster)")
+    s.add_argument("--restart", action="store_true", help="discard the points an earlier run left in --out")
+    s.add_argument("--out", help="output folder (default results/robustness_<scenario>); a rerun into the same "
+                                 "folder skips the points already done")
     s.set_defaults(fn=cmd_robustness)
 
     s = sub.add_parser("soak", help="one pair of FMU instances for a long time under seeded random pushes: "

@@ -120,12 +120,21 @@ def run_point(scenario_path: str, fmu_dir: str | None, study: Study, level: floa
             "wall_time": round(res.wall_time, 3)}
 
 
+def robustness_point(spec: dict) -> dict[str, Any]:
+    """One point of run_studies (anklehip.points runs it on the workers)."""
+    return run_point(spec["scenario"], spec["fmu_dir"], study_by_label(spec["study"]), spec["level"])
+
+
 def run_studies(scenario_path: str, studies: list[tuple[Study, list[float]]], fmu_dir: str | None = None,
-                workers: int = 2) -> list[dict[str, Any]]:
-    import dask
-    from .sweep import _compute
-    return _compute([dask.delayed(run_point)(str(scenario_path), fmu_dir, s, float(x))
-                     for s, levels in studies for x in levels], workers)
+                workers: int = 2, *, scheduler: str | None = None, journal: Path | None = None, key: str = "",
+                restart: bool = False):
+    """Every study at every level, on Dask (anklehip.points, like the sweeps: journal, resumption,
+    clean Ctrl-C). Returns an anklehip.points.Outcome."""
+    from .points import run_points
+    specs = [{"id": f"{s.label}@{float(x)!r}", "scenario": str(scenario_path), "fmu_dir": fmu_dir,
+              "study": s.label, "level": float(x)} for s, levels in studies for x in levels]
+    return run_points(robustness_point, specs, workers=workers, scheduler=scheduler, journal=journal, key=key,
+                      what=f"robustness of {Path(scenario_path).name}", label="robustness", restart=restart)
 
 
 def _side(rows: list[dict], levels: list[float]) -> tuple[float | None, dict | None, bool]:
@@ -191,8 +200,3 @@ def table_markdown(summary: list[dict[str, Any]]) -> str:
         lines.append(f"| {s['study']} | `{s['key']}`{unit} | {lv[0]:g} … {lv[-1]:g} ({len(lv)}) | {span} | "
                      f"{fails} | {bits} | {inv} |")
     return "\n".join(lines) + "\n"
-
-
-def write_points(rows: list[dict[str, Any]], path: Path) -> Path:
-    from .sweep import write_table
-    return write_table(rows, path)

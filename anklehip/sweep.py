@@ -6,6 +6,7 @@ and runs the closed loop in a worker process (each worker extracts the FMUs once
 from __future__ import annotations
 
 import functools
+import os
 
 from dataclasses import dataclass
 from pathlib import Path
@@ -87,44 +88,79 @@ def _one(scenario_path: str, fmu_dir: str | None, peak: float, variant: Variant,
             "max_abs_foot_pitch": float(np.max(np.abs(d["foot_pitch"]))) if "foot_pitch" in d.dtype.names else float("nan"),
             "mode_switches": int(d["mode_switches"][-1]) if "mode_switches" in d.dtype.names else -1,
             "final_phase": int(d["phase"][-1]) if "phase" in d.dtype.names else -1,
-            "wall_time": res.wall_time}
+            "wall_time": res.wall_time, **({"error": res.message} if res.outcome == "error" else {})}
+
+
+def _variant_hash(v: Variant) -> str:
+    import hashlib
+    import json
+    d = json.dumps([v.name, v.controller, v.plant, v.config], sort_keys=True)
+    return hashlib.sha256(d.encode()).hexdigest()[:8]
+
+
+def sweep_point(spec: dict) -> dict[str, Any]:
+    """One point of run_sweep (anklehip.points runs it on the workers)."""
+    v = spec["variant"]
+    return _one(spec["scenario"], spec["fmu_dir"], spec["peak_force"],
+                Variant(v["name"], v["controller"], v["plant"], v["config"]), spec["engine"])
 
 
 def run_sweep(scenario_path: str, forces: list[float], variants: list[Variant], fmu_dir: str | None = None,
-              workers: int = 2, engine: str = "fmpy") -> list[dict[str, Any]]:
-    import dask
-    return _compute([dask.delayed(_one)(str(scenario_path), fmu_dir, float(f), v, engine)
-                     for v in variants for f in forces], workers)
-
-
-def _compute(tasks: list, workers: int) -> list[dict[str, Any]]:
-    """Dask: in this process (workers <= 1) or on a local cluster of `workers` processes."""
-    import dask
-    if workers <= 1:
-        return list(dask.compute(*tasks, scheduler="synchronous"))
-    from dask.distributed import Client, LocalCluster
-    with LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None) as cl, \
-            Client(cl) as client:
-        futs = client.compute(tasks)
-        import sys
-        if sys.stderr.isatty():
-            try:
-                from dask.distributed import progress
-                progress(futs)
-            except Exception:
-                pass
-        return client.gather(futs)
+              workers: int = 2, engine: str = "fmpy", *, scheduler: str | None = None,
+              journal: Path | None = None, key: str = "", restart: bool = False):
+    """Every variant at every peak force, on Dask (anklehip.points: a local cluster, or the
+    scheduler at `scheduler` / $DASK_SCHEDULER_ADDRESS); finished points go to `journal` and a
+    rerun with the same `key` skips them. Returns an anklehip.points.Outcome."""
+    from .points import run_points
+    specs = [{"id": f"{v.name}@{float(f)!r}#{_variant_hash(v)}", "scenario": str(scenario_path), "fmu_dir": fmu_dir,
+              "peak_force": float(f), "engine": engine,
+              "variant": {"name": v.name, "controller": v.controller, "plant": v.plant, "config": v.config}}
+             for v in variants for f in forces]
+    return run_points(sweep_point, specs, workers=workers, scheduler=scheduler, journal=journal, key=key,
+                      what=f"sweep of {Path(scenario_path).name}", label="sweep", restart=restart)
 
 
 def write_table(rows: list[dict[str, Any]], path: Path) -> Path:
-    """CSV with a header; fields quoted where needed (variant names may contain commas)."""
+    """CSV with a header (the union of the rows' keys, in order of appearance); fields quoted where
+    needed (variant names may contain commas)."""
     import csv
     path.parent.mkdir(parents=True, exist_ok=True)
+    fields = list(dict.fromkeys(k for r in rows for k in r))
     with open(path, "w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=list(rows[0].keys()), lineterminator="\n")
+        w = csv.DictWriter(f, fieldnames=fields, lineterminator="\n")
         w.writeheader()
         w.writerows(rows)
     return path
+
+
+def write_points_table(rows: list[dict[str, Any]], out: Path, name: str, complete: bool) -> tuple[Path, Path]:
+    """The per-point table as CSV and Parquet: <name>.csv / <name>.parquet when every point is done,
+    <name>.incomplete.* otherwise (never named like a finished sweep); the other pair is removed."""
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+    from .results import _atomic
+    stem, other = (name, f"{name}.incomplete") if complete else (f"{name}.incomplete", name)
+    for suffix in (".csv", ".parquet"):
+        (out / f"{other}{suffix}").unlink(missing_ok=True)
+    csv_path, pq_path = out / f"{stem}.csv", out / f"{stem}.parquet"
+    with _atomic(csv_path) as (fd, tmp):
+        os.close(fd)
+        write_table(rows, Path(tmp))
+    fields = list(dict.fromkeys(k for r in rows for k in r))
+    table = pa.Table.from_pylist([{k: r.get(k) for k in fields} for r in rows])
+    with _atomic(pq_path) as (fd, tmp):
+        os.close(fd)
+        pq.write_table(table, tmp)
+    return csv_path, pq_path
+
+
+def sweep_key(scenario_path: Path, models) -> str:
+    """What the rows of a sweep depend on besides the point itself: the scenario file and the FMUs."""
+    import hashlib
+    h = hashlib.sha256()
+    for p in (scenario_path, models.controller.path, models.plant.path):
+        h.update(Path(p).read_bytes())
+    return h.hexdigest()[:16]
 
 
 def plot_sweep(rows: list[dict[str, Any]], path: Path, title: str = "") -> Path:

@@ -168,7 +168,10 @@ def main(argv: list[str] | None = None) -> int:
             path = Path(tmp) / f"sweep_{shape}.toml"
             path.write_text(scenario_text(shape))
             sign = SHAPES[shape][2]     # the grid scales the peak force with its sign
-            rows = run_sweep(str(path), [sign * f for f in forces], variants, a.fmu_dir, workers=a.workers)
+            res = run_sweep(str(path), [sign * f for f in forces], variants, a.fmu_dir, workers=a.workers)
+            if not res.complete:
+                sys.exit(f"{shape}: interrupted or incomplete ({len(res.rows)} of {res.total} runs)")
+            rows = res.rows
             for r in rows:
                 r["shape"] = shape
             all_rows += rows

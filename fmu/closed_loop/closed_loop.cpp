@@ -79,24 +79,17 @@ int ahn_write_csv(const char* path, int32_t n_cols, const char* const* names, co
 
 namespace {
 
+struct Instance;
 void logger(fmi2ComponentEnvironment env, fmi2String instance, fmi2Status status, fmi2String category,
-            fmi2String message, ...) {
-  if (!env || status < fmi2Warning) return;
-  static const char* const kStatus[] = {"OK", "Warning", "Discard", "Error", "Fatal", "Pending"};
-  char buf[2048];
-  va_list ap;
-  va_start(ap, message);
-  std::vsnprintf(buf, sizeof buf, message ? message : "", ap);
-  va_end(ap);
-  std::fprintf(stderr, "[%s] %s %s: %s\n", kStatus[status <= fmi2Pending ? status : fmi2Pending],
-               instance ? instance : "?", category ? category : "", buf);
-}
+            fmi2String message, ...);
 
 struct Instance {
   void* lib = nullptr;
   fmuimport::Fmi2Api api;
   fmi2Component c = nullptr;
   fmi2CallbackFunctions callbacks{};
+  bool print_errors = false;
+  std::string errors;  // the FMU's error messages, in order (named in a failed set-up's message)
 
   ~Instance() {
     if (c) api.freeInstance(c);
@@ -112,12 +105,13 @@ struct Instance {
     callbacks.logger = logger;
     callbacks.allocateMemory = std::calloc;
     callbacks.freeMemory = std::free;
-    callbacks.componentEnvironment = log_errors ? this : nullptr;
+    callbacks.componentEnvironment = this;
+    print_errors = log_errors;
     const std::string uri = std::string("file://") + f.unzipdir + "/resources";
     c = api.instantiate(f.instance_name, fmi2CoSimulation, f.guid, uri.c_str(), &callbacks, fmi2False, fmi2False);
-    if (!c) return err = std::string(f.model_identifier) + ": fmi2Instantiate failed", false;
+    if (!c) return err = std::string(f.model_identifier) + ": fmi2Instantiate failed" + why(), false;
     if (api.setupExperiment(c, fmi2False, 0.0, t0, fmi2True, stop) > fmi2Warning)
-      return err = std::string(f.model_identifier) + ": fmi2SetupExperiment failed", false;
+      return err = std::string(f.model_identifier) + ": fmi2SetupExperiment failed" + why(), false;
     for (int i = 0; i < f.n_params; ++i) {
       const fmi2ValueReference vr = f.param_vr[i];
       fmi2Status s = fmi2OK;
@@ -130,12 +124,14 @@ struct Instance {
       }
       if (s > fmi2Warning)
         return err = std::string(f.model_identifier) + " refused the parameter with value reference " +
-                     std::to_string(vr), false;
+                     std::to_string(vr) + why(), false;
     }
     if (api.enterInitializationMode(c) > fmi2Warning || api.exitInitializationMode(c) > fmi2Warning)
-      return err = std::string(f.model_identifier) + ": initialization failed", false;
+      return err = std::string(f.model_identifier) + ": initialization failed" + why(), false;
     return true;
   }
+
+  std::string why() const { return errors.empty() ? "" : ": " + errors; }
 
   void stop(bool terminate) {
     if (!c) return;
@@ -144,6 +140,22 @@ struct Instance {
     c = nullptr;
   }
 };
+
+void logger(fmi2ComponentEnvironment env, fmi2String instance, fmi2Status status, fmi2String category,
+            fmi2String message, ...) {
+  if (!env || status < fmi2Warning) return;
+  auto* inst = static_cast<Instance*>(env);
+  static const char* const kStatus[] = {"OK", "Warning", "Discard", "Error", "Fatal", "Pending"};
+  char buf[2048];
+  va_list ap;
+  va_start(ap, message);
+  std::vsnprintf(buf, sizeof buf, message ? message : "", ap);
+  va_end(ap);
+  if (status >= fmi2Error) inst->errors += (inst->errors.empty() ? "" : "; ") + std::string(buf);
+  if (inst->print_errors)
+    std::fprintf(stderr, "[%s] %s %s: %s\n", kStatus[status <= fmi2Pending ? status : fmi2Pending],
+                 instance ? instance : "?", category ? category : "", buf);
+}
 
 // Python's repr of a float (which FMPy's write_csv prints through numpy's str): the shortest
 // digits that round-trip, positional for 1e-4 <= |x| < 1e16 (with ".0" when integral), else
