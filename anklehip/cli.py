@@ -439,7 +439,88 @@ def cmd_record(a) -> int:
     return EXIT_OK
 
 
+def find_sweep_file(name: str) -> Path:
+    from .paths import MissingFileError, scenarios_dir
+    p = Path(name)
+    if p.suffix == ".toml" or p.parent != Path("."):
+        if p.is_file():
+            return p
+        raise MissingFileError(f"sweep file {p} not found")
+    cand = scenarios_dir() / "sweeps" / f"{name}.toml"
+    if cand.is_file():
+        return cand
+    known = ", ".join(sorted(q.stem for q in (scenarios_dir() / "sweeps").glob("*.toml"))) or "none"
+    raise MissingFileError(f"no sweep file named {name!r} in {scenarios_dir() / 'sweeps'} (known: {known}); "
+                           "a scenario needs --forces")
+
+
+def cmd_sweep_file(a) -> int:
+    from .fmu import FMUError
+    from .master import Models, check_overrides
+    from .native import default_engine
+    from .paths import MissingFileError
+    from .points import JournalMismatch, run_points
+    from .results import output_lock
+    from .scenario import ScenarioError, faults_from, load_scenario
+    from .sweep import sweep_key, write_points_table
+    from .sweepfile import load_sweep_file, sweepfile_point
+    try:
+        path = find_sweep_file(a.scenario)
+        sf = load_sweep_file(path)
+        sc = load_scenario(sf.scenario)
+        models = Models.load(a.fmu_dir, plant_model=sc.plant_model)
+        where = str(path)
+        for k, vals in list(sf.axes.items()) + [(k, list(r)) for k, r in sf.ranges.items()]:
+            group, _, name = k.partition(".")
+            for x in (vals[0], vals[-1]):    # names and ranges checked here, not in every worker
+                if group in ("controller", "plant"):
+                    check_overrides(models, {name: x} if group == "controller" else {},
+                                    {name: x} if group == "plant" else {}, f"{where}: {k}")
+                elif group == "faults":
+                    faults_from({name: x}, sc.faults, f"{where}: {k}")
+                elif name == "height":
+                    check_overrides(models, {}, {"h_push": x}, f"{where}: {k}")
+        for v in sf.variants:
+            models.controller.configuration(v.config or sc.controller_config, f"{where}: variant {v.name}")
+            check_overrides(models, v.controller, v.plant, f"{where}: variant {v.name}")
+    except (ScenarioError, MissingFileError, FMUError, ValueError) as e:
+        return _err(str(e))
+    out = check_output_folder(a.out if a.out else Path("results") / f"sweep_{sf.name}", "--out")
+    specs = sf.specs(a.fmu_dir, a.engine or default_engine())
+    with output_lock(out):
+        try:
+            res = run_points(sweepfile_point, specs, workers=a.workers, scheduler=a.scheduler,
+                             journal=out / "points.jsonl", key=sweep_key(path, models) + sweep_key(sf.scenario, models),
+                             what=f"sweep file {path.name}", label=f"sweep {sf.name}", restart=a.restart)
+        except JournalMismatch as e:
+            return _err(str(e))
+        if not res.rows:
+            print("anklehip sweep: interrupted before any point finished; nothing written", file=sys.stderr)
+            return 130
+        csv_path, pq_path = write_points_table(res.rows, out, "points", complete=res.complete)
+        figs = []
+        if res.complete:
+            from .capability import plot_points
+            figs = plot_points(sf, res.rows, out)
+    print(f"{sf.name}: {len(res.rows)} of {res.total} points ({res.resumed} from an earlier run), {res.wall:.1f} s")
+    for v in sf.variants:
+        rr = [r for r in res.rows if r.get("variant") == v.name]
+        stood = sum(r["outcome"] == "completed" for r in rr)
+        print(f"  {v.name:<16} {stood} of {len(rr)} stood")
+    print(f"table {csv_path}\n      {pq_path}" + "".join(f"\nfigure {f}" for f in figs))
+    for r in res.rows:
+        if r.get("outcome") == "error":
+            print(f"anklehip sweep: point {r['id']}: {r.get('error', '?')}", file=sys.stderr)
+    if res.interrupted:
+        print(f"anklehip sweep: interrupted: {len(res.rows)} of {res.total} points done, kept in "
+              f"{out / 'points.jsonl'}; run the same command again to finish the rest", file=sys.stderr)
+        return 130
+    return EXIT_FAIL if res.errors else EXIT_OK
+
+
 def cmd_sweep(a) -> int:
+    if a.forces is None:
+        return cmd_sweep_file(a)
     from .paths import MissingFileError, find_scenario
     from .points import JournalMismatch
     from .scenario import ScenarioError, load_scenario
@@ -813,9 +894,10 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--controller-config", metavar="NAME", help=CONTROLLER_CONFIG_HELP)
     s.set_defaults(fn=cmd_record)
 
-    s = sub.add_parser("sweep", help="peak push force x controller variant -> outcome (Dask)")
-    s.add_argument("scenario")
-    s.add_argument("--forces", required=True, help="start:stop:step (inclusive) or a,b,c [N]")
+    s = sub.add_parser("sweep", help="a sweep file (scenarios/sweeps/), or a scenario's peak push force x controller "
+                                     "variants, on Dask -> a table of outcomes")
+    s.add_argument("scenario", help="a sweep file (name in scenarios/sweeps/ or path), or a scenario with --forces")
+    s.add_argument("--forces", help="with a scenario: peak forces, start:stop:step (inclusive) or a,b,c [N]")
     s.add_argument("--variant", action="append", help="repeatable: " + _variants_help())
     s.add_argument("--workers", type=_number(ge=1, integer=True), default=2)
     s.add_argument("--engine", choices=("fmpy", "native"),
