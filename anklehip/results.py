@@ -5,6 +5,7 @@ import json
 import math
 import os
 import tempfile
+import time
 from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
@@ -129,7 +130,13 @@ def output_lock(folder: Path):
         try:
             fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except BlockingIOError:
-            pid = os.pread(fd, 32, 0).decode(errors="replace").strip()
+            # the holder writes its pid right after taking the lock: give it a moment to do so
+            pid = ""
+            for _ in range(50):
+                pid = os.pread(fd, 32, 0).decode(errors="replace").strip()
+                if pid.isdigit():
+                    break
+                time.sleep(0.01)
             who = f"(pid {pid}) " if pid.isdigit() else ""
             raise OutputBusyError(f"{folder}: another anklehip run {who}is writing into this folder; "
                                   "wait for it to finish or choose another output folder") from None
