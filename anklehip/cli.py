@@ -439,19 +439,17 @@ def cmd_record(a) -> int:
     return EXIT_OK
 
 
-def find_sweep_file(name: str) -> Path:
-    from .paths import MissingFileError, scenarios_dir
-    p = Path(name)
-    if p.suffix == ".toml" or p.parent != Path("."):
-        if p.is_file():
-            return p
-        raise MissingFileError(f"sweep file {p} not found")
-    cand = scenarios_dir() / "sweeps" / f"{name}.toml"
-    if cand.is_file():
-        return cand
-    known = ", ".join(sorted(q.stem for q in (scenarios_dir() / "sweeps").glob("*.toml"))) or "none"
-    raise MissingFileError(f"no sweep file named {name!r} in {scenarios_dir() / 'sweeps'} (known: {known}); "
-                           "a scenario needs --forces")
+def _points_end(res, journal: Path, command: str) -> int:
+    """The end of a run of points (anklehip.points.Outcome): each failed point's error, the
+    interruption message, and the exit status (130 interrupted, 1 a point failed, else 0)."""
+    for r in res.rows:
+        if r.get("outcome") == "error":
+            print(f"anklehip {command}: point {r['id']}: {r.get('error', '?')}", file=sys.stderr)
+    if res.interrupted:
+        print(f"anklehip {command}: interrupted: {len(res.rows)} of {res.total} points done, kept in "
+              f"{journal}; run the same command again to finish the rest", file=sys.stderr)
+        return 130
+    return EXIT_FAIL if res.errors else EXIT_OK
 
 
 def cmd_sweep_file(a) -> int:
@@ -464,6 +462,7 @@ def cmd_sweep_file(a) -> int:
     from .scenario import ScenarioError, faults_from, load_scenario
     from .sweep import sweep_key, write_points_table
     from .sweepfile import load_sweep_file, sweepfile_point
+    from .paths import find_sweep_file
     try:
         path = find_sweep_file(a.scenario)
         sf = load_sweep_file(path)
@@ -508,14 +507,7 @@ def cmd_sweep_file(a) -> int:
         stood = sum(r["outcome"] == "completed" for r in rr)
         print(f"  {v.name:<16} {stood} of {len(rr)} stood")
     print(f"table {csv_path}\n      {pq_path}" + "".join(f"\nfigure {f}" for f in figs))
-    for r in res.rows:
-        if r.get("outcome") == "error":
-            print(f"anklehip sweep: point {r['id']}: {r.get('error', '?')}", file=sys.stderr)
-    if res.interrupted:
-        print(f"anklehip sweep: interrupted: {len(res.rows)} of {res.total} points done, kept in "
-              f"{out / 'points.jsonl'}; run the same command again to finish the rest", file=sys.stderr)
-        return 130
-    return EXIT_FAIL if res.errors else EXIT_OK
+    return _points_end(res, out / "points.jsonl", "sweep")
 
 
 def cmd_sweep(a) -> int:
@@ -564,14 +556,7 @@ def cmd_sweep(a) -> int:
                                        for r in rr if r["outcome"] != "error") + (f"   largest survived {max(ok, key=abs):g} N" if ok else ""))
     print(f"table {t[0]}\n      {t[1]}\nplot  {p}")
     print(f"{len(rows)} of {res.total} points ({res.resumed} from an earlier run), {res.wall:.1f} s", file=sys.stderr)
-    for r in rows:
-        if r.get("outcome") == "error":
-            print(f"anklehip sweep: point {r['id']}: {r.get('error', '?')}", file=sys.stderr)
-    if res.interrupted:
-        print(f"anklehip sweep: interrupted: {len(rows)} of {res.total} points done, kept in "
-              f"{out / 'sweep.points.jsonl'}; run the same command again to finish the rest", file=sys.stderr)
-        return 130
-    return EXIT_FAIL if res.errors else EXIT_OK
+    return _points_end(res, out / "sweep.points.jsonl", "sweep")
 
 
 def cmd_robustness(a) -> int:

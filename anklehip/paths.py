@@ -66,18 +66,29 @@ def scenarios_dir() -> Path:
     return repo_root() / "scenarios"
 
 
-def find_scenario(name_or_path: str) -> Path:
-    """A scenario given by name (scenarios/<name>.toml) or by path."""
+def _find_toml(name_or_path: str, folder: Path, what: str, hint: str = "") -> Path:
+    """A TOML file given by name (<folder>/<name>.toml) or by path; a clear error naming what is known."""
     p = Path(name_or_path)
     if p.suffix == ".toml" or p.parent != Path("."):
         if p.is_file():
             return p
-        raise MissingFileError(f"scenario file {p} not found")
-    cand = scenarios_dir() / f"{name_or_path}.toml"
+        raise MissingFileError(f"{what} file {p} not found")
+    cand = folder / f"{name_or_path}.toml"
     if cand.is_file():
         return cand
-    known = ", ".join(sorted(q.stem for q in scenarios_dir().glob("*.toml"))) or "none"
-    raise MissingFileError(f"no scenario named {name_or_path!r} in {scenarios_dir()} (known: {known})")
+    known = ", ".join(sorted(q.stem for q in folder.glob("*.toml"))) or "none"
+    raise MissingFileError(f"no {what} named {name_or_path!r} in {folder} (known: {known}){hint}")
+
+
+def find_scenario(name_or_path: str) -> Path:
+    """A scenario given by name (scenarios/<name>.toml) or by path."""
+    return _find_toml(name_or_path, scenarios_dir(), "scenario")
+
+
+def find_sweep_file(name_or_path: str) -> Path:
+    """A sweep file given by name (scenarios/sweeps/<name>.toml) or by path."""
+    return _find_toml(name_or_path, scenarios_dir() / "sweeps", "sweep file", "; a scenario needs --forces")
+
 
 
 def find_rt_runner() -> Path | None:
