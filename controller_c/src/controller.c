@@ -22,6 +22,9 @@
 
 static double clampd(double v, double lo, double hi) { return v < lo ? lo : (v > hi ? hi : v); }
 
+/* Phase 3 -> 0 waits until the lean is back within this [m] (lean_enabled; 0 otherwise). */
+#define LEAN_RETURN_TOL 0.001
+
 /* Context of one tick: measured/derived quantities shared by the laws. */
 typedef struct {
     double h;
@@ -63,6 +66,7 @@ static void compute_derived(ahc_controller *c)
     ahc_com(p, 0.0, 0.0, NULL, &c->rz_erect);
     c->zmp_alpha = p->zmp_filter_tau > 0.0 ? 1.0 - exp(-p->sample_period / p->zmp_filter_tau) : 1.0;
     c->d_alpha = p->zmp_filter_tau > 0.0 ? 1.0 - exp(-2.0 * p->sample_period / p->zmp_filter_tau) : 1.0;
+    c->lean_alpha = 1.0 - exp(-2.0 * p->sample_period / p->lean_tau);
 }
 
 int ahc_update_params(ahc_controller *c, const ahc_params *p)
@@ -195,12 +199,14 @@ static void phase_transitions(ahc_controller *c, const tick_ctx *k)
         break;
     }
     case AHC_PHASE_HIP_TO_ANKLE:
-        /* A new push while returning: back to the hip strategy (k_w = 1 and r_x_d = 0 already). */
+        /* A new push while returning: back to the hip strategy (k_w = 1 and r_x_d = the lean already). */
         if (zmp_beyond_limit(c, &sign)) {
             c->push_sign = sign;
             enter_hip(c);
-        } else if (fabs(c->th2) <= p->return_hip_angle_tol && fabs(c->dth2) <= p->return_hip_rate_tol) {
-            /* 3 -> 0: hip back at erect. */
+        } else if (fabs(c->th2) <= p->return_hip_angle_tol && fabs(c->dth2) <= p->return_hip_rate_tol &&
+                   fabs(c->lean) <= LEAN_RETURN_TOL) {
+            /* 3 -> 0: hip back at erect (and, with lean_enabled, the lean released: eq. 11 would
+             * otherwise give way to a push that is still on). */
             enter_ankle(c);
         }
         break;
@@ -247,6 +253,23 @@ static void law_ankle_reactionless(ahc_controller *c, const tick_ctx *k)
     const double rdot = c->drxd + c->p.Kpr * (c->rxd - k->rx);
     c->dth1 = (n2 > 1e-12 ? k->rz / n2 * rdot : 0.0) + c->k_w * k->ratio * c->dth2;
     c->th1 += k->h * c->dth1;
+}
+
+/* Sustained-push lean (our extension, not the paper's; docs/controller.md section 4.6). A constant
+ * push moment d shifts the ZMP by d/(m g) ahead of the CoM (d = m g (p - r_x)); moving the CoM
+ * back by the same amount puts the ZMP back under the ankle. The lean follows d through two
+ * first-order stages of lean_tau/2, so that only a sustained push moves the CoM, bounded to
+ * lean_margin inside the sole: the sustained-push limit rises from m g (x_toe - r_x)/h towards
+ * m g (x_toe - x_heel)/h (docs/capability.md). Phases 1-3 add it to r_x_d; phase 0 ignores it. */
+static void update_lean(ahc_controller *c, const tick_ctx *k)
+{
+    const ahc_params *p = &c->p;
+    double next;
+    c->lean_f1 += c->lean_alpha * (k->d - c->lean_f1);
+    c->lean_f += c->lean_alpha * (c->lean_f1 - c->lean_f);
+    next = clampd(-c->lean_f / (c->m * p->g), p->heel_x + p->lean_margin, p->toe_x - p->lean_margin);
+    c->dlean = (next - c->lean) / k->h;
+    c->lean = next;
 }
 
 /* ------------------------------------------------------------------------------------------- */
@@ -471,6 +494,10 @@ void ahc_step(ahc_controller *c, const ahc_sensors *s, ahc_outputs *out)
     k.d = p->reaction_compensation ? disturbance_moment_balance(c, s, &k)
                                    : disturbance_paper(c, &k);
 
+    if (p->lean_enabled)
+        update_lean(c, &k);
+    else
+        c->lean = c->dlean = 0.0; /* switched off by ahc_update_params: no lean left behind */
     phase_transitions(c, &k);
 
     {
@@ -480,23 +507,29 @@ void ahc_step(ahc_controller *c, const ahc_sensors *s, ahc_outputs *out)
             law_hip_regulator(c, &k);
             law_ankle_strategy(c, &k);
             break;
-        case AHC_PHASE_ANKLE_TO_HIP:
-            ahc_quintic_eval(&c->kw_spline, c->phase_time, &c->k_w, NULL, NULL);
+        case AHC_PHASE_ANKLE_TO_HIP: {
+            double dkw;
+            ahc_quintic_eval(&c->kw_spline, c->phase_time, &c->k_w, &dkw, NULL);
             ahc_quintic_eval(&c->rxd_spline, c->phase_time, &c->rxd, &c->drxd, NULL);
+            if (p->lean_enabled) { /* the lean blends in with k_w */
+                c->rxd += c->k_w * c->lean;
+                c->drxd += dkw * c->lean + c->k_w * c->dlean;
+            }
             law_hip_strategy(c, &k);
             law_ankle_reactionless(c, &k);
             break;
+        }
         case AHC_PHASE_HIP:
             c->k_w = 1.0;
-            c->rxd = 0.0;
-            c->drxd = 0.0;
+            c->rxd = c->lean; /* 0 unless lean_enabled */
+            c->drxd = c->dlean;
             law_hip_strategy(c, &k);
             law_ankle_reactionless(c, &k);
             break;
         default: /* AHC_PHASE_HIP_TO_ANKLE */
             c->k_w = 1.0;
-            c->rxd = 0.0;
-            c->drxd = 0.0;
+            c->rxd = c->lean;
+            c->drxd = c->dlean;
             law_hip_regulator(c, &k);
             law_ankle_reactionless(c, &k);
             break;
@@ -564,7 +597,7 @@ int ahc_state_validate(const ahc_controller *c, char *msg, size_t msg_size)
     ref = *c; /* derived constants must be those of the parameters */
     compute_derived(&ref);
     if (ref.m != c->m || ref.km != c->km || ref.J2 != c->J2 || ref.rz_erect != c->rz_erect ||
-        ref.zmp_alpha != c->zmp_alpha || ref.d_alpha != c->d_alpha)
+        ref.zmp_alpha != c->zmp_alpha || ref.d_alpha != c->d_alpha || ref.lean_alpha != c->lean_alpha)
         return STATE_FAIL("derived constants do not match the parameters");
 
     {
@@ -601,10 +634,12 @@ int ahc_state_validate(const ahc_controller *c, char *msg, size_t msg_size)
             {"kw_spline.T", c->kw_spline.T, 1e-6, 100.0},
             {"rxd_spline.T", c->rxd_spline.T, 1e-6, 100.0},
             {"last_out.k_w", c->last_out.k_w, 0.0, 1.0},
+            {"lean", c->lean, p->heel_x, p->toe_x},
         };
         const struct { const char *name; double v; } bounded[] = {
             {"dth1", c->dth1}, {"dth2", c->dth2}, {"hip_bump", c->hip_bump}, {"rxd", c->rxd}, {"drxd", c->drxd},
             {"calib_sum", c->calib_sum}, {"calib_bias", c->calib_bias}, {"d_f1", c->d_f1}, {"d_f", c->d_f},
+            {"lean_f1", c->lean_f1}, {"lean_f", c->lean_f}, {"dlean", c->dlean},
             {"last_out.theta_ankle_ref", c->last_out.theta_ankle_ref},
             {"last_out.theta_hip_ref", c->last_out.theta_hip_ref},
             {"last_out.dtheta_ankle_ref", c->last_out.dtheta_ankle_ref},

@@ -77,6 +77,11 @@ void ahc_params_default(ahc_params *p)
      * a time, show the compensated estimate survives smaller pushes in every shape and is not
      * needed for stability (docs/controller.md sections 4.4-4.5). */
     p->reaction_compensation = 0;
+
+    /* Our extension, off by default (docs/controller.md section 4.6). */
+    p->lean_enabled = 0;
+    p->lean_tau = 0.3;
+    p->lean_margin = 0.015;
 }
 
 void ahc_params_paper(ahc_params *p)
@@ -193,6 +198,10 @@ static const ahc_param_info k_table[] = {
          "Disturbance estimate: 1 moment balance minus the measured motion's reaction, 0 paper m g (p - r_x)"),
     PI_D(fz_max, "N", 1.0, 1e5,
          "Normal force above this is an implausible sensor reading (fault, hold): several times the robot's weight"),
+    PI_I(lean_enabled, 0.0, 1.0,
+         "Sustained-push lean (our extension, not the paper's): 1 the CoM reference of phases 1-3 leans against the low-passed disturbance"),
+    PI_D(lean_tau, "s", 0.01, 100.0, "Time constant of the disturbance low-pass the lean follows"),
+    PI_D(lean_margin, "m", 0.0, 1.0, "The leaned CoM reference stays this far inside the toe and heel edges"),
 };
 
 #define TABLE_LEN (sizeof k_table / sizeof k_table[0])
@@ -291,6 +300,10 @@ int ahc_params_validate(const ahc_params *p, char *msg, size_t msg_size)
     if (!(p->fz_lifted < p->fz_max))
         return fail(msg, msg_size, AHC_ERR_INCONSISTENT, "fz_lifted = %.6g must be < fz_max = %.6g",
                     p->fz_lifted, p->fz_max);
+    if (!(p->lean_margin < p->toe_x && p->lean_margin < -p->heel_x))
+        return fail(msg, msg_size, AHC_ERR_INCONSISTENT,
+                    "lean_margin = %.6g must be < toe_x = %.6g and < -heel_x = %.6g (the lean range must hold 0)",
+                    p->lean_margin, p->toe_x, -p->heel_x);
     if (!(p->rz_band_low < p->rz_band_high))
         return fail(msg, msg_size, AHC_ERR_INCONSISTENT,
                     "rz_band_low = %.6g must be < rz_band_high = %.6g", p->rz_band_low, p->rz_band_high);

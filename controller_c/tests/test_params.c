@@ -137,8 +137,12 @@ int main(void)
                 CHECK(gap < 8, "8 uncovered bytes at offset %zu: a field missing from the table", j);
             }
         }
-        CHECK(covered_bytes >= sizeof(ahc_params) - 4 * 4, "covered %zu of %zu bytes", covered_bytes,
-              sizeof(ahc_params));
+        {   /* at most 4 bytes of padding after each int field */
+            size_t n_int = 0;
+            for (i = 0; i < count; ++i) n_int += (size_t)t[i].is_int;
+            CHECK(covered_bytes >= sizeof(ahc_params) - 4 * n_int, "covered %zu of %zu bytes", covered_bytes,
+                  sizeof(ahc_params));
+        }
         CHECK(ahc_param_find("hip_strategy_enabled")->is_int && ahc_param_find("feet_offset_mode")->is_int &&
                   ahc_param_find("kinematics_source")->is_int && !ahc_param_find("Ka")->is_int,
               "int flags");

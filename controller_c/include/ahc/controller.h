@@ -157,6 +157,14 @@ typedef struct {
                                    about the sole point, docs/controller.md "disturbance
                                    estimate"); 0 (default): paper literal, d = m g (p - r_x)   */
     double fz_max;              /* fz above this is an implausible reading (fault, hold) [N]     */
+
+    /* sustained-push lean: our extension, not the paper's (docs/controller.md section 4.6) */
+    int lean_enabled;           /* 1: in phases 1-3 r_x_d leans the CoM against the low-passed
+                                   disturbance, -d_lean/(m g), bounded by the sole; 0 (default):
+                                   the paper's r_x_d (bit-identical outputs)                     */
+    double lean_tau;            /* time constant of the disturbance low-pass the lean follows
+                                   (two first-order stages of lean_tau/2) [s]                    */
+    double lean_margin;         /* the leaned CoM reference stays this far inside toe and heel [m] */
 } ahc_params;
 
 /* Fill with the HOAP-2 defaults (hoap2/nominal.h) and the SI gains. */
@@ -274,6 +282,10 @@ typedef struct {
                                  = 1): first stage, output [N m]                             */
     double d_alpha;           /* coefficient of each stage, 1 - exp(-2 h/tau)                  */
     int d_f_valid;
+    /* sustained-push lean (lean_enabled) */
+    double lean_f1, lean_f;   /* two-stage low-pass of d [N m]: first stage, output            */
+    double lean_alpha;        /* coefficient of each stage, 1 - exp(-2 h/lean_tau)             */
+    double lean, dlean;       /* CoM offset -lean_f/(m g) clamped to the sole [m], its rate    */
     /* faults */
     unsigned fault;           /* bits of the last tick                                       */
     int holding;              /* 1 while a hold fault is active                              */

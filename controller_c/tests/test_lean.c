@@ -1,0 +1,126 @@
+/*
+ * test_lean — establishes the sustained-push lean (lean_enabled; our extension, docs/controller.md
+ * section 4.6), driven through the quasi-static robot of ahc_test.h (no reaction in the ZMP):
+ *  A. off (the default), the lean parameters change nothing: outputs bit-identical;
+ *  B. on, a sustained push on the chest: the CoM reference settles at -d/(m g), which puts the
+ *     measured ZMP back under the ankle (|p| < 1 mm, against F h/(M g) = -24 mm without it);
+ *  C. on, a sustained push from behind: the CoM reference leans back and stops at
+ *     heel_x + lean_margin, never beyond; the ZMP moves back by as much (45 -> 23 mm at 9 N);
+ *  D. on the chest, a push beyond what the lean can take: bounded by toe_x - lean_margin;
+ *  E. the CoM reference and the reference angles move continuously (no jump at any switch), the
+ *     robot returns to phase 0 after the push, and phase 3 -> 0 waits for the lean to be
+ *     released (|r_x_d| <= 1 mm);
+ *  F. a lean_margin that leaves no room in the sole is refused with a message naming it.
+ */
+#include "ahc_test.h"
+
+#define NMAX 20000
+static ahc_outputs rec[NMAX];
+static ahc_outputs rec2[NMAX];
+
+/* Closed loop through the quasi-static robot: push F from 0.5 s (0.5 s ramps) held until t1. */
+static int run_qs(const ahc_params *p, double F, double t1, double t_end, ahc_outputs *out)
+{
+    ahc_controller c;
+    qs_robot r;
+    ahc_sensors s;
+    int n, N = (int)(t_end / p->sample_period + 0.5);
+    if (ahc_init(&c, p) != AHC_OK) return 0;
+    qs_init(&r, p);
+    for (n = 0; n < N && n < NMAX; ++n) {
+        qs_sense(&r, push_profile(n * p->sample_period, F, 0.5, 0.5, t1), &s);
+        ahc_step(&c, &s, &out[n]);
+        qs_apply(&r, &out[n]);
+    }
+    return n;
+}
+
+/* ZMP the quasi-static robot measures for these outputs (the next tick's sensor reading). */
+static double zmp_of(const ahc_params *p, const ahc_outputs *o, double push)
+{
+    qs_robot r;
+    ahc_sensors s;
+    qs_init(&r, p);
+    r.th1 = o->theta_ankle_ref;
+    r.th2 = o->theta_hip_ref;
+    qs_sense(&r, push, &s);
+    return s.zmp_x;
+}
+
+int main(void)
+{
+    ahc_params p, q;
+    const double h = 0.001;
+    int n, N, i;
+
+    /* A */
+    ahc_params_default(&p);
+    q = p;
+    q.lean_tau = 2.0;
+    q.lean_margin = 0.03;
+    N = run_qs(&p, 9.0, 4.0, 8.0, rec);
+    CHECK(run_qs(&q, 9.0, 4.0, 8.0, rec2) == N && N > 0, "runs");
+    CHECK(memcmp(rec, rec2, (size_t)N * sizeof rec[0]) == 0, "lean off: lean_tau and lean_margin change nothing");
+    CHECK(rec[3000].phase == AHC_PHASE_HIP, "a 9 N push takes the default to the hip strategy");
+    CHECK(fabs(zmp_of(&p, &rec[3900], 9.0) - 9.0 * 0.335 / ((p.m1 + p.m2 + p.feet_mass) * p.g)) < 0.004,
+          "without the lean the ZMP stays F h/(M g) ahead: %g", zmp_of(&p, &rec[3900], 9.0));
+
+    /* B */
+    p.lean_enabled = 1;
+    N = run_qs(&p, -5.0, 4.0, 10.0, rec);
+    {
+        const ahc_outputs *o = &rec[3900];
+        const double m = p.m1 + p.m2;
+        CHECK(o->phase == AHC_PHASE_HIP, "phase 2 under the sustained push (%d)", o->phase);
+        CHECK(fabs(o->com_x_desired + o->disturbance_moment / (m * p.g)) < 2e-4,
+              "r_x_d = -d/(m g): %g vs %g", o->com_x_desired, -o->disturbance_moment / (m * p.g));
+        CHECK(o->com_x_desired > 0.02, "leaned forward by more than 20 mm: %g", o->com_x_desired);
+        CHECK(fabs(zmp_of(&p, o, -5.0)) < 0.001, "the ZMP is back under the ankle: %g", zmp_of(&p, o, -5.0));
+    }
+
+    /* E: continuity, return, 3 -> 0 waits for the lean */
+    for (n = 1; n < N; ++n) {
+        CHECK(fabs(rec[n].theta_ankle_ref - rec[n - 1].theta_ankle_ref) <= h * 2.0 + 1e-12 &&
+                  fabs(rec[n].theta_hip_ref - rec[n - 1].theta_hip_ref) <= h * 4.0 + 1e-12,
+              "reference angles continuous at tick %d", n);
+        if (rec[n].phase != AHC_PHASE_ANKLE && rec[n - 1].phase != AHC_PHASE_ANKLE)
+            CHECK(fabs(rec[n].com_x_desired - rec[n - 1].com_x_desired) < 2e-4, "r_x_d continuous at tick %d: %g -> %g",
+                  n, rec[n - 1].com_x_desired, rec[n].com_x_desired);
+        if (rec[n].phase == AHC_PHASE_ANKLE && rec[n - 1].phase == AHC_PHASE_HIP_TO_ANKLE)
+            /* the switch reads the lean of this tick; the last output shows the one before */
+            CHECK(fabs(rec[n - 1].com_x_desired) <= 0.001 + 1e-5, "3 -> 0 only with the lean released: %g",
+                  rec[n - 1].com_x_desired);
+    }
+    CHECK(rec[N - 1].phase == AHC_PHASE_ANKLE, "back in phase 0 after the push (%d)", rec[N - 1].phase);
+
+    /* C */
+    N = run_qs(&p, 9.0, 4.0, 10.0, rec);
+    {
+        double lo = 1.0;
+        for (i = 0; i < N; ++i)
+            if (rec[i].phase != AHC_PHASE_ANKLE && rec[i].com_x_desired < lo) lo = rec[i].com_x_desired;
+        CHECK(lo >= p.heel_x + p.lean_margin - 1e-12, "bounded by heel + margin: %g", lo);
+        CHECK(lo <= p.heel_x + p.lean_margin + 1e-9, "reaches heel + margin under 9 N: %g", lo);
+        CHECK(fabs(zmp_of(&p, &rec[3900], 9.0) - 0.0229) < 0.001, "ZMP 22.5 mm further back: %g",
+              zmp_of(&p, &rec[3900], 9.0));
+    }
+
+    /* D */
+    N = run_qs(&p, -6.0, 4.0, 10.0, rec);
+    CHECK(rec[3900].phase == AHC_PHASE_HIP && rec[3900].com_x_desired > 0.015,
+          "a front push leans towards the toe: phase %d, r_x_d %g", rec[3900].phase, rec[3900].com_x_desired);
+    N = run_qs(&p, -12.0, 4.0, 10.0, rec);
+    for (i = 0; i < N; ++i)
+        CHECK(rec[i].phase == AHC_PHASE_ANKLE || rec[i].com_x_desired <= p.toe_x - p.lean_margin + 1e-12,
+              "bounded by toe - margin at tick %d: %g", i, rec[i].com_x_desired);
+
+    /* F */
+    {
+        char msg[200];
+        q = p;
+        q.lean_margin = 0.04;
+        CHECK(ahc_params_validate(&q, msg, sizeof msg) == AHC_ERR_INCONSISTENT && strstr(msg, "lean_margin"),
+              "lean_margin beyond the heel refused: %s", msg);
+    }
+    TEST_MAIN_END();
+}
