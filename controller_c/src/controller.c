@@ -24,6 +24,8 @@ static double clampd(double v, double lo, double hi) { return v < lo ? lo : (v >
 
 /* Phase 3 -> 0 waits until the lean is back within this [m] (lean_enabled; 0 otherwise). */
 #define LEAN_RETURN_TOL 0.001
+/* The lean holds its estimate while the ZMP is this close to the toe or heel [m]. */
+#define LEAN_EDGE 0.002
 
 /* Context of one tick: measured/derived quantities shared by the laws. */
 typedef struct {
@@ -256,17 +258,35 @@ static void law_ankle_reactionless(ahc_controller *c, const tick_ctx *k)
 }
 
 /* Sustained-push lean (our extension, not the paper's; docs/controller.md section 4.6). A constant
- * push moment d shifts the ZMP by d/(m g) ahead of the CoM (d = m g (p - r_x)); moving the CoM
- * back by the same amount puts the ZMP back under the ankle. The lean follows d through two
+ * external moment D about the sole point shifts the ZMP by D/(m g) ahead of where the CoM alone
+ * puts it; moving the CoM back by D/(m g) puts the ZMP back under the ankle. The lean follows the
+ * moment-balance estimate of D (external_moment: the ZMP minus the reaction of the robot's own
+ * motion; m g (p - r_x) would feed the lean's own motion back and oscillate) through two
  * first-order stages of lean_tau/2, so that only a sustained push moves the CoM, bounded to
  * lean_margin inside the sole: the sustained-push limit rises from m g (x_toe - r_x)/h towards
  * m g (x_toe - x_heel)/h (docs/capability.md). Phases 1-3 add it to r_x_d; phase 0 ignores it. */
-static void update_lean(ahc_controller *c, const tick_ctx *k)
+static void update_lean(ahc_controller *c, const tick_ctx *k, double ext)
 {
     const ahc_params *p = &c->p;
     double next;
-    c->lean_f1 += c->lean_alpha * (k->d - c->lean_f1);
-    c->lean_f += c->lean_alpha * (c->lean_f1 - c->lean_f);
+    if (c->phase == AHC_PHASE_ANKLE) {
+        /* The lean integrates the push from the tick the hip strategy is called: a push that the
+         * ankle strategy handles alone leaves no lean behind. */
+        c->lean_f1 = c->lean_f = c->lean = c->dlean = 0.0;
+        return;
+    }
+    /* The moment balance assumes the sole flat on the ground. With the ZMP at an edge the foot may
+     * be rocking about it and the estimate means nothing: at the edge the push drives the ZMP to
+     * (the toe for a push from behind, D > 0) the lean holds; at the opposite edge the push is
+     * gone and the robot rebounds, and the lean is released (its filter runs towards 0). */
+    {
+        const int at_toe = c->zmp_f >= p->toe_x - LEAN_EDGE, at_heel = c->zmp_f <= p->heel_x + LEAN_EDGE;
+        if (!((at_toe && c->lean_f > 0.0) || (at_heel && c->lean_f < 0.0))) {
+            const double in = (at_toe || at_heel) ? 0.0 : ext;
+            c->lean_f1 += c->lean_alpha * (in - c->lean_f1);
+            c->lean_f += c->lean_alpha * (c->lean_f1 - c->lean_f);
+        }
+    }
     next = clampd(-c->lean_f / (c->m * p->g), p->heel_x + p->lean_margin, p->toe_x - p->lean_margin);
     c->dlean = (next - c->lean) / k->h;
     c->lean = next;
@@ -357,8 +377,9 @@ static double disturbance_paper(ahc_controller *c, const tick_ctx *k)
  * reaction of the robot's own motion (dH_O/dt); eq. 11 and eq. 16 fed with it form an algebraic
  * loop (gain ~1.1 at the ankle, ~1.3 at the hip for HOAP-2). Subtracting dH_O/dt computed from the
  * measured joint angles (backward differences over the last three ticks) leaves the external
- * disturbance moment about O. The sum is low-passed by two first-order stages of zmp_filter_tau/2. */
-static double disturbance_moment_balance(ahc_controller *c, const ahc_sensors *s, const tick_ctx *k)
+ * disturbance moment about O (raw here; disturbance_moment_balance low-passes it by two first-order
+ * stages of zmp_filter_tau/2, update_lean by two of lean_tau/2). Updates the angle history. */
+static double external_moment(ahc_controller *c, const ahc_sensors *s, const tick_ctx *k)
 {
     const ahc_params *p = &c->p;
     const double h = p->sample_period;
@@ -395,6 +416,14 @@ static double disturbance_moment_balance(ahc_controller *c, const ahc_sensors *s
     grav = p->g * c->m * k->rx_meas;
     if (p->feet_offset_mode != AHC_FEET_IGNORE) grav += p->g * p->feet_mass * p->feet_com_x;
     raw = s->zmp_x * s->fz - grav - dH;
+    return raw;
+}
+
+/* reaction_compensation = 1: the external moment, low-passed (and calibrated) for eqs. 11/16. */
+static double disturbance_moment_balance(ahc_controller *c, double raw)
+{
+    const ahc_params *p = &c->p;
+    const double h = p->sample_period;
 
     /* Two first-order stages of tau/2 each: the same DC gain and about the same delay as the ZMP
      * filter, but the double-differenced encoder noise is attenuated by alpha^2 instead of alpha
@@ -426,7 +455,7 @@ void ahc_step(ahc_controller *c, const ahc_sensors *s, ahc_outputs *out)
 {
     const ahc_params *p = &c->p;
     tick_ctx k;
-    double kin1, kin2;
+    double kin1, kin2, ext = 0.0;
     unsigned f;
 
     memset(&k, 0, sizeof k);
@@ -491,11 +520,12 @@ void ahc_step(ahc_controller *c, const ahc_sensors *s, ahc_outputs *out)
     k.Ja = ahc_ankle_inertia(p, kin2);
 
     /* Disturbance estimate d (eq. 11's m g (p - r_x); DESIGN lessons 1 and 5). */
-    k.d = p->reaction_compensation ? disturbance_moment_balance(c, s, &k)
+    if (p->reaction_compensation || p->lean_enabled) ext = external_moment(c, s, &k);
+    k.d = p->reaction_compensation ? disturbance_moment_balance(c, ext)
                                    : disturbance_paper(c, &k);
 
     if (p->lean_enabled)
-        update_lean(c, &k);
+        update_lean(c, &k, ext);
     else
         c->lean = c->dlean = 0.0; /* switched off by ahc_update_params: no lean left behind */
     phase_transitions(c, &k);

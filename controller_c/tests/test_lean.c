@@ -2,8 +2,9 @@
  * test_lean — establishes the sustained-push lean (lean_enabled; our extension, docs/controller.md
  * section 4.6), driven through the quasi-static robot of ahc_test.h (no reaction in the ZMP):
  *  A. off (the default), the lean parameters change nothing: outputs bit-identical;
- *  B. on, a sustained push on the chest: the CoM reference settles at -d/(m g), which puts the
- *     measured ZMP back under the ankle (|p| < 1 mm, against F h/(M g) = -24 mm without it);
+ *  B. on, a sustained push on the chest: the CoM reference settles at -D/(m g), D the external
+ *     moment (here = d, at rest), which puts the measured ZMP back under the ankle (|p| < 1 mm,
+ *     against F h/(M g) = -24 mm without it); the robot stays in phase 2 or 3;
  *  C. on, a sustained push from behind: the CoM reference leans back and stops at
  *     heel_x + lean_margin, never beyond; the ZMP moves back by as much (45 -> 23 mm at 9 N);
  *  D. on the chest, a push beyond what the lean can take: bounded by toe_x - lean_margin;
@@ -27,6 +28,7 @@ static int run_qs(const ahc_params *p, double F, double t1, double t_end, ahc_ou
     int n, N = (int)(t_end / p->sample_period + 0.5);
     if (ahc_init(&c, p) != AHC_OK) return 0;
     qs_init(&r, p);
+    r.reaction = 1; /* the moment balance the lean reads is consistent only with the reaction in the ZMP */
     for (n = 0; n < N && n < NMAX; ++n) {
         qs_sense(&r, push_profile(n * p->sample_period, F, 0.5, 0.5, t1), &s);
         ahc_step(&c, &s, &out[n]);
@@ -55,6 +57,7 @@ int main(void)
 
     /* A */
     ahc_params_default(&p);
+    p.zmp_filter_tau = QS_ZMP_FILTER_TAU; /* the ideal-servo robot needs it (ahc_test.h) */
     q = p;
     q.lean_tau = 2.0;
     q.lean_margin = 0.03;
@@ -71,7 +74,8 @@ int main(void)
     {
         const ahc_outputs *o = &rec[3900];
         const double m = p.m1 + p.m2;
-        CHECK(o->phase == AHC_PHASE_HIP, "phase 2 under the sustained push (%d)", o->phase);
+        CHECK(o->phase == AHC_PHASE_HIP || o->phase == AHC_PHASE_HIP_TO_ANKLE,
+              "phase 2 or 3 under the sustained push (%d)", o->phase);
         CHECK(fabs(o->com_x_desired + o->disturbance_moment / (m * p.g)) < 2e-4,
               "r_x_d = -d/(m g): %g vs %g", o->com_x_desired, -o->disturbance_moment / (m * p.g));
         CHECK(o->com_x_desired > 0.02, "leaned forward by more than 20 mm: %g", o->com_x_desired);
@@ -107,7 +111,7 @@ int main(void)
 
     /* D */
     N = run_qs(&p, -6.0, 4.0, 10.0, rec);
-    CHECK(rec[3900].phase == AHC_PHASE_HIP && rec[3900].com_x_desired > 0.015,
+    CHECK(rec[3900].phase != AHC_PHASE_ANKLE && rec[3900].com_x_desired > 0.015,
           "a front push leans towards the toe: phase %d, r_x_d %g", rec[3900].phase, rec[3900].com_x_desired);
     N = run_qs(&p, -12.0, 4.0, 10.0, rec);
     for (i = 0; i < N; ++i)

@@ -160,9 +160,9 @@ typedef struct {
 
     /* sustained-push lean: our extension, not the paper's (docs/controller.md section 4.6) */
     int lean_enabled;           /* 1: in phases 1-3 r_x_d leans the CoM against the low-passed
-                                   disturbance, -d_lean/(m g), bounded by the sole; 0 (default):
-                                   the paper's r_x_d (bit-identical outputs)                     */
-    double lean_tau;            /* time constant of the disturbance low-pass the lean follows
+                                   external moment D (moment balance), -D/(m g), bounded by the
+                                   sole; 0 (default): the paper's r_x_d (bit-identical outputs)  */
+    double lean_tau;            /* time constant of the external-moment low-pass the lean follows
                                    (two first-order stages of lean_tau/2) [s]                    */
     double lean_margin;         /* the leaned CoM reference stays this far inside toe and heel [m] */
 } ahc_params;
@@ -283,7 +283,7 @@ typedef struct {
     double d_alpha;           /* coefficient of each stage, 1 - exp(-2 h/tau)                  */
     int d_f_valid;
     /* sustained-push lean (lean_enabled) */
-    double lean_f1, lean_f;   /* two-stage low-pass of d [N m]: first stage, output            */
+    double lean_f1, lean_f;   /* two-stage low-pass of the external moment [N m]: 1st, output  */
     double lean_alpha;        /* coefficient of each stage, 1 - exp(-2 h/lean_tau)             */
     double lean, dlean;       /* CoM offset -lean_f/(m g) clamped to the sole [m], its rate    */
     /* faults */
