@@ -499,8 +499,10 @@ def cmd_sweep_file(a) -> int:
         csv_path, pq_path = write_points_table(res.rows, out, "points", complete=res.complete)
         figs = []
         if res.complete:
-            from .capability import plot_points
+            from .capability import plot_capability, plot_points
             figs = plot_points(sf, res.rows, out)
+            cap = plot_capability(sf, res.rows, out, _sweep_plant_params(a.fmu_dir, sc, sf))
+            figs += [cap] if cap else []
     print(f"{sf.name}: {len(res.rows)} of {res.total} points ({res.resumed} from an earlier run), {res.wall:.1f} s")
     for v in sf.variants:
         rr = [r for r in res.rows if r.get("variant") == v.name]
@@ -508,6 +510,18 @@ def cmd_sweep_file(a) -> int:
         print(f"  {v.name:<16} {stood} of {len(rr)} stood")
     print(f"table {csv_path}\n      {pq_path}" + "".join(f"\nfigure {f}" for f in figs))
     return _points_end(res, out / "points.jsonl", "sweep")
+
+
+def _sweep_plant_params(fmu_dir, sc, sf) -> dict:
+    """The sagittal plant's parameters a sweep file's bounds use: the FMU's defaults with the
+    scenario's and the first variant's plant overrides ({} without the sagittal plant FMU)."""
+    from .fmu import FMUError, FMUInfo
+    from .paths import PLANT_FMU, MissingFileError, find_fmu
+    try:
+        params = FMUInfo.load(find_fmu(PLANT_FMU, fmu_dir)).start_values()
+    except (MissingFileError, FMUError):
+        return {}
+    return {**params, **sc.plant, **sf.variants[0].plant}
 
 
 def cmd_sweep(a) -> int:

@@ -1,19 +1,23 @@
 """Sweep files (anklehip/sweepfile.py, `anklehip sweep FILE`): what a file may say and how a wrong
 one is refused (file, key, value named; exit 2, nothing run), the points a grid and a seeded random
 sample make, how a point's values become the push and the parameters, and a small sweep end to
-end: one row per point with the outcome metrics, the figures, and a second run that only resumes.
+end: one row per point with the outcome metrics, the figures, and a second run that only resumes;
+the capability map (anklehip/capability.py: survive_boundary, plot_capability; docs/capability.md).
 """
 from __future__ import annotations
 
 import csv
+import random
 from pathlib import Path
 
 import pytest
 
+from anklehip.capability import plot_capability, survive_boundary
 from anklehip.cli import main
 from anklehip.paths import scenarios_dir
 from anklehip.scenario import ScenarioError
 from anklehip.sweepfile import load_sweep_file, point_setup
+from test_bounds import PARAMS
 
 BASE = """description = "test"
 scenario = "hip_saves_push"
@@ -104,3 +108,85 @@ def test_committed_sweep_files_load():
     for f in files:
         sf = load_sweep_file(f)
         assert sf.specs(None, "native")
+
+
+# ---------------------------------------------------------------------------------------------
+# capability map
+
+CAP_HEAD = """scenario = "hip_saves_push"
+stop_time = 3.0
+[push]
+t = 1.0
+rise = 0.05
+[[variant]]
+name = "a"
+[[variant]]
+name = "b"
+plant = { h_push = 0.3 }
+"""
+
+
+def _cap_sweep(tmp_path: Path, grid: str, head: str = CAP_HEAD):
+    p = tmp_path / "cap.toml"
+    p.write_text(head + grid)
+    return load_sweep_file(p)
+
+
+def _cap_rows(kx: str, table: dict[str, dict[float, list[tuple[float, str]]]]) -> list[dict]:
+    rows = [{"variant": v, kx: x, "push.force": f, "outcome": o}
+            for v, by_x in table.items() for x, pts in by_x.items() for f, o in pts]
+    random.Random(1).shuffle(rows)
+    return rows
+
+
+def test_survive_boundary_on_synthetic_rows():
+    """Establishes: per x, the boundary is the largest force that stood with every smaller force
+    standing too (a stand above a fall does not count; an error counts as not standing; 0 when the
+    smallest force fell), flagged when every force tried stood; rows are taken in any order and
+    other variants' rows are ignored."""
+    rows = _cap_rows("push.duration", {
+        "a": {0.1: [(2, "completed"), (4, "completed"), (6, "fell"), (8, "completed")],
+              1.0: [(2, "fell"), (4, "fell")],
+              2.0: [(2, "completed"), (4, "completed"), (8, "completed")],
+              0.5: [(2, "completed"), (4, "error"), (6, "completed")]},
+        "b": {0.1: [(2, "fell")]}})
+    xs, fs, top = survive_boundary(rows, "a", "push.duration")
+    assert xs.tolist() == [0.1, 0.5, 1.0, 2.0]
+    assert fs.tolist() == [4.0, 2.0, 0.0, 8.0]
+    assert top.tolist() == [False, False, False, True]
+    xs, fs, top = survive_boundary(rows, "b", "push.duration")
+    assert xs.tolist() == [0.1] and fs.tolist() == [0.0] and not top[0]
+    assert len(survive_boundary(rows, "nosuch", "push.duration")[0]) == 0
+
+
+def test_plot_capability_applies_to_force_by_duration_or_height(tmp_path):
+    """Establishes: plot_capability writes capability.png for a grid over push.force and
+    push.duration (log axis) or push.height, also for a push on the chest, and returns None for
+    any other sweep (other keys, one key, random samples) and for parameters that are not the
+    sagittal plant's."""
+    pts = {0.1: [(4, "completed"), (8, "fell")], 1.0: [(4, "completed"), (8, "completed")]}
+    sf = _cap_sweep(tmp_path, '[grid]\n"push.force" = [4, 8]\n"push.duration" = [0.1, 1.0]\n')
+    out = plot_capability(sf, _cap_rows("push.duration", {"a": pts, "b": pts}), tmp_path, PARAMS)
+    assert out == tmp_path / "capability.png" and out.stat().st_size > 1000
+    out.unlink()
+    hpts = {0.3: pts[0.1], 0.4: pts[1.0]}
+    chest = CAP_HEAD.replace("rise = 0.05", "rise = 0.05\ndirection = -1")
+    sf = _cap_sweep(tmp_path, '[grid]\n"push.height" = [0.3, 0.4]\n"push.force" = [4, 8]\n', chest)
+    assert plot_capability(sf, _cap_rows("push.height", {"a": hpts}), tmp_path, PARAMS) == tmp_path / "capability.png"
+    assert (tmp_path / "capability.png").is_file()
+    for grid in ('[grid]\n"push.force" = [4, 8]\n"push.rise" = [0.01, 0.1]\n', '[grid]\n"push.force" = [4, 8]\n',
+                 '[random]\nn = 4\n"push.force" = [2, 8]\n"push.duration" = [0.1, 1.0]\n'):
+        assert plot_capability(_cap_sweep(tmp_path, grid), [], tmp_path, PARAMS) is None
+    sf = _cap_sweep(tmp_path, '[grid]\n"push.force" = [4, 8]\n"push.duration" = [0.1, 1.0]\n')
+    assert plot_capability(sf, [], tmp_path, {"g": 9.81, "h_push": 0.335}) is None
+
+
+def test_sweep_writes_the_capability_map(tmp_path, capsys):
+    """Establishes: `anklehip sweep FILE` on a 2 x 2 grid over push.force and push.duration runs the
+    points and writes capability.png next to the other figures, naming it in its output."""
+    p = tmp_path / "tiny.toml"
+    p.write_text(CAP_HEAD.split("[[variant]]")[0] + '[grid]\n"push.force" = [6, 30]\n"push.duration" = [0.2, 1.0]\n')
+    out = tmp_path / "out"
+    assert main(["sweep", str(p), "--workers", "1", "--engine", "native", "--out", str(out)]) == 0
+    assert (out / "capability.png").stat().st_size > 1000
+    assert f"figure {out / 'capability.png'}" in capsys.readouterr().out
