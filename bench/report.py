@@ -10,7 +10,8 @@ bench/results.json. Called by `bash bench/run.sh`; docs/performance.md explains 
      closed loop as a container FMU (FMPy's container support), the Rust fmi-sim crate on the
      plant FMU with a CSV input (when installed: bench/run.sh installs it with cargo);
   4. scaling: wall time and peak memory for stop times 10 ... 600 s (fit slope), memory per run,
-     and the sweep's throughput in runs per minute on 1 and 2 Dask workers.
+     the sweep's throughput in runs per minute on 1 and 2 Dask workers, and the committed capability
+     map sweep (force_duration, 960 runs) on 1 and 2 workers.
 Medians of repeated runs; every ratio comes from figures measured in this same run.
 
 Usage: .venv/bin/python bench/report.py [--quick] [--out bench/results.json] [--fmi-sim PATH]
@@ -222,6 +223,25 @@ def sweep_throughput(quick: bool) -> dict:
     return out
 
 
+def capability_map_throughput(tmp: Path) -> dict:
+    """The committed example sweep (scenarios/sweeps/force_duration.toml, 960 runs of up to 8 s) as
+    `anklehip sweep force_duration` runs it, on 1 and 2 local Dask workers."""
+    from anklehip.cli import main as cli
+    from anklehip.sweepfile import load_sweep_file
+    from anklehip.paths import find_sweep_file
+    sf = load_sweep_file(find_sweep_file("force_duration"))
+    n = len(sf.values()) * len(sf.variants)
+    out = {"sweep": "force_duration", "runs": n}
+    for workers in (1, 2):
+        t = time.perf_counter()
+        rc = cli(["sweep", "force_duration", "--workers", str(workers), "--out", str(tmp / f"cap{workers}"), "--restart"])
+        w = time.perf_counter() - t
+        assert rc == 0, f"anklehip sweep force_duration --workers {workers} exited {rc}"
+        out[f"{workers}w_runs_per_min"] = n / w * 60.0
+        out[f"{workers}w_wall_s"] = w
+    return out
+
+
 def fmt_table(R: dict) -> str:
     L = []
     m = R["machine"]
@@ -264,6 +284,11 @@ def fmt_table(R: dict) -> str:
     w = R["sweep"]
     L.append(f"   sweep ({w['runs']} runs of 60 s): native {w['native_1w_runs_per_min']:.0f} runs/min on 1 worker, "
              f"{w['native_2w_runs_per_min']:.0f} on 2; FMPy {w['fmpy_2w_runs_per_min']:.0f} on 2")
+    if "capability_map" in R:
+        k = R["capability_map"]
+        L.append(f"   capability map ({k['sweep']}, {k['runs']} runs of up to 8 s, figures included): "
+                 f"{k['1w_runs_per_min']:.0f} runs/min on 1 worker ({k['1w_wall_s']:.1f} s), "
+                 f"{k['2w_runs_per_min']:.0f} on 2 ({k['2w_wall_s']:.1f} s; x{k['2w_runs_per_min'] / k['1w_runs_per_min']:.2f})")
     return "\n".join(L)
 
 
@@ -289,6 +314,7 @@ def main() -> int:
         R["peers"] = peers(models, sc, ref, tmp, find_fmi_sim(a.fmi_sim), repeat)
         R["scaling"] = scaling(tmp, a.quick)
         R["sweep"] = sweep_throughput(a.quick)
+        R["capability_map"] = capability_map_throughput(tmp)
     Path(a.out).write_text(json.dumps(R, indent=1) + "\n")
     print(fmt_table(R))
     print(f"\nfigures: {a.out}")
