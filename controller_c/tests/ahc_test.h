@@ -159,4 +159,24 @@ static inline double push_profile(double t, double F, double t0, double rise, do
     return 0.0;
 }
 
+/* Closed loop of a fresh controller through the quasi-static robot with the reaction of its own
+ * motion in the ZMP; push F from 0.5 s with 0.5 s ramps, held until t1. Records at most nmax
+ * ticks of outputs; returns their number (0 if p is invalid). */
+static inline int qs_run(const ahc_params *p, double F, double t1, double t_end, ahc_outputs *out, int nmax)
+{
+    ahc_controller c;
+    qs_robot r;
+    ahc_sensors s;
+    int n, N = (int)(t_end / p->sample_period + 0.5);
+    if (ahc_init(&c, p) != AHC_OK) return 0;
+    qs_init(&r, p);
+    r.reaction = 1;
+    for (n = 0; n < N && n < nmax; ++n) {
+        qs_sense(&r, push_profile(n * p->sample_period, F, 0.5, 0.5, t1), &s);
+        ahc_step(&c, &s, &out[n]);
+        qs_apply(&r, &out[n]);
+    }
+    return n;
+}
+
 #endif /* AHC_TEST_H */

@@ -19,22 +19,11 @@
 static ahc_outputs rec[NMAX];
 static ahc_outputs rec2[NMAX];
 
-/* Closed loop through the quasi-static robot: push F from 0.5 s (0.5 s ramps) held until t1. */
+/* Closed loop through the quasi-static robot (with the reaction in the ZMP: the moment balance
+ * the lean reads is consistent only with it): push F from 0.5 s (0.5 s ramps) held until t1. */
 static int run_qs(const ahc_params *p, double F, double t1, double t_end, ahc_outputs *out)
 {
-    ahc_controller c;
-    qs_robot r;
-    ahc_sensors s;
-    int n, N = (int)(t_end / p->sample_period + 0.5);
-    if (ahc_init(&c, p) != AHC_OK) return 0;
-    qs_init(&r, p);
-    r.reaction = 1; /* the moment balance the lean reads is consistent only with the reaction in the ZMP */
-    for (n = 0; n < N && n < NMAX; ++n) {
-        qs_sense(&r, push_profile(n * p->sample_period, F, 0.5, 0.5, t1), &s);
-        ahc_step(&c, &s, &out[n]);
-        qs_apply(&r, &out[n]);
-    }
-    return n;
+    return qs_run(p, F, t1, t_end, out, NMAX);
 }
 
 /* ZMP the quasi-static robot measures for these outputs (the next tick's sensor reading). */

@@ -61,23 +61,10 @@ static int drive_to_phase(ahc_controller *c, double zmp, int phase, int max_tick
     return 0;
 }
 
-/* Closed-loop run through the quasi-static robot; returns the number of ticks recorded. */
+/* Closed-loop run through the quasi-static robot (push held until 3 s); returns the number of ticks. */
 static int run_qs(const ahc_params *p, double F, double t_end, ahc_outputs *out)
 {
-    ahc_controller c;
-    qs_robot r;
-    ahc_sensors s;
-    int n, N = (int)(t_end / p->sample_period + 0.5);
-    if (ahc_init(&c, p) != AHC_OK) return 0;
-    qs_init(&r, p);
-    r.reaction = 1;
-    for (n = 0; n < N && n < NMAX; ++n) {
-        const double t = n * p->sample_period;
-        qs_sense(&r, push_profile(t, F, 0.5, 0.5, 3.0), &s);
-        ahc_step(&c, &s, &out[n]);
-        qs_apply(&r, &out[n]);
-    }
-    return n;
+    return qs_run(p, F, 3.0, t_end, out, NMAX);
 }
 
 /* Bumpless check. Angles: |th_n - th_{n-1}| <= h |dth_n| (no jump beyond one tick's rate).
