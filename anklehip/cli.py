@@ -17,6 +17,8 @@ from typing import Any
 
 import numpy as np
 
+from . import __version__
+
 EXIT_OK, EXIT_FAIL, EXIT_ERROR = 0, 1, 2
 
 
@@ -805,6 +807,8 @@ def build_parser() -> argparse.ArgumentParser:
     p = _Parser(prog="anklehip", description="Ankle/hip balance control FMUs: closed-loop "
                                 "scenarios, step tests, comparison, plots, sweeps.")
     p.add_argument("--fmu-dir", help="folder with the .fmu files (default: $ANKLEHIP_FMU_DIR or <repo>/build/fmus)")
+    p.add_argument("--version", action="version", version=f"anklehip {__version__}",
+                   help="print the package's version and exit")
     sub = p.add_subparsers(dest="cmd", required=True, metavar="COMMAND")
 
     s = sub.add_parser("list", help="list the scenarios")

@@ -36,6 +36,24 @@ def test_help_and_list(capsys):
     assert "paper_five_pushes" in out and "hip_disabled_falls" in out
 
 
+def test_version_is_the_packages_and_python_m_works(capsys):
+    """Establishes: `anklehip --version` prints the version pyproject.toml declares (the two
+    sources cannot drift), and `python -m anklehip` is the same command (docs/fmu.md §5)."""
+    import subprocess
+    import sys
+    import tomllib
+    from pathlib import Path
+    import anklehip
+    declared = tomllib.loads((Path(__file__).parents[1] / "pyproject.toml").read_text())["project"]["version"]
+    assert anklehip.__version__ == declared
+    with pytest.raises(SystemExit) as e:
+        main(["--version"])
+    assert e.value.code == 0
+    assert capsys.readouterr().out.strip() == f"anklehip {declared}"
+    r = subprocess.run([sys.executable, "-m", "anklehip", "--version"], capture_output=True, text=True, timeout=60)
+    assert r.returncode == 0 and r.stdout.strip() == f"anklehip {declared}", r.stderr
+
+
 def test_run_without_fmus_names_the_file_and_the_fix(tmp_path, monkeypatch, capsys):
     monkeypatch.setenv("ANKLEHIP_FMU_DIR", str(tmp_path))
     assert main(["run", "ankle_small_push", "--out", str(tmp_path / "o")]) == 2
