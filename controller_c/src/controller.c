@@ -1,10 +1,10 @@
 /*
  * controller.c — the four-phase ankle/hip balance controller (Nenchev & Nishio, ICRA 2010;
- * our reading in DESIGN section 4 and docs/controller.md).
+ * our reading in docs/controller.md §2-§4).
  *
  * Structure of one tick (ahc_step):
  *   1. classify the inputs (fault bits); on a "hold" fault freeze the reference and return;
- *   2. ZMP low-pass filter (DESIGN lesson 1), kinematics, disturbance estimate d (lesson 5);
+ *   2. ZMP low-pass filter (prototype finding 1, docs/controller.md §4.2), kinematics, disturbance estimate d (finding 5);
  *   3. phase transitions, decided on the state at the start of the tick (phase_transitions);
  *   4. the control law of the (possibly new) phase, integrated over one tick (law_*):
  *      acceleration laws (eqs. 11, 16) with semi-implicit Euler  v += h a(x, v); x += h v,
@@ -121,7 +121,7 @@ static void enter_ankle(ahc_controller *c)
 
 static void enter_ankle_to_hip(ahc_controller *c, const tick_ctx *k, int sign)
 {
-    /* DESIGN lesson 2: r_x_d starts at the current CoM projection with the velocity v0 that
+    /* prototype finding 2 (docs/controller.md §4.2): r_x_d starts at the current CoM projection with the velocity v0 that
      * makes eq. 23 (k_w = 0, r_x_d = r_x) reproduce the current ankle rate exactly:
      *   dth1 = r_z/(r_z^2 + a^2) * v0   =>   v0 = dth1 (r_z^2 + a^2)/r_z,
      * i.e. the CoM velocity as eq. 23 sees it; zero acceleration; ends at (0, 0, 0). */
@@ -166,7 +166,7 @@ static int zmp_beyond_limit(const ahc_controller *c, int *sign)
     return 0;
 }
 
-/* All phase switches in one place (DESIGN section 4; docs/controller.md, "phases"). */
+/* All phase switches in one place (docs/controller.md §4, "The four phases"). */
 static void phase_transitions(ahc_controller *c, const tick_ctx *k)
 {
     const ahc_params *p = &c->p;
@@ -190,7 +190,7 @@ static void phase_transitions(ahc_controller *c, const tick_ctx *k)
         break;
     case AHC_PHASE_HIP: {
         /* 2 -> 3: paper: r_z back in the band near erect AND p on the side opposite to the push;
-         * fallback (DESIGN lesson 3): |d| small and hip near erect for fallback_dwell. */
+         * fallback (prototype finding 3, docs/controller.md §4.2): |d| small and hip near erect for fallback_dwell. */
         const double drz = k->rz - c->rz_erect;
         const int paper = drz >= p->rz_band_low && drz <= p->rz_band_high &&
                           (double)c->push_sign * c->zmp_f < 0.0;
@@ -247,7 +247,7 @@ static void law_hip_regulator(ahc_controller *c, const tick_ctx *k)
 }
 
 /* Eqs. 23-24: th1' = r_z/(r_z^2 + a^2) r_x_ref' + k_w ratio th2',
- *             r_x_ref' = r_x_d' + Kpr (r_x_d - r_x)   (feed-forward: DESIGN lesson 2).
+ *             r_x_ref' = r_x_d' + Kpr (r_x_d - r_x)   (feed-forward: prototype finding 2 (docs/controller.md §4.2)).
  * Uses the hip rate commanded this tick. Explicit Euler. */
 static void law_ankle_reactionless(ahc_controller *c, const tick_ctx *k)
 {
@@ -343,7 +343,7 @@ static void write_outputs(ahc_controller *c, const tick_ctx *k, ahc_outputs *out
 }
 
 /* Paper reading of the disturbance: d = m g (p - r_x) from the filtered ZMP, with the feet handled
- * as feet_offset_mode says (DESIGN lesson 5). */
+ * as feet_offset_mode says (prototype finding 5, docs/controller.md §4.2). */
 static double disturbance_paper(ahc_controller *c, const tick_ctx *k)
 {
     const ahc_params *p = &c->p;
@@ -502,7 +502,7 @@ void ahc_step(ahc_controller *c, const ahc_sensors *s, ahc_outputs *out)
     c->last_th1 = s->theta_ankle;
     c->last_th2 = s->theta_hip;
 
-    /* ZMP low-pass filter, exact discretisation of tau y' = u - y (DESIGN lesson 1). */
+    /* ZMP low-pass filter, exact discretisation of tau y' = u - y (prototype finding 1, docs/controller.md §4.2). */
     if (!c->zmp_f_valid) {
         c->zmp_f = s->zmp_x;
         c->zmp_f_valid = 1;
@@ -519,7 +519,7 @@ void ahc_step(ahc_controller *c, const ahc_sensors *s, ahc_outputs *out)
     k.ratio = ahc_reactionless_ratio(p, kin1, kin2);
     k.Ja = ahc_ankle_inertia(p, kin2);
 
-    /* Disturbance estimate d (eq. 11's m g (p - r_x); DESIGN lessons 1 and 5). */
+    /* Disturbance estimate d (eq. 11's m g (p - r_x); prototype findings 1 and 5, docs/controller.md §4.2). */
     if (p->reaction_compensation || p->lean_enabled) ext = external_moment(c, s, &k);
     k.d = p->reaction_compensation ? disturbance_moment_balance(c, ext)
                                    : disturbance_paper(c, &k);

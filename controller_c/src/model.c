@@ -1,5 +1,5 @@
 /*
- * model.c — kinematics of the planar double inverted pendulum (DESIGN section 4) and the quintic
+ * model.c — kinematics of the planar double inverted pendulum (docs/controller.md §2) and the quintic
  * splines. Pure functions, no state.
  */
 #include <math.h>

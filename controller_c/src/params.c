@@ -32,7 +32,7 @@ void ahc_params_default(ahc_params *p)
     p->hip_min = HOAP2_HIP_MIN;
     p->hip_max = HOAP2_HIP_MAX;
 
-    /* gains: paper values read as N mm/rad -> SI (DESIGN section 4, docs/controller.md) */
+    /* gains: paper values read as N mm/rad -> SI (docs/controller.md §3) */
     p->Ka = 40.0;      /* paper 40000 N mm/rad   */
     p->Ca = 10.0;      /* paper 10000 N mm s/rad */
     p->Kh = 4.0;       /* paper 4000 N mm/rad    */
@@ -41,7 +41,7 @@ void ahc_params_default(ahc_params *p)
     p->Kp_theta = 15.0;/* paper, 1/s             */
 
     /* phase logic. The paper's 45 mm limit leaves 12.5 mm to the toe, too little for the
-     * transition (DESIGN lesson 4). Defaults chosen by push sweeps on the plant FMU, one setting
+     * transition (prototype finding 4, docs/controller.md §4.2). Defaults chosen by push sweeps on the plant FMU, one setting
      * at a time (docs/controller.md section 4.5): trigger at 25 mm, T_ah = 0.5 s. The paper's
      * numbers are the configuration "paper" (ahc_params_paper()). */
     p->hip_strategy_enabled = 1;

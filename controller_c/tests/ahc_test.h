@@ -45,7 +45,7 @@ static inline double test_rand(unsigned long long *state, double lo, double hi)
     return lo + (hi - lo) * (double)(*state >> 11) / 9007199254740992.0;
 }
 
-/* Rigid-body terms of the two-link body on a flat, resting foot (DESIGN section 3 conventions:
+/* Rigid-body terms of the two-link body on a flat, resting foot (conventions of docs/controller.md:
  * x forward, z up from the SOLE, angles positive pitching forward), for given joint angles,
  * rates and accelerations:
  *   dH_O = sum_i m_i (x_i z_i'' - z_i x_i'') - I1 th1'' - I2 (th1'' + th2'')
@@ -98,7 +98,7 @@ static inline void test_body_dynamics(const ahc_params *p, double th1, double th
  * the reaction through an ideal one-tick servo, eq. 11/16 close an algebraic loop of gain >= 1
  * (docs/controller.md 4.4). A real servo's finite bandwidth breaks that loop (the plant, and
  * test_closed_loop_dynamic's servo lag, are stable without a ZMP filter); this ideal-servo model
- * needs the ZMP filter (DESIGN lesson 1), so the tests that use reaction = 1 with the paper's
+ * needs the ZMP filter (prototype finding 1, docs/controller.md §4.2), so the tests that use reaction = 1 with the paper's
  * estimate set zmp_filter_tau = QS_ZMP_FILTER_TAU. */
 #define QS_ZMP_FILTER_TAU 0.02
 typedef struct {

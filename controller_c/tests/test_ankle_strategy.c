@@ -13,7 +13,7 @@
  *     motion in the ZMP (joints follow the reference, constant push, default ZMP filter, feet
  *     modelled): the reference converges to the static lean th1 = F h / Ka, the estimate d to
  *     the push moment F h, and the hip stays erect.
- *  3. Feet (DESIGN lesson 5), static quasi-static robot: the feet handling of modes 1 and 2
+ *  3. Feet (prototype finding 5, docs/controller.md §4.2), static quasi-static robot: the feet handling of modes 1 and 2
  *     removes the rest offset (no lean without a push) with either estimator; feet ignored,
  *     the paper-literal estimator (reaction_compensation = 0) leans by ~ m_f g (x_f - r_x)/Ka
  *     (fixed point with r_x ~ r_z th), the moment balance by exactly m_f g x_f / Ka.

@@ -1,5 +1,5 @@
 /*
- * test_closed_loop_dynamic — establishes DESIGN lesson 1 on a simple dynamic sensor model:
+ * test_closed_loop_dynamic — establishes prototype finding 1 (docs/controller.md §4.2) on a simple dynamic sensor model:
  * joints follow the references through a first-order servo lag (tau_s = 10 ms), and the
  * measured ZMP contains the reaction of the body's own accelerations,
  *   p = [m g r_x + m_f g x_f + F h_push - J_a th1'' - J_c th2''] / (M g)

@@ -1,7 +1,7 @@
 /*
  * test_params — establishes the parameter interface:
  *  - the defaults (and the "paper" configuration) validate and equal the HOAP-2 numbers of
- *    hoap2/nominal.h and the SI gains of DESIGN section 4; the paper configuration differs only in
+ *    hoap2/nominal.h and the SI gains of docs/controller.md §3; the paper configuration differs only in
  *    the ZMP limits (45 mm);
  *  - the metadata table lists every field of ahc_params exactly once, with offsets equal to
  *    offsetof and correct int flags (copying all rows through the table reproduces the struct

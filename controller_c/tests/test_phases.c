@@ -16,7 +16,7 @@
  *  F. the sequence 0 -> 1 -> 2 -> 3 -> 0 for a push applied and removed, from behind and from
  *     the front (with the reaction in the ZMP both return through the paper condition, ~0.1 s
  *     after the release; without it p never goes behind the ankle and a push from behind
- *     returns through the fallback, DESIGN lesson 3), driven through the
+ *     returns through the fallback, prototype finding 3 (docs/controller.md §4.2)), driven through the
  *     quasi-static robot of ahc_test.h with the reaction of its own motion in the ZMP (physically
  *     consistent for the default estimator); the front response mirrors the back one;
  *  G. every switch is bumpless: reference angles move by at most h * rate per tick, and the

@@ -5,7 +5,7 @@
  *
  * Properties: C99, no heap, no globals, only libc + libm; deterministic; one POD struct per
  * instance (ahc_controller contains no pointers, so it can be snapshotted with memcpy).
- * Units are SI everywhere. Sign conventions: DESIGN.md section 3 (x forward, angles positive
+ * Units are SI everywhere. Sign conventions: docs/controller.md (x forward, angles positive
  * when the body above the joint pitches forward, x measured from the ankle's ground projection).
  * Full documentation: docs/controller.md.
  */
@@ -70,7 +70,7 @@ enum {
     AHC_ERR_UNKNOWN_NAME = 5   /* no configuration of that name (ahc_params_named)             */
 };
 
-/* Handling of the feet in the disturbance estimate (DESIGN lesson 5). */
+/* Handling of the feet in the disturbance estimate (prototype finding 5, docs/controller.md §4.2). */
 enum {
     AHC_FEET_IGNORE = 0,    /* paper literal (default): d = m g (p - r_x); the feet bias d by
                                ~ +0.03 N m (a 0.66 mrad lean at rest)                           */
@@ -84,7 +84,7 @@ enum {
  * and the phase triggers. The disturbance estimate and the com_x/com_z outputs always use the
  * measured angles. */
 enum {
-    AHC_KIN_MEASURED = 0,   /* measured joint angles (DESIGN section 4's first reading): eq. 24's
+    AHC_KIN_MEASURED = 0,   /* measured joint angles (our first reading of the paper): eq. 24's
                                CoM feedback at Kpr = 100/s then closes through the servo, which is
                                unstable unless the servo is much faster than 100 rad/s          */
     AHC_KIN_REFERENCE = 1   /* the controller's own reference angles (default): eqs. 23-24 are a
@@ -320,7 +320,7 @@ int ahc_state_validate(const ahc_controller *c, char *msg, size_t msg_size);
 double ahc_time(const ahc_controller *c);
 
 /* ---------------------------------------------------------------------------------------------
- * Pure helpers (model of DESIGN section 4; useful to tests and other components)
+ * Pure helpers (model of docs/controller.md §2; useful to tests and other components)
  * ------------------------------------------------------------------------------------------- */
 /* CoM of the two-link body: rx = (m1 lg1 S1 + m2 (l1 S1 + lg2 S12))/m,
  *                           rz = (m1 lg1 C1 + m2 (l1 C1 + lg2 C12))/m.  Either pointer may be NULL. */
