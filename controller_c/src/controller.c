@@ -38,6 +38,7 @@ typedef struct {
     double ratio;    /* reactionless ratio (eq. 15) */
     double Ja;       /* whole-body inertia about the ankle (eq. 11 denominator) */
     double d;        /* disturbance moment estimate */
+    double dlean;    /* rate of the lean this tick (update_lean; 0 without it) [m/s] */
 } tick_ctx;
 
 /* ------------------------------------------------------------------------------------------- */
@@ -265,14 +266,14 @@ static void law_ankle_reactionless(ahc_controller *c, const tick_ctx *k)
  * first-order stages of lean_tau/2, so that only a sustained push moves the CoM, bounded to
  * lean_margin inside the sole: the sustained-push limit rises from m g (x_toe - r_x)/h towards
  * m g (x_toe - x_heel)/h (docs/capability.md). Phases 1-3 add it to r_x_d; phase 0 ignores it. */
-static void update_lean(ahc_controller *c, const tick_ctx *k, double ext)
+static void update_lean(ahc_controller *c, tick_ctx *k, double ext)
 {
     const ahc_params *p = &c->p;
     double next;
     if (c->phase == AHC_PHASE_ANKLE) {
         /* The lean integrates the push from the tick the hip strategy is called: a push that the
          * ankle strategy handles alone leaves no lean behind. */
-        c->lean_f1 = c->lean_f = c->lean = c->dlean = 0.0;
+        c->lean_f1 = c->lean_f = c->lean = 0.0;
         return;
     }
     /* The moment balance assumes the sole flat on the ground. With the ZMP at an edge the foot may
@@ -288,7 +289,7 @@ static void update_lean(ahc_controller *c, const tick_ctx *k, double ext)
         }
     }
     next = clampd(-c->lean_f / (c->m * p->g), p->heel_x + p->lean_margin, p->toe_x - p->lean_margin);
-    c->dlean = (next - c->lean) / k->h;
+    k->dlean = (next - c->lean) / k->h;
     c->lean = next;
 }
 
@@ -527,7 +528,7 @@ void ahc_step(ahc_controller *c, const ahc_sensors *s, ahc_outputs *out)
     if (p->lean_enabled)
         update_lean(c, &k, ext);
     else
-        c->lean = c->dlean = 0.0; /* switched off by ahc_update_params: no lean left behind */
+        c->lean = 0.0; /* switched off by ahc_update_params: no lean left behind */
     phase_transitions(c, &k);
 
     {
@@ -543,7 +544,7 @@ void ahc_step(ahc_controller *c, const ahc_sensors *s, ahc_outputs *out)
             ahc_quintic_eval(&c->rxd_spline, c->phase_time, &c->rxd, &c->drxd, NULL);
             if (p->lean_enabled) { /* the lean blends in with k_w */
                 c->rxd += c->k_w * c->lean;
-                c->drxd += dkw * c->lean + c->k_w * c->dlean;
+                c->drxd += dkw * c->lean + c->k_w * k.dlean;
             }
             law_hip_strategy(c, &k);
             law_ankle_reactionless(c, &k);
@@ -552,14 +553,14 @@ void ahc_step(ahc_controller *c, const ahc_sensors *s, ahc_outputs *out)
         case AHC_PHASE_HIP:
             c->k_w = 1.0;
             c->rxd = c->lean; /* 0 unless lean_enabled */
-            c->drxd = c->dlean;
+            c->drxd = k.dlean;
             law_hip_strategy(c, &k);
             law_ankle_reactionless(c, &k);
             break;
         default: /* AHC_PHASE_HIP_TO_ANKLE */
             c->k_w = 1.0;
             c->rxd = c->lean;
-            c->drxd = c->dlean;
+            c->drxd = k.dlean;
             law_hip_regulator(c, &k);
             law_ankle_reactionless(c, &k);
             break;
@@ -669,7 +670,7 @@ int ahc_state_validate(const ahc_controller *c, char *msg, size_t msg_size)
         const struct { const char *name; double v; } bounded[] = {
             {"dth1", c->dth1}, {"dth2", c->dth2}, {"hip_bump", c->hip_bump}, {"rxd", c->rxd}, {"drxd", c->drxd},
             {"calib_sum", c->calib_sum}, {"calib_bias", c->calib_bias}, {"d_f1", c->d_f1}, {"d_f", c->d_f},
-            {"lean_f1", c->lean_f1}, {"lean_f", c->lean_f}, {"dlean", c->dlean},
+            {"lean_f1", c->lean_f1}, {"lean_f", c->lean_f},
             {"last_out.theta_ankle_ref", c->last_out.theta_ankle_ref},
             {"last_out.theta_hip_ref", c->last_out.theta_hip_ref},
             {"last_out.dtheta_ankle_ref", c->last_out.dtheta_ankle_ref},

@@ -285,7 +285,7 @@ typedef struct {
     /* sustained-push lean (lean_enabled) */
     double lean_f1, lean_f;   /* two-stage low-pass of the external moment [N m]: 1st, output  */
     double lean_alpha;        /* coefficient of each stage, 1 - exp(-2 h/lean_tau)             */
-    double lean, dlean;       /* CoM offset -lean_f/(m g) clamped to the sole [m], its rate    */
+    double lean;              /* CoM offset -lean_f/(m g) clamped to the sole [m]              */
     /* faults */
     unsigned fault;           /* bits of the last tick                                       */
     int holding;              /* 1 while a hold fault is active                              */
