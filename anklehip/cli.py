@@ -335,7 +335,7 @@ def cmd_plot(a) -> int:
 
 
 def cmd_compare(a) -> int:
-    from .compare import CompareError, compare, plot_failed
+    from .compare import CompareError, compare, plot_comparison
     cols = [c.strip() for c in a.columns.split(",")] if a.columns else None
     try:
         rep = compare(a.result, a.reference, columns=cols, num=a.num, dx=a.dx, dy=a.dy, abs_tol=a.abs_tol,
@@ -344,9 +344,9 @@ def cmd_compare(a) -> int:
     except CompareError as e:
         return _err(str(e))
     print(rep.text(verbose=not a.failed_only))
-    if a.plot and not rep.passed:
-        p = plot_failed(rep, a.plot)
-        print(f"plot of the failed signals: {p}")
+    if a.plot:   # a passing comparison's plot is evidence too
+        p = plot_comparison(rep, a.plot)
+        print(f"plot of {'the failed signals' if rep.failed else 'all compared signals (all passed)'}: {p}")
     if a.json:
         Path(a.json).write_text(json.dumps(rep.as_dict(), indent=2, default=float) + "\n")
     return EXIT_OK if rep.passed else EXIT_FAIL
@@ -864,7 +864,8 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--t-start", type=FINITE)
     s.add_argument("--t-stop", type=FINITE)
     s.add_argument("--allow-partial", action="store_true", help="do not fail when the result covers less time")
-    s.add_argument("--plot", metavar="PNG", help="plot reference, band and result of the failed signals")
+    s.add_argument("--plot", metavar="PNG", help="always write a plot of reference, band/tube, result and failing "
+                   "samples: of the failed signals, or of every signal when all pass")
     s.add_argument("--json", metavar="FILE", help="write the report as JSON")
     s.add_argument("--failed-only", action="store_true")
     s.set_defaults(fn=cmd_compare)

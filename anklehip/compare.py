@@ -1,6 +1,6 @@
 """Comparison of a result CSV with a reference CSV, signal by signal.
 
-Per signal two criteria (docs/step-tests.md):
+Per continuous (float) signal two criteria (docs/step-tests.md):
 
 * the FMI cross-check band, computed by FMPy's ``fmpy.util.validate_signal``: the reference is
   resampled on ``num`` uniform points (default: max(1000, number of reference samples); FMPy's
@@ -10,11 +10,16 @@ Per signal two criteria (docs/step-tests.md):
 * optionally a minimum band half-height ``band_floor`` (absolute), for nearly constant signals
   whose range-relative band would be ~0;
 * optionally a stricter tube: |y(t) - y_ref(t)| <= abs_tol + rel_tol |y_ref(t)| at every result
-  sample inside the reference's time span (y_ref interpolated linearly, or held for discrete
-  signals).
+  sample inside the reference's time span (y_ref interpolated linearly).
 
-A signal whose values are all integers in both files is treated as discrete (zero-order hold),
-as validate_signal does for non-float signals.
+A signal whose values are all integers in both files (phase, fault, booleans) is discrete and is
+compared exactly instead: every result sample inside the reference's time span (its first and last
+sample included) must equal the reference's value at that time; a result sample that falls
+between two reference samples may equal either of them. The band's horizontal tolerance and the
+tolerances do not apply to it (they would let a phase off by 3 pass near a switch or at the ends).
+
+``SignalResult.outside`` marks the result samples the verdict counts as failing; the plot draws
+exactly those, with the band and the tube the verdict used.
 """
 from __future__ import annotations
 
@@ -41,12 +46,14 @@ class SignalResult:
     tube_ok: bool | None = None
     n_samples: int = 0
     n_outside: int = 0
-    first_outside: float | None = None       # first time outside the band or the tube
-    max_dev: float = 0.0                      # largest |y - y_ref| (interpolated reference)
+    first_outside: float | None = None       # first time outside the band or the tube (or differing)
+    max_dev: float = 0.0                      # largest |y - y_ref| (interpolated; discrete: _discrete_deviation)
     max_dev_time: float | None = None
     max_excess: float = 0.0                   # largest distance outside the band
     message: str = ""
-    band: tuple[np.ndarray, np.ndarray, np.ndarray] | None = field(default=None, repr=False)
+    band: tuple[np.ndarray, np.ndarray, np.ndarray] | None = field(default=None, repr=False)  # t_band, lo, hi
+    tube: tuple[np.ndarray, np.ndarray] | None = field(default=None, repr=False)  # lo, hi at the result's times
+    outside: np.ndarray | None = field(default=None, repr=False)  # result samples that fail (the verdict's)
 
     def line(self) -> str:
         v = "PASS" if self.passed else "FAIL"
@@ -54,7 +61,7 @@ class SignalResult:
         if self.max_dev_time is not None:
             s += f" at t={self.max_dev_time:.4f}"
         if not self.passed:
-            s += f"; {self.n_outside}/{self.n_samples} samples outside"
+            s += f"; {self.n_outside}/{self.n_samples} samples {'differ' if self.discrete else 'outside'}"
             if self.first_outside is not None:
                 s += f", first at t={self.first_outside:.4f}"
         if self.message:
@@ -96,8 +103,9 @@ class CompareReport:
         return {"result": self.result, "reference": self.reference, "passed": self.passed,
                 "n_signals": len(self.signals), "n_failed": len(self.failed),
                 "failed": [s.name for s in self.failed], "notes": self.notes,
-                "signals": {s.name: {"passed": s.passed, "max_dev": s.max_dev, "max_dev_time": s.max_dev_time,
-                                     "first_outside": s.first_outside, "n_outside": s.n_outside,
+                "signals": {s.name: {"passed": s.passed, "discrete": s.discrete, "max_dev": s.max_dev,
+                                     "max_dev_time": s.max_dev_time, "first_outside": s.first_outside,
+                                     "n_outside": s.n_outside, "n_samples": s.n_samples,
                                      "message": s.message} for s in self.signals}}
 
 
@@ -161,7 +169,7 @@ def _time(data: np.ndarray, label: str) -> np.ndarray:
 
 def _is_discrete(*arrays: np.ndarray) -> bool:
     """All finite values are integers of an fmi2Integer's (32-bit) range, e.g. phase or fault; 1e20
-    is an integral float, not a discrete signal (and would overflow the int64 cast)."""
+    is an integral float, not a discrete signal."""
     for a in arrays:
         a = a[np.isfinite(a)]
         if a.size == 0 or not np.all(a == np.round(a)) or np.max(np.abs(a)) > 2 ** 31:
@@ -169,11 +177,14 @@ def _is_discrete(*arrays: np.ndarray) -> bool:
     return True
 
 
-def _interp(t: np.ndarray, tr: np.ndarray, yr: np.ndarray, discrete: bool) -> np.ndarray:
-    if discrete:
-        i = np.clip(np.searchsorted(tr, t, side="right") - 1, 0, len(tr) - 1)
-        return yr[i]
-    return np.interp(t, tr, yr)
+def _discrete_deviation(t: np.ndarray, y: np.ndarray, t_ref: np.ndarray, y_ref: np.ndarray) -> np.ndarray:
+    """|y - y_ref| for a discrete signal: at a reference sample's time its value; between two
+    reference samples (another time grid) the nearer in value of the two (so a switch between
+    them is not a difference, a wrong value is); at a repeated time (an event) either row's value."""
+    last = len(t_ref) - 1
+    before = y_ref[np.clip(np.searchsorted(t_ref, t, side="right") - 1, 0, last)]
+    after = y_ref[np.clip(np.searchsorted(t_ref, t, side="left"), 0, last)]
+    return np.minimum(np.abs(y - before), np.abs(y - after))
 
 
 def compare_signal(name: str, t: np.ndarray, y: np.ndarray, t_ref: np.ndarray, y_ref: np.ndarray, *,
@@ -201,40 +212,59 @@ def compare_signal(name: str, t: np.ndarray, y: np.ndarray, t_ref: np.ndarray, y
     r.n_samples = int(inside.sum())
     msgs = []
     nan = ~np.isfinite(y) & inside
-    discrete = _is_discrete(y, y_ref)
-    r.discrete = discrete
-    if num is None:
-        # FMPy's cross-check default is 1000 band samples; a finer reference gets one band sample
-        # per reference sample, else features shorter than the band spacing (a brief phase
-        # switch) fall between band samples and an identical result is reported outside the band
-        num = max(1000, len(t_ref))
+    r.discrete = _is_discrete(y, y_ref)
 
-    # the FMI cross-check band (FMPy's implementation)
-    yv = np.where(np.isfinite(y), y, 0.0)
-    yy = yv.astype(np.int64) if discrete else yv
-    yr = y_ref.astype(np.int64) if discrete else y_ref
-    t_band, y_min, y_max, i_out = validate_signal(t=np.asarray(t, float), y=yy, t_ref=t_ref.copy(),
-                                                  y_ref=yr, num=num, dx=dx, dy=dy)
-    i_out = np.asarray(i_out, bool)
-    if band_floor:
-        # widen the band to at least +-band_floor around the reference (validate_signal's vertical
-        # width is dy x the signal's range, which is ~0 for a nearly constant signal such as fz)
-        y_band = (np.interp(t_band, t_ref, y_ref) if not discrete else _interp(t_band, t_ref, y_ref, True))
-        y_min = np.minimum(y_min, y_band - band_floor)
-        y_max = np.maximum(y_max, y_band + band_floor)
-        lo_i, hi_i = np.interp(t, t_band, y_min), np.interp(t, t_band, y_max)
-        i_out = ((yv < lo_i) | (yv > hi_i)) & (t > t_band[0]) & (t < t_band[-1])
-    i_out = i_out | nan
-    r.band = (t_band, y_min, y_max)
-    r.band_ok = not i_out.any()
-    lo = np.interp(t, t_band, y_min)
-    hi = np.interp(t, t_band, y_max)
-    exc = np.where(inside & np.isfinite(y), np.maximum(lo - y, y - hi), 0.0)
-    r.max_excess = float(max(0.0, exc.max())) if len(exc) else 0.0
+    if r.discrete:
+        # exact comparison at every sample, the first and last included: validate_signal's band
+        # would allow dx band samples of time shift and skips the end samples, so a phase or fault
+        # flag off by 3 could pass; no tolerance applies either
+        dev = _discrete_deviation(t, y, t_ref, y_ref)
+        out = inside & ~(dev == 0)            # NaN differs too
+        if (out & ~nan).any():
+            msgs.append("discrete signal: compared exactly")
+    else:
+        if num is None:
+            # FMPy's cross-check default is 1000 band samples; a finer reference gets one band
+            # sample per reference sample, else features shorter than the band spacing fall
+            # between band samples and an identical result is reported outside the band
+            num = max(1000, len(t_ref))
+        # the FMI cross-check band (FMPy's implementation)
+        yv = np.where(np.isfinite(y), y, 0.0)
+        t_band, y_min, y_max, i_out = validate_signal(t=np.asarray(t, float), y=yv, t_ref=t_ref.copy(),
+                                                      y_ref=y_ref, num=num, dx=dx, dy=dy)
+        i_out = np.asarray(i_out, bool)
+        if band_floor:
+            # widen the band to at least +-band_floor around the reference (validate_signal's
+            # vertical width is dy x the signal's range, which is ~0 for a nearly constant signal
+            # such as fz)
+            y_band = np.interp(t_band, t_ref, y_ref)
+            y_min = np.minimum(y_min, y_band - band_floor)
+            y_max = np.maximum(y_max, y_band + band_floor)
+            lo_i, hi_i = np.interp(t, t_band, y_min), np.interp(t, t_band, y_max)
+            i_out = ((yv < lo_i) | (yv > hi_i)) & (t > t_band[0]) & (t < t_band[-1])
+        r.band = (t_band, y_min, y_max)
+        r.band_ok = not i_out.any()
+        lo = np.interp(t, t_band, y_min)
+        hi = np.interp(t, t_band, y_max)
+        exc = np.where(inside & np.isfinite(y), np.maximum(lo - y, y - hi), 0.0)
+        r.max_excess = float(max(0.0, exc.max())) if len(exc) else 0.0
+        if not r.band_ok:
+            msgs.append(f"outside the band by up to {r.max_excess:.4g}")
+        out = i_out | nan
 
-    # deviation from the (interpolated) reference
-    yr_at = _interp(t, t_ref, y_ref, discrete)
-    dev = np.abs(y - yr_at)
+        # deviation from the (linearly interpolated) reference, and the optional tube around it
+        yr_at = np.interp(t, t_ref, y_ref)
+        dev = np.abs(y - yr_at)
+        if abs_tol is not None or rel_tol is not None:
+            lim = (abs_tol or 0.0) + (rel_tol or 0.0) * np.abs(yr_at)
+            r.tube = (yr_at - lim, yr_at + lim)
+            tube_out = inside & ~(dev <= lim)
+            r.tube_ok = not tube_out.any()
+            if not r.tube_ok:
+                k = int(np.argmax(tube_out))
+                msgs.append(f"outside the tube (abs {abs_tol or 0:g}, rel {rel_tol or 0:g}) from t={t[k]:.6g}")
+            out |= tube_out
+
     dev_in = np.where(inside, dev, 0.0)
     if inside.any():
         if nan.any():
@@ -244,20 +274,10 @@ def compare_signal(name: str, t: np.ndarray, y: np.ndarray, t_ref: np.ndarray, y
         else:
             k = int(np.argmax(dev_in))
             r.max_dev, r.max_dev_time = float(dev_in[k]), float(t[k])
-    out = i_out.copy()
-    if abs_tol is not None or rel_tol is not None:
-        lim = (abs_tol or 0.0) + (rel_tol or 0.0) * np.abs(yr_at)
-        tube_out = inside & ~(dev <= lim)
-        r.tube_ok = not tube_out.any()
-        if not r.tube_ok:
-            k = int(np.argmax(tube_out))
-            msgs.append(f"outside the tube (abs {abs_tol or 0:g}, rel {rel_tol or 0:g}) from t={t[k]:.6g}")
-        out |= tube_out
+    r.outside = out
     r.n_outside = int(out.sum())
     if out.any():
         r.first_outside = float(t[int(np.argmax(out))])
-    if not r.band_ok:
-        msgs.insert(0, f"outside the band by up to {r.max_excess:.4g}")
     if require_coverage:
         tol = 1e-9 * max(1.0, abs(t_ref[-1]))
         if len(t) == 0 or t[0] > t_ref[0] + tol or t[-1] < t_ref[-1] - tol:
@@ -266,7 +286,7 @@ def compare_signal(name: str, t: np.ndarray, y: np.ndarray, t_ref: np.ndarray, y
             r.passed = False
             if r.first_outside is None and len(t):
                 r.first_outside = float(min(t[-1], t_ref[-1]))
-    r.passed = r.passed and r.band_ok and (r.tube_ok is not False)
+    r.passed = r.passed and not out.any()
     r.message = "; ".join(msgs)
     return r
 
@@ -360,38 +380,53 @@ def _check_options(opts: dict[str, Any], prefix: str = "") -> None:
             raise CompareError(f"{prefix}{k}: must be a finite number >= 0, got {v!r}")
 
 
-def plot_failed(report: CompareReport, out: str | Path, signals: list[str] | None = None) -> Path | None:
-    """One PNG with reference, band and result (outliers red) for the failed signals."""
-    names = signals or [s.name for s in report.failed]
-    if not names:
-        return None
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+def comparison_figure(report: CompareReport, signals: list[str] | None = None):
+    """A matplotlib Figure, one panel per signal (default: the failed signals, or every compared
+    signal when all passed): reference, the band and the tube that the verdict used, the result,
+    and in red exactly the result samples that the verdict counts as failing."""
+    from matplotlib.figure import Figure
     sig = {s.name: s for s in report.signals}
-    n = len(names)
-    fig, axes = plt.subplots(n, 1, figsize=(9, 2.4 * n + 0.6), sharex=True, squeeze=False)
-    for ax, name in zip(axes[:, 0], names):
+    names = signals or [s.name for s in (report.failed or report.signals)]
+    fig = Figure(figsize=(9, 2.4 * len(names) + 0.8))
+    axes = fig.subplots(len(names), 1, sharex=True, squeeze=False)[:, 0]
+    for ax, name in zip(axes, names):
         s = sig[name]
+        step = "steps-post" if s.discrete else "default"
         if s.band is not None:
-            tb, lo, hi = s.band
-            ax.fill_between(tb, lo, hi, color="tab:blue", alpha=0.18, lw=0, label="band")
-        ax.plot(report.t_ref, report.ref[name], color="tab:blue", lw=1, label="reference")
+            ax.fill_between(s.band[0], s.band[1], s.band[2], color="tab:blue", alpha=0.18, lw=0, label="band")
+        if s.tube is not None:
+            ax.fill_between(report.t_res, s.tube[0], s.tube[1], color="tab:orange", alpha=0.35, lw=0,
+                            label="tube (abs/rel tol)")
+        ax.plot(report.t_ref, report.ref[name], color="tab:blue", lw=1, drawstyle=step,
+                label="reference" + (" (discrete: exact)" if s.discrete else ""))
         y = np.asarray(report.res[name], float)
-        ax.plot(report.t_res, y, color="k", lw=0.8, label="result")
-        if s.band is not None:
-            lo_i = np.interp(report.t_res, s.band[0], s.band[1])
-            hi_i = np.interp(report.t_res, s.band[0], s.band[2])
-            bad = (y < lo_i) | (y > hi_i)
-            ax.plot(report.t_res[bad], y[bad], ".", color="tab:red", ms=3, label="outside")
+        ax.plot(report.t_res, y, color="k", lw=0.8, drawstyle=step, label="result")
+        if s.outside is not None and s.outside.any():
+            ax.plot(report.t_res[s.outside], y[s.outside], ".", color="tab:red", ms=4,
+                    label=f"failing samples ({s.n_outside})")
+        if s.first_outside is not None:
+            ax.axvline(s.first_outside, color="tab:red", lw=0.8, ls=":", label=f"first failure t={s.first_outside:.4g}")
         ax.set_ylabel(name)
         ax.set_title(s.line(), fontsize=8, loc="left")
         ax.grid(alpha=0.3)
-    axes[0, 0].legend(fontsize=7, loc="best")
-    axes[-1, 0].set_xlabel("time [s]")
+        ax.legend(fontsize=7, loc="best")
+    axes[-1].set_xlabel("time [s]")
+    fig.suptitle(f"{'PASS' if report.passed else 'FAIL'}: {report.result} vs {report.reference} "
+                 f"({len(report.failed)} of {len(report.signals)} signals failed)", fontsize=9)
     fig.tight_layout()
+    return fig
+
+
+def plot_comparison(report: CompareReport, out: str | Path, signals: list[str] | None = None) -> Path:
+    """Write comparison_figure(report, signals) as a PNG (also when every signal passed)."""
+    fig = comparison_figure(report, signals)
     out = Path(out)
     out.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(out, dpi=110)
-    plt.close(fig)
     return out
+
+
+def plot_failed(report: CompareReport, out: str | Path, signals: list[str] | None = None) -> Path | None:
+    """plot_comparison of the failed signals (or ``signals``); None, nothing written, if none failed."""
+    names = signals or [s.name for s in report.failed]
+    return plot_comparison(report, out, names) if names else None

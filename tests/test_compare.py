@@ -1,10 +1,12 @@
 """The CSV comparator (FMI cross-check band via fmpy.util.validate_signal + optional tube)."""
+import json
+
 import numpy as np
 import pytest
 from fmpy.util import read_csv, write_csv
 
 from anklehip.cli import main
-from anklehip.compare import CompareError, compare
+from anklehip.compare import CompareError, compare, comparison_figure
 
 T = np.linspace(0.0, 10.0, 2001)
 
@@ -62,8 +64,10 @@ def test_time_shift_fails_at_the_right_time():
     rep = compare(res, ref)
     ph = [s for s in rep.signals if s.name == "phase"][0]
     assert not ph.passed and ph.discrete
-    # the band allows ~0.1 s of shift; the first sample outside is just after 5.1 s
-    assert 5.05 < ph.first_outside < 5.2
+    # a discrete signal is compared exactly (no horizontal band tolerance): every sample in (5, 5.5] differs
+    assert ph.first_outside == T[T > 5][0]
+    assert ph.n_outside == np.count_nonzero((T > 5) & (T <= 5.5))
+    assert "samples differ" in ph.line()
 
 
 def test_resampled_equal_signal_passes():
@@ -200,3 +204,119 @@ def test_tolerance_for_a_signal_that_is_not_compared_is_an_error():
     ref = ref_signals(T)
     with pytest.raises(CompareError, match=r"tolerances given for signal\(s\) that are not compared: yy"):
         compare(ref, ref, tolerances={"yy": {"abs_tol": 1.0}})
+
+
+# --- `compare --plot` writes also when all pass; the plot shows the verdict's band, tube and failures;
+# --- integer signals are compared exactly
+
+def _png(path):
+    return path.is_file() and path.stat().st_size > 1000 and path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_plot_is_written_when_every_signal_passes(tmp_path, capsys):
+    write_csv(tmp_path / "ref.csv", ref_signals(T))
+    write_csv(tmp_path / "res.csv", ref_signals(T))
+    png = tmp_path / "sub" / "pass.png"
+    assert main(["compare", str(tmp_path / "res.csv"), str(tmp_path / "ref.csv"), "--plot", str(png)]) == 0
+    assert _png(png)
+    out = capsys.readouterr().out
+    assert f"plot of all compared signals (all passed): {png}" in out
+
+
+@pytest.fixture
+def saved_figures(monkeypatch):
+    """The matplotlib figures that are saved (to inspect what a plot draws)."""
+    from matplotlib.figure import Figure
+    figs, savefig = [], Figure.savefig
+
+    def spy(self, *args, **kwargs):
+        figs.append(self)
+        return savefig(self, *args, **kwargs)
+    monkeypatch.setattr(Figure, "savefig", spy)
+    return figs
+
+
+def _marked_points(ax):
+    """(x, y) of every marker-only line of an axis: the samples the plot marks as failing."""
+    pts = [np.column_stack([ln.get_xdata(), ln.get_ydata()]) for ln in ax.get_lines() if ln.get_linestyle() == "None"]
+    return np.concatenate(pts) if pts else np.zeros((0, 2))
+
+
+def test_plot_draws_the_tube_and_the_failures_of_a_strict_abs_tol(tmp_path, saved_figures, capsys):
+    ref = ref_signals(T)
+    res = ref.copy()
+    res["y"] = np.where(T >= 6.0, res["y"] + 0.01, res["y"])    # inside the default band (~0.35)
+    write_csv(tmp_path / "ref.csv", ref)
+    write_csv(tmp_path / "res.csv", res)
+    png = tmp_path / "strict.png"
+    rc = main(["compare", str(tmp_path / "res.csv"), str(tmp_path / "ref.csv"), "--abs-tol", "1e-3",
+               "--plot", str(png), "--json", str(tmp_path / "r.json")])
+    assert rc == 1 and _png(png)
+    assert compare(res, ref).passed                  # the failure comes from the tube alone
+    (fig,) = saved_figures
+    (ax,) = [ax for ax in fig.axes if ax.get_ylabel() == "y"]
+    assert [ax.get_ylabel() for ax in fig.axes] == ["y"]       # only the failed signal
+    pts = _marked_points(ax)
+    # exactly the samples that the verdict counts: t >= 6, where |dev| = 0.01 > 1e-3
+    assert np.array_equal(pts[:, 0], T[T >= 6.0]) and np.allclose(pts[:, 1], res["y"][T >= 6.0])
+    assert json.loads((tmp_path / "r.json").read_text())["signals"]["y"]["n_outside"] == len(pts)
+    # the tube is drawn: +-1e-3 around the reference
+    (tube,) = [c for c in ax.collections if "tube" in c.get_label()]
+    ys = np.concatenate([path.vertices[:, 1] for path in tube.get_paths()])
+    assert np.ptp(ys) == pytest.approx(np.ptp(ref["y"]) + 2e-3, rel=1e-6)
+
+
+def test_plot_library_marks_exactly_the_verdicts_samples():
+    ref = ref_signals(T)
+    res = ref.copy()
+    res["y"][[100, 700]] += 0.05
+    res["phase"][-1] = 5
+    rep = compare(res, ref, abs_tol=0.01)
+    fig = comparison_figure(rep)
+    axes = {ax.get_ylabel(): ax for ax in fig.axes}
+    assert sorted(axes) == ["phase", "y"]
+    assert np.array_equal(_marked_points(axes["y"])[:, 0], T[[100, 700]])
+    assert np.array_equal(_marked_points(axes["phase"])[:, 0], T[-1:])
+    assert {ax.get_ylabel() for ax in comparison_figure(compare(ref, ref)).axes} == {"y", "ramp", "phase"}
+
+
+def phase_ref(t):
+    return make(t, y=np.sin(t), phase=np.where(t < 5.0, 0, 3).astype(np.int32))
+
+
+@pytest.mark.parametrize("where", ["first sample", "last sample", "40 ms after the switch"])
+def test_integer_signal_off_by_3_fails(tmp_path, capsys, where):
+    ref = phase_ref(T)
+    res = ref.copy()
+    bad = {"first sample": T == T[0], "last sample": T == T[-1],
+           "40 ms after the switch": (T >= 5.0) & (T < 5.04)}[where]
+    res["phase"] = np.where(bad, res["phase"] - 3 if where.startswith("40") else res["phase"] + 3, res["phase"])
+    assert np.max(np.abs(res["phase"] - ref["phase"])) == 3
+    write_csv(tmp_path / "ref.csv", ref)
+    write_csv(tmp_path / "res.csv", res)
+    rc = main(["compare", str(tmp_path / "res.csv"), str(tmp_path / "ref.csv"), "--json", str(tmp_path / "r.json")])
+    out = capsys.readouterr().out
+    assert rc == 1, out
+    n, t0 = np.count_nonzero(bad), T[bad][0]
+    assert "[FAIL] phase" in out and f"{n}/{len(T)} samples differ, first at t={t0:.4f}" in out
+    assert "[PASS] y" in out
+    ph = json.loads((tmp_path / "r.json").read_text())["signals"]["phase"]
+    assert ph["discrete"] and ph["n_outside"] == n and ph["first_outside"] == t0 and ph["max_dev"] == 3
+    # tolerances do not loosen the exact rule
+    assert not compare(res, ref, dy=10.0, abs_tol=5.0, band_floor=5.0).passed
+
+
+def test_integer_signal_on_another_time_grid():
+    """Between two reference samples a discrete result may take either's value (a switch in between),
+    never another value."""
+    ref = phase_ref(T)                                  # samples every 5 ms: 0 at 4.995, 3 from 5.000
+    t = np.linspace(0.0, 10.0, 10001)                   # every 1 ms
+    res = make(t, y=np.sin(t), phase=np.where(t < 4.997, 0, 3).astype(np.int32))   # switch in between
+    rep = compare(res, ref)
+    assert rep.passed, rep.text()
+    res["phase"][4996] = 1                              # t = 4.996: the reference is 0 or 3 around it
+    ph = compare(res, ref).signals[1]
+    assert not ph.passed and ph.n_outside == 1 and ph.first_outside == pytest.approx(4.996)
+    res["phase"][4996] = 0
+    res["phase"][5000] = 0                              # t = 5.000 is a reference sample: 3 exactly
+    assert compare(res, ref).signals[1].first_outside == pytest.approx(5.0)
