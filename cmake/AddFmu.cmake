@@ -7,6 +7,8 @@
 #   <ModelName>       shared library <ModelName>.so with the FMI 2.0 API of the glue; only fmi2*
 #                     symbols exported (hidden visibility + version script), libstdc++/libgcc
 #                     linked statically, no undefined symbols; LINK libraries must be static.
+#                     With ANKLEHIP_GLIBC_BASELINE (the default) the packed .so is the one built
+#                     by zig against that glibc (cmake/LinuxBaselineFmus.cmake), not this target.
 #   <ModelName>_gen   generator built from the same sources: writes modelDescription.xml and
 #                     documentation/index.html from the variable table.
 #   <ModelName>_fmu   (ALL) packs into OUTPUT_DIR (default ${ANKLEHIP_FMU_DIR}) modelDescription.xml,
@@ -53,6 +55,13 @@ function(_add_fmu_binary name link include_dirs)
       # sanitized binaries resolve the sanitizer runtime (and the C++ runtime it wraps) from the
       # process: no static libstdc++, undefined __asan_* symbols, symbols kept for the reports
       target_link_options(${name} PRIVATE "LINKER:--version-script=${vscript}")
+    elseif(ANKLEHIP_ZIG_RUNTIME)
+      # zig links its libc++/libc++abi/libunwind statically; the version script hides them (zig
+      # takes the script as a separate argument, not --version-script=). FMUGLUE_ZIG_RUNTIME: the
+      # static objects' destructors at unload (fmi2_api.cpp).
+      target_compile_definitions(${name} PRIVATE FMUGLUE_ZIG_RUNTIME)
+      target_link_options(${name} PRIVATE "LINKER:--version-script,${vscript}" "LINKER:--no-undefined"
+        "LINKER:--gc-sections" $<$<CONFIG:Release,MinSizeRel>:-s>)
     else()
       target_compile_definitions(${name} PRIVATE FMUGLUE_STATIC_LIBSTDCXX)  # fmi2_api.cpp frees its pool
       target_link_options(${name} PRIVATE -static-libstdc++ -static-libgcc
@@ -93,8 +102,15 @@ function(add_fmu)
     CXX_VISIBILITY_PRESET hidden C_VISIBILITY_PRESET hidden VISIBILITY_INLINES_HIDDEN ON)
   target_compile_options(${name}_objs PRIVATE -ffunction-sections -fdata-sections)
 
-  # The FMU binary.
-  _add_fmu_binary(${name} "${FMU_LINK}" "" $<TARGET_OBJECTS:${name}_objs>)
+  # The FMU binary: this build's, or the glibc-baseline sub-build's (cmake/LinuxBaselineFmus.cmake).
+  if(ANKLEHIP_LINUX_BASELINE_BINARY_DIR)
+    set(so "${ANKLEHIP_LINUX_BASELINE_BINARY_DIR}/${name}.so")
+    set(so_dep "${so}")
+  else()
+    _add_fmu_binary(${name} "${FMU_LINK}" "" $<TARGET_OBJECTS:${name}_objs>)
+    set(so $<TARGET_FILE:${name}>)
+    set(so_dep ${name})
+  endif()
 
   # The coverage-guided FMI fuzzer of this FMU (fmu/fuzz/fmi_fuzz.cpp, docs/reliability.md).
   if(ANKLEHIP_FUZZ)
@@ -177,19 +193,22 @@ ${xml_files}      <IncludeDirectory name=\".\"/>
     COMMAND "${CMAKE_COMMAND}" -E rm -rf "${stage}"
     COMMAND "${CMAKE_COMMAND}" -E make_directory "${stage}/binaries/linux64" "${stage}/documentation" "${stage}/resources" "${ANKLEHIP_FMU_DIR}"
     COMMAND $<TARGET_FILE:${name}_gen> "${stage}" ${src_names}
-    COMMAND "${CMAKE_COMMAND}" -E copy $<TARGET_FILE:${name}> "${stage}/binaries/linux64/${name}.so"
+    COMMAND "${CMAKE_COMMAND}" -E copy "${so}" "${stage}/binaries/linux64/${name}.so"
     ${win_cmds}
     ${doc_cmds}
     ${src_cmds}
     COMMAND "${CMAKE_COMMAND}" -E rm -f "${fmu}"
     COMMAND "${CMAKE_COMMAND}" -E chdir "${stage}" "${CMAKE_COMMAND}" -E tar cf "${fmu}" --format=zip
             modelDescription.xml binaries documentation resources ${src_entry}
-    DEPENDS ${name} ${name}_gen ${doc_deps} ${src_deps} ${win_deps}
+    DEPENDS ${so_dep} ${name}_gen ${doc_deps} ${src_deps} ${win_deps}
     COMMENT "Packing ${name}.fmu"
     VERBATIM)
   add_custom_target(${name}_fmu ALL DEPENDS "${fmu}")
   if(ANKLEHIP_WIN64)
     add_dependencies(${name}_fmu win64_fmus)
+  endif()
+  if(ANKLEHIP_LINUX_BASELINE_BINARY_DIR)
+    add_dependencies(${name}_fmu linux64_fmus)
   endif()
   set_property(TARGET ${name}_fmu PROPERTY FMU_FILE "${fmu}")
   set_property(TARGET ${name}_fmu PROPERTY FMU_STAGE_DIR "${stage}")

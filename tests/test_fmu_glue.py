@@ -680,22 +680,6 @@ def test_guid_is_deterministic(controller_fmu, native_tool, tmp_path):
     assert ET.parse(tmp_path / "without" / "modelDescription.xml").getroot().get("guid") == guid
 
 
-def test_binary_exports_only_fmi2_and_needs_only_libc(controller_unzipped):
-    so = controller_unzipped / "binaries" / "linux64" / "AnkleHipController.so"
-    nm = shutil.which("nm")
-    readelf = shutil.which("readelf")
-    if not nm or not readelf:
-        pytest.fail("nm/readelf (binutils) are needed for this test: apt-get install binutils")
-    syms = subprocess.run([nm, "-D", "--defined-only", str(so)], check=True, capture_output=True,
-                          text=True).stdout.split("\n")
-    names = [line.split()[-1] for line in syms if line.strip()]
-    assert names and all(n.startswith("fmi2") for n in names), [n for n in names if not n.startswith("fmi2")]
-    dyn = subprocess.run([readelf, "-d", str(so)], check=True, capture_output=True, text=True).stdout
-    needed = {line.split("[")[1].split("]")[0] for line in dyn.splitlines() if "(NEEDED)" in line}
-    allowed = {"libc.so.6", "libm.so.6", "ld-linux-x86-64.so.2"}  # issue 3: C library and libm only
-    assert needed <= allowed, needed - allowed
-
-
 def test_packed_fmu_alone_in_empty_dir(controller_fmu, tmp_path):
     """Copy only the .fmu into an empty folder and simulate it from a clean process."""
     lone = tmp_path / "lone"

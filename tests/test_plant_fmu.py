@@ -26,20 +26,6 @@ def test_validates(plant_fmu):
     assert validate_fmu(str(plant_fmu)) == []
 
 
-def test_self_contained_binary(plant_unzipped):
-    """The binary needs only libc/libm/ld-linux (SUNDIALS, libstdc++ linked statically) and exports
-    only fmi2* functions, so it loads on a machine where only the FMU exists."""
-    so = plant_unzipped / "binaries" / "linux64" / "Hoap2Plant.so"
-    dyn = subprocess.run(["readelf", "-d", str(so)], capture_output=True, text=True, check=True).stdout
-    needed = sorted(l.split("[")[1].rstrip("]") for l in dyn.splitlines() if "(NEEDED)" in l)
-    assert set(needed) <= {"libc.so.6", "libm.so.6", "ld-linux-x86-64.so.2"}, needed
-    syms = subprocess.run(["nm", "-D", "--defined-only", str(so)], capture_output=True, text=True, check=True).stdout
-    names = [l.split()[-1] for l in syms.splitlines() if l.strip()]
-    assert names and all(n.startswith("fmi2") for n in names), [n for n in names if not n.startswith("fmi2")]
-    undef = subprocess.run(["nm", "-D", "--undefined-only", str(so)], capture_output=True, text=True, check=True).stdout
-    assert "sundials" not in undef.lower() and "CVode" not in undef and "N_V" not in undef
-
-
 def test_standalone_simulation_with_input_csv(plant_fmu, tmp_path):
     """From an empty directory holding only the .fmu, fmpy.simulate_fmu runs the plant with an
     input CSV (a 25 N, 60 ms push on the back): the foot rocks onto the toe, lands flat again and

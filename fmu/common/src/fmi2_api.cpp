@@ -162,6 +162,16 @@ void __freeres() noexcept;
 __attribute__((destructor)) static void releaseStaticRuntime() { __gnu_cxx::__freeres(); }
 #endif
 
+#if defined(FMUGLUE_ZIG_RUNTIME)
+// zig links no crtbeginS.o, whose destructor calls __cxa_finalize(&__dso_handle) when the binary
+// is unloaded: the destructors of this binary's static objects (registered with __cxa_atexit)
+// then stayed in the process's exit list, and the process crashed at exit calling into the
+// unmapped binary after an importer's dlclose. This destructor does what crtbeginS.o does.
+extern "C" void __cxa_finalize(void* dso);
+extern "C" __attribute__((visibility("hidden"))) void* __dso_handle;
+__attribute__((destructor)) static void finalizeStaticObjects() { __cxa_finalize(&__dso_handle); }
+#endif
+
 #define CALLLOG(inst, ...) \
   do { if ((inst)->logEnabled(kLogCalls)) (inst)->log(kLogCalls, fmi2OK, __VA_ARGS__); } while (0)
 

@@ -242,7 +242,7 @@ bool readPlantState(const Context& ctx, StateReader& r, bool& has, Snap& snap, d
   if (!r.u32(flag) || flag > 1) return err = "bad plant state header", false;
   has = flag == 1;
   if (!has) return true;
-  FieldReader fr{r};
+  FieldReader fr{r, {}};
   visit_fields(snap, fr);
   for (int i = 0; i < n; ++i) fr("last_inputs", last_in[i]);
   if (!fr.ok()) return err = "plant snapshot: " + fr.error, false;
