@@ -381,13 +381,18 @@ def test_stop_time_is_enforced(raw_controller):
 # Logging
 
 def test_logging_categories(raw_controller):
+    """loggingOn=true enables every category but logCalls; logCalls is switched on and off by name;
+    an unknown name is an error; with loggingOn=false only errors are logged."""
     inst = raw_controller.instance(logging_on=True)
     inst.fmi2SetupExperiment(0, 0.0, 0.0, 0, 0.0)
-    assert any(c == "logCalls" for _, c, _ in inst.log)
-    inst.log.clear()
+    assert not any(c == "logCalls" for _, c, _ in inst.log)
     cats = (ctypes.c_char_p * 1)(b"logCalls")
-    assert inst.fmi2SetDebugLogging(0, 1, cats) == fmi2OK
+    assert inst.fmi2SetDebugLogging(1, 1, cats) == fmi2OK
     inst.fmi2EnterInitializationMode()
+    assert any(c == "logCalls" and "fmi2EnterInitializationMode" in m for _, c, m in inst.log)
+    inst.log.clear()
+    assert inst.fmi2SetDebugLogging(0, 1, cats) == fmi2OK
+    inst.fmi2ExitInitializationMode()
     assert not any(c == "logCalls" for _, c, _ in inst.log)
     bad = (ctypes.c_char_p * 1)(b"noSuchCategory")
     assert inst.fmi2SetDebugLogging(1, 1, bad) == fmi2Error

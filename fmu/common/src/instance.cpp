@@ -36,7 +36,10 @@ Instance::Instance(const ModelInfo& inf, std::string nm, std::string res,
   vrIndex_.assign(info.variables.empty() ? 0 : static_cast<size_t>(maxVr) + 1, -1);
   for (size_t i = 0; i < info.variables.size(); ++i)
     vrIndex_[info.variables[i].vr] = static_cast<int>(i);
+  // loggingOn: every category but logCalls (one line per fmi2 call would bury the events);
+  // logCalls only when fmi2SetDebugLogging asks for it. Errors are always explained.
   categoryOn_.assign(kFirstModelCategory + info.extra_log_categories.size(), loggingOn);
+  categoryOn_[kLogCalls] = false;
   categoryOn_[kLogStatusError] = true;
   categoryOn_[kLogStatusFatal] = true;
   resetStore();
