@@ -331,7 +331,8 @@ def raw_glue_model(glue_test_fmu, tmp_path_factory) -> RawModel:
 class Slave:
     """One FMPy instance of a plant FMU (unzipped): named access to every variable, 1 ms steps."""
 
-    def __init__(self, unzipped: Path, params: dict | None = None, name: str = "plant", inputs: dict | None = None):
+    def __init__(self, unzipped: Path, params: dict | None = None, name: str = "plant", inputs: dict | None = None,
+                 tolerance: float | None = None):
         from fmpy import read_model_description
         from fmpy.fmi2 import FMU2Slave
         self.md = read_model_description(str(unzipped / "modelDescription.xml"))
@@ -339,7 +340,7 @@ class Slave:
         self.fmu = FMU2Slave(guid=self.md.guid, unzipDirectory=str(unzipped),
                              modelIdentifier=self.md.coSimulation.modelIdentifier, instanceName=name)
         self.fmu.instantiate(loggingOn=False)
-        self.fmu.setupExperiment(startTime=0.0)
+        self.fmu.setupExperiment(tolerance=tolerance, startTime=0.0)
         self.fmu.enterInitializationMode()
         for k, v in {**(params or {}), **(inputs or {})}.items():
             self.set(k, v)

@@ -93,6 +93,57 @@ def test_fall_discard_terminated_protocol(plant_unzipped):
     s.fmu.freeInstance()
 
 
+def _rocking_run(unzipped, params=None, tolerance=None, steps=300):
+    """A 25 N push of 60 ms that rocks the foot onto its toe; the outputs and the integrator's
+    right-hand-side count at the end."""
+    s = Slave(unzipped, params, tolerance=tolerance)
+    s.set("push_force", 25.0)
+    for i in range(steps):
+        if i == 60:
+            s.set("push_force", 0.0)
+        s.step()
+    out = s.outputs() + [s.get("rhs_evals")]
+    s.free()
+    return out
+
+
+def test_importer_tolerance_rule(plant_unzipped):
+    """The integrator's relative tolerance (docs/plant.md): the importer's fmi2SetupExperiment
+    tolerance when it defines one, else the DefaultExperiment's (1e-8, the model's default); the
+    parameter rtol, when set (> 0), wins over both. Established by equal and unequal runs: an
+    undefined tolerance runs exactly like a defined 1e-8; a loose 1e-4 changes the trajectory and
+    needs fewer right-hand-side evaluations; rtol=1e-10 with an importer's 1e-4 runs exactly like
+    rtol=1e-10 alone."""
+    from fmpy import read_model_description
+    md = read_model_description(str(plant_unzipped / "modelDescription.xml"))
+    assert md.defaultExperiment.tolerance == "1e-08"
+    assert next(v for v in md.modelVariables if v.name == "rtol").start == "0"
+    default = _rocking_run(plant_unzipped)
+    assert _rocking_run(plant_unzipped, tolerance=1e-8) == default
+    loose = _rocking_run(plant_unzipped, tolerance=1e-4)
+    assert loose != default and loose[-1] < default[-1]
+    tight = _rocking_run(plant_unzipped, {"rtol": 1e-10})
+    assert tight != default and tight[-1] > default[-1]
+    assert _rocking_run(plant_unzipped, {"rtol": 1e-10}, tolerance=1e-4) == tight
+
+
+def test_importer_tolerance_out_of_range_is_an_error(plant_unzipped, fmu_path):
+    """A tolerance the integrators cannot use (> 1e-2) fails the initialization with a message
+    that names fmi2SetupExperiment; the controller and the 3D plant (no error-controlled
+    integrator) advertise no tolerance."""
+    from fmpy import read_model_description
+    from fmpy.fmi2 import fmi2Error, fmi2OK
+    from conftest import RawModel
+    inst = RawModel(plant_unzipped).instance(logging_on=True)
+    assert inst.fmi2SetupExperiment(1, 0.5, 0.0, 0, 0.0) == fmi2OK
+    assert inst.fmi2EnterInitializationMode() == fmi2OK
+    assert inst.fmi2ExitInitializationMode() == fmi2Error
+    assert any("0.5" in m and "fmi2SetupExperiment" in m for m in inst.errors()), inst.errors()
+    inst.free()
+    for model in ("AnkleHipController", "Hoap2Plant3D"):
+        assert read_model_description(str(fmu_path(model))).defaultExperiment.tolerance is None, model
+
+
 def test_state_serialization_bit_for_bit(plant_unzipped):
     """A serialized FMU state taken while the foot rocks on its toe, de-serialized into a fresh
     instance, continues bit for bit like the uninterrupted run (the integrator restarted

@@ -49,6 +49,9 @@ struct RealParam {
   double min, max;
 };
 
+// The relative tolerances the integrators are used with (the parameter rtol, or the importer's).
+constexpr double kMinRtol = 1e-14, kMaxRtol = 1e-2;
+
 const RealParam kParams[] = {
     {"g", &Params::g, "m/s2", "Gravitational acceleration", 0.0, 100.0},
     {"m1", &Params::m1, "kg", "Mass of link 1 (both legs, knee straight)", 1e-6, 1e3},
@@ -85,19 +88,26 @@ const RealParam kParams[] = {
     {"sensor_fmin", &Params::sensor_fmin, "N", "Below this total load the sensor ZMP reads 0", 0.0, 1e4},
     {"theta_ankle_init", &Params::theta_ankle_init, "rad", "Initial ankle set-point (starts at rest in static equilibrium under it)", HOAP2_ANKLE_MIN, HOAP2_ANKLE_MAX},
     {"theta_hip_init", &Params::theta_hip_init, "rad", "Initial hip set-point (starts at rest in static equilibrium under it)", HOAP2_HIP_MIN, HOAP2_HIP_MAX},
-    {"rtol", &Params::rtol, "", "Relative tolerance of the integrator", 1e-14, 1e-2},
+    {"rtol", &Params::rtol, "", "Relative tolerance of the integrator; 0: the importer's fmi2SetupExperiment tolerance "
+     "when it defines one, else the DefaultExperiment's (docs/plant.md)", 0.0, kMaxRtol},
     {"atol", &Params::atol, "", "Absolute tolerance of the integrator (all states)", 1e-16, 1e-2},
 };
 constexpr int kNumParams = sizeof(kParams) / sizeof(kParams[0]);
+int paramIndex(double Params::*field) {
+  for (int i = 0; i < kNumParams; ++i)
+    if (kParams[i].field == field) return i;
+  return -1;
+}
 
 ModelInfo makeInfo() {
-  const Params def = hoap2plant::default_params();
+  Params def = hoap2plant::default_params();
+  def.rtol = 0.0;  // the parameter's start: the experiment's tolerance (paramsFromStore)
   ModelInfo m;
   m.model_name = "Hoap2Plant";
   m.description =
       "HOAP-2 humanoid in the sagittal plane: foot (flat / toe / heel / airborne contact, SUNDIALS root "
       "functions), legs and upper body, PD joint servos, sole load cells, push on the back, fall detection";
-  m.default_experiment = {0.0, 5.0, 1e-6, 1e-3};
+  m.default_experiment = {0.0, 5.0, hoap2plant::default_params().rtol, 1e-3};
   m.outputs_depend_on_inputs = false;
   m.extra_log_categories = {{"logSolver", "Integrator (ARKODE / CVODE) messages"}};
   auto add = [&](const char* n, fmi2ValueReference r, Type t, Causality c, Variability v, const char* unit,
@@ -172,7 +182,16 @@ bool paramsFromStore(const Context& ctx, Params& p, std::string& why) {
   p.seed = static_cast<std::uint64_t>(ctx.integer(vr::seed));
   p.integrator = static_cast<hoap2plant::Integrator>(ctx.integer(vr::integrator));
   char buf[160];
-  if (!(p.toe_x > p.heel_x)) {
+  // The integrator's relative tolerance: the parameter rtol when set (> 0, the user's explicit
+  // choice); else the importer's fmi2SetupExperiment tolerance when it defines one; else the
+  // model's default, which the DefaultExperiment advertises.
+  if (p.rtol == 0.0) p.rtol = ctx.tolerance_defined() ? ctx.tolerance() : hoap2plant::default_params().rtol;
+  if (!(p.rtol >= kMinRtol && p.rtol <= kMaxRtol)) {
+    std::snprintf(buf, sizeof buf, "relative tolerance %g (%s) is outside [%g, %g]", p.rtol,
+                  ctx.real(vr::first_real_param + paramIndex(&Params::rtol)) > 0.0 ? "parameter rtol"
+                                                                                    : "fmi2SetupExperiment's tolerance",
+                  kMinRtol, kMaxRtol);
+  } else if (!(p.toe_x > p.heel_x)) {
     std::snprintf(buf, sizeof buf, "toe_x (%g) must be > heel_x (%g)", p.toe_x, p.heel_x);
   } else if (p.h_push <= p.ankle_height + p.l1) {
     std::snprintf(buf, sizeof buf, "h_push (%g m) must be above the hip (ankle_height + l1 = %g m)", p.h_push,

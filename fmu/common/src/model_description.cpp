@@ -123,8 +123,9 @@ std::string xmlWithGuid(const ModelInfo& info, const std::string& guid,
   o << "  </LogCategories>\n";
 
   const auto& de = info.default_experiment;
-  o << "  <DefaultExperiment startTime=\"" << num(de.start_time) << "\" stopTime=\"" << num(de.stop_time)
-    << "\" tolerance=\"" << num(de.tolerance) << "\" stepSize=\"" << num(de.step_size) << "\"/>\n";
+  o << "  <DefaultExperiment startTime=\"" << num(de.start_time) << "\" stopTime=\"" << num(de.stop_time) << "\"";
+  if (de.tolerance > 0.0) o << " tolerance=\"" << num(de.tolerance) << "\"";
+  o << " stepSize=\"" << num(de.step_size) << "\"/>\n";
 
   o << "  <ModelVariables>\n";
   int index = 0;

@@ -80,7 +80,7 @@ struct LogCategoryInfo {
 struct DefaultExperiment {
   double start_time = 0.0;
   double stop_time = 1.0;
-  double tolerance = 1e-6;
+  double tolerance = 0.0;  // > 0: the tolerance of the model's error-controlled integrator; 0: none (omitted)
   double step_size = 1e-3;
 };
 
