@@ -126,20 +126,43 @@ def zmp_limits(params: dict[str, Any]) -> tuple[float, ...] | None:
 
 
 def make_figures(sc_name: str, data: np.ndarray, out: Path, res=None, animate: bool = False,
-                 anim_args: dict | None = None, figures: bool = True, params: dict | None = None) -> list[Path]:
+                 anim_args: dict | None = None, figures: bool = True, params: dict | None = None,
+                 progress: bool | None = None) -> list[Path]:
     """The standard figures of a result (and the 3D plant's frontal one), the animation if asked;
-    geometry from the run's plant parameters, or `params` for a CSV read back."""
+    geometry from the run's plant parameters, or `params` for a CSV read back. `progress` as in
+    master.simulate: on a terminal a bar of the figures, then one of the GIF's frames, and a line per
+    file written; nothing with False (`--no-progress`) or when stderr is not a terminal."""
+    import time
+
     from . import plots
-    files = [] if not figures else [plots.overview(data, out / f"{sc_name}_overview.png", title=sc_name),
-             plots.fig4(data, out / f"{sc_name}_fig4_joint_angles.png", title=f"{sc_name}: joint angles (cf. paper Fig. 4)"),
-             plots.fig5(data, out / f"{sc_name}_fig5_first_cycle.png",
-                        zmp_limits=zmp_limits(res.controller_parameters) if res else None,
-                        title=f"{sc_name}: first push cycle (cf. paper Fig. 5)")]
-    if figures and plots._has(data, "zmp_y", "com_y", "foot_roll"):   # the 3D plant's results
-        files.append(plots.frontal(data, out / f"{sc_name}_frontal.png", title=f"{sc_name}: frontal plane and feet"))
+    jobs = []
+    if figures:
+        zl = zmp_limits(res.controller_parameters) if res else None
+        jobs = [(f"{sc_name}_overview.png", lambda p: plots.overview(data, p, title=sc_name)),
+                (f"{sc_name}_fig4_joint_angles.png",
+                 lambda p: plots.fig4(data, p, title=f"{sc_name}: joint angles (cf. paper Fig. 4)")),
+                (f"{sc_name}_fig5_first_cycle.png",
+                 lambda p: plots.fig5(data, p, zmp_limits=zl, title=f"{sc_name}: first push cycle (cf. paper Fig. 5)"))]
+        if plots._has(data, "zmp_y", "com_y", "foot_roll"):   # the 3D plant's results
+            jobs.append((f"{sc_name}_frontal.png",
+                         lambda p: plots.frontal(data, p, title=f"{sc_name}: frontal plane and feet")))
+    files = []
+    bar = plots.progress_bar(len(jobs), "figures", "fig", progress) if jobs else None
+    try:
+        for name, draw in jobs:
+            if bar is not None:
+                bar.set_postfix_str(name)
+            t0 = time.perf_counter()
+            files.append(draw(out / name))
+            if bar is not None:
+                bar.update(1)
+            plots.say_written(bar, files[-1], time.perf_counter() - t0)
+    finally:
+        if bar is not None:
+            bar.close()
     if animate:
         files.append(plots.animate(data, out / f"{sc_name}.gif", geometry_for(res, params), title=sc_name,
-                                   **(anim_args or {})))
+                                   progress=progress, **(anim_args or {})))
     return files
 
 
@@ -268,7 +291,8 @@ def _run(a, sc, models, out: Path) -> int:
     if a.plots or a.animate:
         anim = {"fps": a.fps, "speed": a.speed, "t_start": a.anim_start, "t_stop": a.anim_stop}
         try:
-            for p in make_figures(sc.name, res.data, out, res, animate=a.animate, anim_args=anim, figures=a.plots):
+            for p in make_figures(sc.name, res.data, out, res, animate=a.animate, anim_args=anim, figures=a.plots,
+                                  progress=None if not a.no_progress else False):
                 files[p.stem] = str(p)
         except Exception as e:
             warnings.append(f"figures failed: {type(e).__name__}: {e}")

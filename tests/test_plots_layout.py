@@ -1,0 +1,150 @@
+"""Layout of the standard figures (no FMUs needed): the phase legend and the signal legends
+never overlap each other, stay inside the figure and hide no data; progress of figures and GIF
+frames follows the simulation's rules (a bar on a terminal only, none with progress=False)."""
+from __future__ import annotations
+
+import io
+import itertools
+import sys
+
+import numpy as np
+import pytest
+
+from anklehip import plots
+from anklehip.compare import read_result_csv
+from anklehip.paths import repo_root
+
+GOLDEN = repo_root() / "scenarios" / "reference" / "paper_five_pushes.csv"
+
+
+def synthetic(t_end=3.0, h=0.01):
+    """One push cycle with every phase, the hip angle peaking high (where a legend would go)."""
+    t = np.arange(0, t_end + h / 2, h)
+    names = ("time", "theta_ankle", "theta_hip", "theta_ankle_ref", "theta_hip_ref", "zmp_x", "com_x",
+             "fz", "push_force", "phase")
+    d = np.zeros(len(t), [(n, float) for n in names])
+    bump = np.exp(-((t - 2.6) / 0.3) ** 2)          # late in the window: under an upper-right legend
+    d["time"] = t
+    d["theta_ankle"], d["theta_hip"] = -0.08 * bump, 0.33 * bump
+    d["theta_ankle_ref"], d["theta_hip_ref"] = d["theta_ankle"], d["theta_hip"]
+    d["zmp_x"], d["com_x"] = 0.045 * bump, 0.008 * bump
+    d["fz"] = 70.2
+    d["push_force"] = np.where((t > 0.5) & (t < 2.8), 6.0, 0.0)
+    d["phase"] = np.select([t < 1.0, t < 1.6, t < 2.2, t < 2.9], [0, 1, 2, 3], 0)
+    return d
+
+
+def _figures():
+    gold = read_result_csv(GOLDEN)
+    for name, d in (("golden", gold), ("synthetic", synthetic())):
+        yield f"fig5-{name}", lambda d=d: plots.fig5_figure(d, zmp_limits=(0.025, -0.016), title="fig5")
+        yield f"overview-{name}", lambda d=d: plots.overview_figure(d, title="overview")
+        yield f"fig4-{name}", lambda d=d: plots.fig4_figure(d, title="fig4")
+
+
+FIGURES = list(_figures())
+
+
+def _intersect(a, b) -> bool:
+    """Strict overlap of two display-space bounding boxes (touching edges do not count)."""
+    return a.x0 < b.x1 and b.x0 < a.x1 and a.y0 < b.y1 and b.y0 < a.y1
+
+
+@pytest.fixture(params=FIGURES, ids=[n for n, _ in FIGURES])
+def drawn(request):
+    fig = request.param[1]()
+    fig.canvas.draw()
+    yield fig, fig.canvas.get_renderer()
+    plots.plt.close(fig)
+
+
+def test_one_phase_legend_below_the_panels_with_every_phase(drawn):
+    fig, r = drawn
+    assert len(fig.legends) == 1, "one phase legend for the whole figure"
+    leg = fig.legends[0]
+    labels = [t.get_text() for t in leg.get_texts()]
+    assert labels == ["phase 0 ankle (unshaded)", "phase 1 ankle→hip", "phase 2 hip", "phase 3 hip→ankle"]
+    cyan = leg.legend_handles[3].get_facecolor()
+    assert np.allclose(cyan[:3], plots.matplotlib.colors.to_rgb(plots.PHASE_COLORS[3]))
+    lb = leg.get_window_extent(r)
+    for ax in fig.axes:          # outside every panel, including its tick labels
+        assert not _intersect(lb, ax.get_tightbbox(r)), ax.get_ylabel()
+
+
+def test_legends_do_not_overlap_and_stay_in_the_figure(drawn):
+    fig, r = drawn
+    legends = list(fig.legends) + [ax.get_legend() for ax in fig.axes if ax.get_legend() is not None]
+    assert len(legends) >= 2          # the phase legend and at least one signal legend
+    boxes = [leg.get_window_extent(r) for leg in legends]
+    fb = fig.bbox
+    for b in boxes:
+        assert fb.x0 - 0.5 <= b.x0 and b.x1 <= fb.x1 + 0.5 and fb.y0 - 0.5 <= b.y0 and b.y1 <= fb.y1 + 0.5, b
+    for (i, a), (j, b) in itertools.combinations(enumerate(boxes), 2):
+        assert not _intersect(a, b), f"legend {i} overlaps legend {j}: {a} / {b}"
+
+
+def test_signal_legends_hide_no_data(drawn):
+    fig, r = drawn
+    for ax in fig.axes:
+        leg = ax.get_legend()
+        if leg is None:
+            continue
+        lb = leg.get_window_extent(r)
+        for line in ax.get_lines():
+            xy = line.get_transform().transform(np.column_stack(line.get_data()).astype(float))
+            inside = ((xy[:, 0] > lb.x0) & (xy[:, 0] < lb.x1) & (xy[:, 1] > lb.y0) & (xy[:, 1] < lb.y1))
+            assert not inside.any(), f"{ax.get_ylabel()}: {line.get_label()} runs under the legend"
+
+
+# ----------------------------------------------------------------------------------------------
+# progress and the GIF
+
+class _Terminal(io.StringIO):
+    def isatty(self):
+        return True
+
+
+def test_gif_progress_on_a_terminal_and_the_file_it_wrote(tmp_path, monkeypatch):
+    err = _Terminal()
+    monkeypatch.setattr(sys, "stderr", err)
+    out = plots.animate(synthetic(), tmp_path / "a.gif", fps=10, title="syn")
+    text = err.getvalue()
+    assert "frame" in text and "GIF a.gif" in text
+    assert f"anklehip: wrote {out}" in text
+
+
+@pytest.mark.parametrize("progress, stream", [(False, _Terminal), (None, io.StringIO)])
+def test_no_gif_progress_with_no_progress_or_off_a_terminal(tmp_path, monkeypatch, progress, stream):
+    err = stream()
+    monkeypatch.setattr(sys, "stderr", err)
+    plots.animate(synthetic(), tmp_path / "a.gif", fps=10, progress=progress)
+    assert err.getvalue() == ""
+
+
+def test_gif_frames_and_exact_colours(tmp_path):
+    """Every frame is written (3 s at 10 fps: 31 frames, none identical: the clock runs), and the
+    one palette keeps the background white and the arrow's orange exact."""
+    from PIL import Image, ImageSequence
+    out = plots.animate(synthetic(), tmp_path / "a.gif", fps=10, progress=False)
+    with Image.open(out) as im:
+        assert im.n_frames == 31
+        frames = [f.convert("RGB") for f in ImageSequence.Iterator(im)]
+    assert frames[0].getpixel((1, 1)) == (255, 255, 255)
+    orange = tuple(round(255 * c) for c in plots.matplotlib.colors.to_rgb("tab:orange"))
+    assert any(orange in {c for _, c in f.getcolors(1 << 16)} for f in frames[5:25])   # the push arrow
+
+
+def test_make_figures_progress_bar_and_lines(tmp_path, monkeypatch):
+    from anklehip.cli import make_figures
+    err = _Terminal()
+    monkeypatch.setattr(sys, "stderr", err)
+    files = make_figures("syn", synthetic(), tmp_path)
+    assert [f.name for f in files] == ["syn_overview.png", "syn_fig4_joint_angles.png", "syn_fig5_first_cycle.png"]
+    text = err.getvalue()
+    assert "figures" in text
+    for f in files:
+        assert f"anklehip: wrote {f}" in text
+    err2 = _Terminal()
+    monkeypatch.setattr(sys, "stderr", err2)
+    make_figures("syn", synthetic(), tmp_path, progress=False)
+    assert err2.getvalue() == ""
