@@ -377,68 +377,60 @@ def cmd_compare(a) -> int:
 
 
 def cmd_steptest(a) -> int:
-    from .compare import CompareError
+    from .compare import CompareError, plot_failed
     from .fmu import FMUError
     from .paths import CONTROLLER_FMU, MissingFileError, find_fmu, find_rt_runner
-    from .steptest import StepTestError, run_case, run_native
+    from .steptest import StepTestError, failures, histogram_path, rt_histogram, run_case, run_native, summary
+    if a.fail_on_miss and not a.realtime:
+        return _err("--fail-on-miss needs --realtime (only a paced run has deadlines)")
+    if a.histogram and not (a.realtime or a.native):
+        return _err("--histogram needs --realtime or --native (a plain Python run is not timed)")
+    cases = [Path(c) for c in a.cases]
+    names = [c.name for c in cases]
+    if (a.out or a.histogram) and len(set(names)) < len(names):
+        dup = sorted({n for n in names if names.count(n) > 1})
+        return _err(f"two cases are named {', '.join(dup)}: their files under --out/--histogram would collide")
     try:
         fmu = Path(a.fmu) if a.fmu else find_fmu(CONTROLLER_FMU, a.fmu_dir)
+        exe = find_rt_runner() if a.native else None
     except MissingFileError as e:
         return _err(str(e))
-    rc = EXIT_OK
-    for case in a.cases:
-        case = Path(case)
+    if a.native and exe is None:
+        return _err("the native real-time runner anklehip_rt_step is not built (fmu/rt_runner; "
+                    "run `bash scripts/setup.sh`), or set ANKLEHIP_RT_STEP")
+    tol = dict(abs_tol=a.abs_tol, rel_tol=a.rel_tol, dx=a.dx, dy=a.dy, compare_ref=not a.no_compare)
+    results = []
+    for case in cases:
         out = Path(a.out) / case.name if a.out else None
-        if a.native:
-            exe = find_rt_runner()
-            if exe is None:
-                return _err("the native real-time runner anklehip_rt_step is not built (fmu/rt_runner; "
-                            "run `bash scripts/setup.sh`), or set ANKLEHIP_RT_STEP")
-            try:
-                r, rep, _ = run_native(exe, fmu, case, out, a.native_args, fast=not a.realtime,
-                                       histogram=Path(a.histogram) if a.histogram else None,
-                                       compare_ref=not a.no_compare, abs_tol=a.abs_tol, rel_tol=a.rel_tol,
-                                       dx=a.dx, dy=a.dy)
-            except (StepTestError, CompareError, FMUError) as e:
-                print(f"anklehip: error: {case}: {e}", file=sys.stderr)
-                rc = EXIT_ERROR
-                continue
-            if r != 0:
-                print(f"anklehip: error: {case}: anklehip_rt_step exited with {r}", file=sys.stderr)
-                rc = max(rc, EXIT_FAIL)
-            if rep is not None:
-                print(rep.text(verbose=not a.failed_only))
-                if not rep.passed:
-                    rc = max(rc, EXIT_FAIL)
-            continue
         try:
-            r = run_case(case, fmu, out, realtime=a.realtime, spin_us=a.spin_us, abs_tol=a.abs_tol,
-                         rel_tol=a.rel_tol, dx=a.dx, dy=a.dy, compare_ref=not a.no_compare)
+            if a.native:
+                r = run_native(exe, fmu, case, out, a.native_args, realtime=a.realtime, **tol)
+            else:
+                r = run_case(case, fmu, out, realtime=a.realtime, spin_us=a.spin_us, **tol)
         except (StepTestError, CompareError, FMUError) as e:
             print(f"anklehip: error: {case}: {e}", file=sys.stderr)
-            rc = EXIT_ERROR
+            results.append((case, None))
             continue
-        print(f"step test {case}: {len(r.data) - 1} steps" + (f", outputs {r.out_csv}" if r.out_csv else ""))
+        results.append((case, r))
+        steps = f"{len(r.data) - 1} steps" if r.data is not None else "no outputs"
+        print(f"step test {case}: {steps}" + (f", outputs {r.out_csv}" if r.out_csv else ""))
         if r.report is not None:
             print(r.report.text(verbose=not a.failed_only))
             if a.plot and not r.report.passed:
-                from .compare import plot_failed
-                dest = (out or case) / "failed_signals.png"
-                print(f"plot of the failed signals: {plot_failed(r.report, dest)}")
-            if not r.report.passed:
-                rc = max(rc, EXIT_FAIL)
+                print(f"plot of the failed signals: {plot_failed(r.report, (out or case) / 'failed_signals.png')}")
         if r.rt is not None:
             print(r.rt.text())
             if a.histogram:
-                from .plots import rt_histogram
-                dest = Path(a.histogram) if len(a.cases) == 1 else Path(a.histogram).with_name(
-                    f"{case.name}_{Path(a.histogram).name}")
-                print(f"histogram: {rt_histogram(r.rt.exec_us, r.rt.late_us, r.rt.period_us, dest, str(case))}")
+                dest = histogram_path(Path(a.histogram), case, len(cases))
+                print(f"histogram: {rt_histogram(r.rt, dest, case.name)}")
             if out:
                 out.mkdir(parents=True, exist_ok=True)
                 (out / "realtime.json").write_text(json.dumps(r.rt.as_dict(), indent=2) + "\n")
-            if a.fail_on_miss and r.rt.misses:
-                rc = max(rc, EXIT_FAIL)
+                print(f"timing report: {out / 'realtime.json'}")
+        why = failures(r, a.fail_on_miss)
+        print(f"{case.name}: {'FAIL: ' + '; '.join(why) if why else 'PASS'}")
+    text, rc = summary(results, a.fail_on_miss)
+    print(text)
     return rc
 
 
@@ -903,8 +895,10 @@ def build_parser() -> argparse.ArgumentParser:
                    help="use the native anklehip_rt_step (fmu/rt_runner): paced with --realtime, else as fast as possible")
     s.add_argument("--native-args", nargs=argparse.REMAINDER, help="extra arguments for anklehip_rt_step")
     s.add_argument("--spin-us", type=NON_NEGATIVE, default=0.0, help="busy-wait the last N µs before a deadline")
-    s.add_argument("--histogram", metavar="PNG", help="plot execution time and lateness histograms")
-    s.add_argument("--fail-on-miss", action="store_true", help="exit 1 on any deadline miss")
+    s.add_argument("--histogram", metavar="PNG", help="plot execution time and lateness histograms (with several "
+                   "cases one file per case: <stem>_<case>.png beside PNG)")
+    s.add_argument("--fail-on-miss", action="store_true", help="with --realtime: a case with a deadline miss fails "
+                   "(exit 1), for both runners")
     s.add_argument("--abs-tol", type=NON_NEGATIVE)
     s.add_argument("--rel-tol", type=NON_NEGATIVE)
     s.add_argument("--dx", type=_number(ge=1, integer=True))

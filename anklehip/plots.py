@@ -612,22 +612,3 @@ def animate(d: np.ndarray, out: Path, geom: Geometry | None = None, fps: float =
             bar.close()
         plt.close(fig)
     return out
-
-
-# ----------------------------------------------------------------------------------------------
-
-def rt_histogram(exec_us: np.ndarray, late_us: np.ndarray, period_us: float, out: Path, title: str = "") -> Path:
-    fig, ax = plt.subplots(1, 2, figsize=(10, 3.6))
-    for x, v, lab in ((ax[0], exec_us, "step execution time [µs]"), (ax[1], late_us, "wake-up lateness [µs]")):
-        if len(v):
-            x.hist(v, bins=100, color="tab:blue", log=True)
-            for q, ls in ((50, "-"), (99, "--"), (99.9, ":")):
-                x.axvline(np.percentile(v, q), color="k", ls=ls, lw=0.8, label=f"p{q:g}")
-        x.set_xlabel(lab)
-        x.grid(alpha=0.3)
-        x.legend(fontsize=7)
-    ax[0].axvline(period_us, color="tab:red", lw=1)
-    ax[0].set_ylabel("count")
-    fig.suptitle(title, fontsize=9)
-    fig.tight_layout()
-    return _save(fig, out)

@@ -180,43 +180,71 @@ class _StepTestV(_V):
 
 @dataclass
 class RTStats:
+    """Per-step timings of one run, in µs: ``exec_us`` the duration of each fmi2DoStep alone,
+    ``late_us`` how long after its deadline each step started. ``misses`` counts the deadline
+    misses (steps whose work — set inputs, doStep, get outputs — finished after the next deadline);
+    it is None for a run that was not paced (the native runner's fast mode), which has no
+    deadlines and no lateness."""
     period_us: float
     exec_us: np.ndarray
     late_us: np.ndarray
-    misses: int
+    misses: int | None
     spin_us: float = 0.0
+    runner: str = "python"          # "python" (run_controller) or "native" (anklehip_rt_step)
+
+    @property
+    def paced(self) -> bool:
+        return self.misses is not None
+
+    @classmethod
+    def from_timings(cls, path: Path, period_us: float, paced: bool) -> RTStats:
+        """The per-step ``--timings`` CSV of anklehip_rt_step: step,time,exec_ns,lateness_ns,miss."""
+        tm = np.genfromtxt(path, delimiter=",", names=True, ndmin=1)
+        if "miss" not in (tm.dtype.names or ()):
+            raise StepTestError(f"{path}: no 'miss' column: this anklehip_rt_step is older than the "
+                                "anklehip package, rebuild it (cmake --build build --target anklehip_rt_step)")
+        return cls(period_us=period_us, exec_us=tm["exec_ns"] / 1e3,
+                   late_us=tm["lateness_ns"] / 1e3 if paced else np.zeros(0),
+                   misses=int(np.sum(tm["miss"])) if paced else None, runner="native")
 
     def pct(self, v: np.ndarray) -> dict[str, float]:
+        """p50/p99/p99.9/max by nearest rank (each one a measured value, as anklehip_rt_step
+        reports them)."""
         if not len(v):
             return {}
-        return {"p50": float(np.percentile(v, 50)), "p99": float(np.percentile(v, 99)),
-                "p99.9": float(np.percentile(v, 99.9)), "max": float(np.max(v))}
+        return {"p50": float(np.percentile(v, 50, method="inverted_cdf")),
+                "p99": float(np.percentile(v, 99, method="inverted_cdf")),
+                "p99.9": float(np.percentile(v, 99.9, method="inverted_cdf")), "max": float(np.max(v))}
 
     def as_dict(self) -> dict[str, Any]:
-        return {"period_us": self.period_us, "steps": int(len(self.exec_us)), "deadline_misses": self.misses,
+        """The content of realtime.json (docs/step-tests.md, "Real-time pacing")."""
+        return {"runner": self.runner, "mode": "realtime" if self.paced else "fast",
+                "period_us": self.period_us, "steps": int(len(self.exec_us)), "deadline_misses": self.misses,
                 "exec_us": self.pct(self.exec_us), "lateness_us": self.pct(self.late_us), "spin_us": self.spin_us}
 
     def text(self) -> str:
-        e, l = self.pct(self.exec_us), self.pct(self.late_us)
         f = lambda d: "  ".join(f"{k} {v:8.1f}" for k, v in d.items())  # noqa: E731
-        return (f"real-time: period {self.period_us:.0f} µs, {len(self.exec_us)} steps, "
-                f"{self.misses} deadline misses\n"
-                f"  doStep execution [µs]  {f(e)}\n"
-                f"  wake-up lateness [µs]  {f(l)}")
+        head = (f"real-time: period {self.period_us:.0f} µs, {len(self.exec_us)} steps, {self.misses} deadline misses"
+                if self.paced else f"timing, not paced (fast): {len(self.exec_us)} steps, no deadlines")
+        lines = [f"{head} ({self.runner} runner)", f"  doStep execution [µs]  {f(self.pct(self.exec_us))}"]
+        if self.paced:
+            lines.append(f"  wake-up lateness [µs]  {f(self.pct(self.late_us))}")
+        return "\n".join(lines)
 
 
 @dataclass
 class StepTestResult:
     case: Path
     out_csv: Path | None
-    data: np.ndarray
+    data: np.ndarray | None             # the outputs; None when the native runner failed
     report: CompareReport | None
     rt: RTStats | None = None
     notes: list[str] = field(default_factory=list)
+    runner_error: str | None = None     # why the native runner failed (its exit status)
 
     @property
     def passed(self) -> bool:
-        return self.report is None or self.report.passed
+        return not self.runner_error and (self.report is None or self.report.passed)
 
 
 def run_controller(fmu: Path | FMUInfo, inputs: np.ndarray, start: float, stop: float, step: float,
@@ -344,6 +372,27 @@ def run_controller(fmu: Path | FMUInfo, inputs: np.ndarray, start: float, stop: 
     return out[order], rt
 
 
+def _compare(data: np.ndarray, ref: np.ndarray, meta: dict[str, Any], result_label: str, reference_label: str,
+             abs_tol: float | None = None, rel_tol: float | None = None, dx: int | None = None,
+             dy: float | None = None, num: int | None = None) -> CompareReport:
+    """Every reference column against the run's outputs, with the case's [compare] tolerances
+    unless given here (the command line's)."""
+    cm = dict(meta.get("compare", {}))
+    return compare(data, ref, columns=list(ref.dtype.names[1:]), num=num or cm.get("num"), dx=dx or cm.get("dx", 20),
+                   dy=dy if dy is not None else cm.get("dy", 0.1),
+                   abs_tol=abs_tol if abs_tol is not None else cm.get("abs_tol"),
+                   rel_tol=rel_tol if rel_tol is not None else cm.get("rel_tol"),
+                   tolerances=cm.get("signals"), result_label=result_label, reference_label=reference_label)
+
+
+def _reference(f: dict[str, Path], compare_ref: bool) -> np.ndarray | None:
+    if not compare_ref:
+        return None
+    if not f["ref"].is_file():
+        raise StepTestError(f"{f['ref']}: no such file (use --no-compare to only produce outputs)")
+    return read_result_csv(f["ref"], "reference")
+
+
 def run_case(case_dir: Path, fmu: Path, out_dir: Path | None = None, *, realtime: bool = False,
              spin_us: float = 0.0, abs_tol: float | None = None, rel_tol: float | None = None,
              dx: int | None = None, dy: float | None = None, num: int | None = None,
@@ -356,9 +405,7 @@ def run_case(case_dir: Path, fmu: Path, out_dir: Path | None = None, *, realtime
     meta = read_meta(f["meta"])
     inputs = read_result_csv(f["in"], "input")
     params = dict(meta.get("controller", {}))
-    cm = dict(meta.get("compare", {}))
-    ref = read_result_csv(f["ref"], "reference") if compare_ref and f["ref"].is_file() else None
-    outputs = list(ref.dtype.names[1:]) if ref is not None else None
+    ref = _reference(f, compare_ref)
     data, rt = run_controller(fmu, inputs, opts["StartTime"], opts["StopTime"], opts["StepSize"],
                               params, outputs=None, realtime=realtime, spin_us=spin_us, source=str(f["in"]),
                               parameters_origin=f"{f['meta']} [controller]")
@@ -368,55 +415,191 @@ def run_case(case_dir: Path, fmu: Path, out_dir: Path | None = None, *, realtime
         atomic_write_csv(out_csv, data)
     report = None
     if ref is not None:
-        report = compare(data, ref, columns=outputs, num=num or cm.get("num"), dx=dx or cm.get("dx", 20),
-                         dy=dy if dy is not None else cm.get("dy", 0.1),
-                         abs_tol=abs_tol if abs_tol is not None else cm.get("abs_tol"),
-                         rel_tol=rel_tol if rel_tol is not None else cm.get("rel_tol"),
-                         tolerances=cm.get("signals"), result_label=str(out_csv or "output"), reference_label=str(f["ref"]))
-    elif compare_ref:
-        raise StepTestError(f"{f['ref']}: no such file (use --no-compare to only produce outputs)")
+        report = _compare(data, ref, meta, str(out_csv or "output"), str(f["ref"]), abs_tol=abs_tol,
+                          rel_tol=rel_tol, dx=dx, dy=dy, num=num)
     return StepTestResult(case=case_dir, out_csv=out_csv, data=data, report=report, rt=rt)
 
 
-def run_native(exe: Path, fmu: Path, case_dir: Path, out_dir: Path | None, extra: list[str] | None = None,
-               model: str = MODEL, fast: bool = False, histogram: Path | None = None,
-               compare_ref: bool = True, **tol) -> tuple[int, CompareReport | None, Path]:
-    """Delegate the paced run to the native executable ``anklehip_rt_step`` (fmu/rt_runner), then
-    compare its outputs with the reference like the Python runner does."""
+def run_native(exe: Path, fmu: Path, case_dir: Path, out_dir: Path | None = None, extra: list[str] | None = None,
+               *, realtime: bool = False, abs_tol: float | None = None, rel_tol: float | None = None,
+               dx: int | None = None, dy: float | None = None, num: int | None = None,
+               model: str = MODEL, compare_ref: bool = True) -> StepTestResult:
+    """run_case on the native executable ``anklehip_rt_step`` (fmu/rt_runner): paced with
+    ``realtime``, else as fast as possible; its outputs are compared with the reference like the
+    Python runner's, its per-step timings (timings.csv) become ``rt``. Without ``out_dir`` the
+    runner's files go to a temporary folder that is removed afterwards."""
     import tempfile
+    case_dir = Path(case_dir)
     f = case_files(case_dir, model)
+    if not case_dir.is_dir():
+        raise StepTestError(f"{case_dir}: no such case folder")
     opts = read_opt(f["opt"])
     if opts["StartTime"] != 0.0:
         raise StepTestError(f"{f['opt']}: the native runner starts at t = 0 (StartTime {opts['StartTime']:g})")
     meta = read_meta(f["meta"])
+    read_result_csv(f["in"], "input")          # a malformed cell is an error naming it (the runner reads 0)
+    ref = _reference(f, compare_ref)
     info = FMUInfo.load(fmu)
     params = dict(meta.get("controller", {}))
     info.check_overrides(params, f"{f['meta']} [controller]")
-    work = Path(out_dir) if out_dir is not None else Path(tempfile.mkdtemp(prefix="rt_step_"))
-    work.mkdir(parents=True, exist_ok=True)
-    out_csv = work / f"{model}_out.csv"
-    timings = work / "timings.csv"
-    cmd = [str(exe), "--fmu-dir", str(info.unzipdir), "--input", str(f["in"]), "--output", str(out_csv),
-           "--step", repr(opts["StepSize"]), "--stop-time", repr(opts["StopTime"]), "--timings", str(timings)]
-    for k, v in params.items():
-        cmd += ["--param", f"{k}={int(v) if isinstance(v, bool) else v}"]
-    if fast:
-        cmd.append("--fast")
-    cmd += extra or []
-    print("+ " + " ".join(cmd), flush=True)
-    rc = subprocess.call(cmd, env=os.environ.copy())
+    with tempfile.TemporaryDirectory(prefix="rt_step_") as tmp:
+        work = Path(out_dir) if out_dir is not None else Path(tmp)
+        work.mkdir(parents=True, exist_ok=True)
+        out_csv, timings = work / f"{model}_out.csv", work / "timings.csv"
+        cmd = [str(exe), "--fmu-dir", str(info.unzipdir), "--input", str(f["in"]), "--output", str(out_csv),
+               "--step", repr(opts["StepSize"]), "--stop-time", repr(opts["StopTime"]), "--timings", str(timings)]
+        for k, v in params.items():
+            cmd += ["--param", f"{k}={int(v) if isinstance(v, bool) else v}"]
+        if not realtime:
+            cmd.append("--fast")
+        cmd += extra or []
+        print("+ " + " ".join(cmd), flush=True)
+        # its report is printed from timings.csv below, the same way as the Python runner's
+        p = subprocess.run(cmd, env=os.environ.copy(), stdout=subprocess.PIPE, text=True)
+        if p.returncode != 0:
+            print(p.stdout, end="", flush=True)
+            return StepTestResult(case=case_dir, out_csv=None, data=None, report=None,
+                                  runner_error=f"anklehip_rt_step exited with {p.returncode}")
+        rt = RTStats.from_timings(timings, opts["StepSize"] * 1e6, paced=realtime)
+        data = read_result_csv(out_csv, "native runner output")
+    out_label = str(out_csv) if out_dir is not None else "native runner output"
     report = None
-    if rc == 0 and histogram is not None and timings.is_file():
-        from .plots import rt_histogram
-        tm = np.genfromtxt(timings, delimiter=",", names=True)
-        print(f"histogram: {rt_histogram(tm['exec_ns'] / 1e3, tm['lateness_ns'] / 1e3, opts['StepSize'] * 1e6, histogram, f'native: {case_dir}')}")
-    if rc == 0 and compare_ref and f["ref"].is_file():
-        ref = read_result_csv(f["ref"], "reference")
-        cm = dict(meta.get("compare", {}))
-        for k, v in tol.items():
-            if v is not None:
-                cm[k] = v
-        report = compare(out_csv, ref, columns=list(ref.dtype.names[1:]), num=cm.get("num"),
-                         dx=cm.get("dx", 20), dy=cm.get("dy", 0.1), abs_tol=cm.get("abs_tol"),
-                         rel_tol=cm.get("rel_tol"), tolerances=cm.get("signals"), reference_label=str(f["ref"]))
-    return rc, report, out_csv
+    if ref is not None:
+        report = _compare(data, ref, meta, out_label, str(f["ref"]), abs_tol=abs_tol, rel_tol=rel_tol, dx=dx,
+                          dy=dy, num=num)
+    return StepTestResult(case=case_dir, out_csv=out_csv if out_dir is not None else None, data=data,
+                          report=report, rt=rt)
+
+
+# ----------------------------------------------------------------------------------------------
+# the verdict, shared by both runners
+
+def failures(r: StepTestResult, fail_on_miss: bool = False) -> list[str]:
+    """Why a case that ran fails ([] when it passes) — the one rule of `anklehip steptest` for the
+    Python and the native runner: the runner failed, a signal is outside its tolerance, or, with
+    ``fail_on_miss``, a deadline was missed."""
+    why = []
+    if r.runner_error:
+        why.append(r.runner_error)
+    if r.report is not None and not r.report.passed:
+        why.append(f"{len(r.report.failed)} of {len(r.report.signals)} signals outside tolerance")
+    if fail_on_miss and r.rt is not None and r.rt.misses:
+        why.append(f"{r.rt.misses} deadline misses (--fail-on-miss)")
+    return why
+
+
+def summary(results: list[tuple[Path, StepTestResult | None]], fail_on_miss: bool = False) -> tuple[str, int]:
+    """The closing summary of a step-test run and its exit status: 0 when every case passes,
+    1 when a case fails (see failures), 2 when a case could not run (malformed case, missing file;
+    its result is None)."""
+    ran = [(c, r) for c, r in results if r is not None]
+    failed = [c.name for c, r in ran if failures(r, fail_on_miss)]
+    broken = [c.name for c, r in results if r is None]
+    code = 2 if broken else 1 if failed else 0
+    named = lambda names: f" ({', '.join(names)})" if names else ""  # noqa: E731
+    lines = [f"summary: {len(results)} case{'s' if len(results) != 1 else ''}: {len(ran) - len(failed)} passed, "
+             f"{len(failed)} failed{named(failed)}, {len(broken)} could not run{named(broken)}"]
+    paced = [(c, r.rt) for c, r in ran if r.rt is not None and r.rt.paced]
+    if paced:
+        total = sum(rt.misses for _, rt in paced)
+        lines.append(f"  deadline misses: {total} in total ("
+                     + ", ".join(f"{c.name} {rt.misses}" for c, rt in paced) + ")"
+                     + ("" if not total else "; failing the run (--fail-on-miss)" if fail_on_miss
+                        else "; not failing the run (no --fail-on-miss)"))
+    else:
+        lines.append("  deadline misses: not measured (no --realtime)")
+    timed = [(c, r.rt) for c, r in ran if r.rt is not None and len(r.rt.exec_us)]
+    if timed:
+        c, rt = max(timed, key=lambda x: float(np.max(x[1].exec_us)))
+        lines.append(f"  worst-case doStep execution: {np.max(rt.exec_us):.1f} µs ({c.name}, {rt.runner} runner; "
+                     f"period {rt.period_us:g} µs)")
+    else:
+        lines.append("  worst-case doStep execution: not measured (use --realtime or --native)")
+    lines.append(f"exit {code} (0: every case passed; 1: a case failed: a signal outside tolerance, a runner "
+                 f"error or, with --fail-on-miss, a deadline miss; 2: a case could not run)")
+    return "\n".join(lines), code
+
+
+# ----------------------------------------------------------------------------------------------
+# the execution-time histogram
+
+def histogram_path(png: Path, case: Path, n_cases: int) -> Path:
+    """Where --histogram PNG goes for a case: PNG itself for a single case, else one file per case
+    beside it, named after the case: <stem>_<case><suffix> (rt.png -> rt_ankle_small_push.png)."""
+    png = Path(png)
+    return png if n_cases == 1 else png.with_name(f"{png.stem}_{Path(case).name}{png.suffix or '.png'}")
+
+
+def _us(x: float) -> str:
+    """A time in µs for a label: 3 significant digits, no exponent (0.852, 3.04, 396, 3455)."""
+    return f"{x:.0f}" if abs(x) >= 100 else f"{x:.3g}"
+
+
+def rt_histogram(rt: RTStats, out: Path, title: str = "") -> Path:
+    """rt_histogram_figure as a PNG."""
+    import matplotlib.pyplot as plt
+    fig = rt_histogram_figure(rt, title)
+    out = Path(out)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(out, dpi=120)
+    plt.close(fig)
+    return out
+
+
+def rt_histogram_figure(rt: RTStats, title: str = ""):
+    """Histograms of the execution time and the wake-up lateness on log-log axes in µs (20 bins a
+    decade), the period as a red line, median/p99/max as labelled lines (one row of labels each,
+    above the bars), the legend below the panels."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib.ticker import FuncFormatter
+
+    fig, axes = plt.subplots(1, 2, figsize=(12, 4.8), layout="constrained")
+    panels = (("fmi2DoStep execution time", rt.exec_us, f"deadline: period {rt.period_us:g} µs" if rt.paced
+               else f"period {rt.period_us:g} µs (the deadline when paced)"),
+              ("wake-up lateness (step start − its deadline)", rt.late_us,
+               f"period {rt.period_us:g} µs (a step this late misses its deadline)"))
+    for ax, (name, v, period_label) in zip(axes, panels):
+        ax.set_title(name, fontsize=10)
+        if not len(v):
+            ax.text(0.5, 0.5, "not paced (--native without --realtime):\nno deadlines, no lateness",
+                    ha="center", va="center", transform=ax.transAxes)
+            ax.set_xticks([])
+            ax.set_yticks([])
+            continue
+        floor = 0.01                                   # 10 ns; 0 (coarse clocks) lands in the first bin
+        lo = 10 ** math.floor(math.log10(max(float(np.min(v)), floor)))
+        right_end = 2 * max(float(np.max(v)), rt.period_us)
+        hi = 10 ** math.ceil(math.log10(right_end))
+        bins = np.logspace(math.log10(lo), math.log10(hi), 20 * round(math.log10(hi / lo)) + 1)
+        counts, _, _ = ax.hist(np.clip(v, lo, None), bins=bins, color="tab:blue", alpha=0.75,
+                               label=f"{len(v)} steps, 20 bins per decade")
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        ax.set_xlim(lo, right_end)
+        # the tallest bar reaches 55 % of the height (log scale): the labels go above it
+        ax.set_ylim(0.6, 0.6 * (float(np.max(counts)) / 0.6) ** (1 / 0.55))
+        ax.xaxis.set_major_formatter(FuncFormatter(lambda x, _: f"{x:g}"))
+        ax.set_xlabel(f"{name.split(' (')[0]} [µs], log scale")
+        ax.set_ylabel("steps per bin, log scale")
+        ax.grid(alpha=0.3, which="major")
+        ax.axvline(rt.period_us, color="tab:red", lw=2, label=period_label)
+        p = rt.pct(v)
+        marks = (("median", p["p50"], "tab:green", "-"), ("p99", p["p99"], "tab:orange", "--"),
+                 ("max", p["max"], "tab:purple", ":"), ("period", rt.period_us, "tab:red", None))
+        for i, (label, x, color, ls) in enumerate(marks):
+            text = f"{label} {_us(x)} µs"
+            if ls:
+                ax.axvline(x, color=color, ls=ls, lw=1.5, label=text)
+            # one row per label (they never overlap), left of the line when it is in the right part
+            right = math.log10(max(x, lo) / lo) / math.log10(right_end / lo) > 0.7
+            ax.annotate(text, xy=(x, 0.96 - 0.08 * i), xycoords=("data", "axes fraction"),
+                        xytext=(-4 if right else 4, 0), textcoords="offset points", ha="right" if right else "left",
+                        va="top", fontsize=8, color=color,
+                        bbox=dict(boxstyle="round,pad=0.15", fc="white", ec="none", alpha=0.8))
+        ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.18), ncol=2, fontsize=8, frameon=False)
+    mode = (f"paced at {rt.period_us:g} µs, {rt.misses} deadline misses" if rt.paced
+            else "not paced (fast)")
+    fig.suptitle(f"{title}: {rt.runner} runner, {len(rt.exec_us)} steps, {mode}", fontsize=10)
+    return fig

@@ -1,6 +1,6 @@
 """The native real-time runner fmu/rt_runner (anklehip_rt_step): paced and fast runs of the
 controller FMU on a short sensor CSV; outputs identical to FMPy's simulate_fmu bit for bit, and
-the timing report has its fields."""
+the timing report and the per-step timings (with the deadline misses) have their fields."""
 from __future__ import annotations
 
 import re
@@ -58,6 +58,26 @@ def test_rt_runner_matches_fmpy(controller_fmu, controller_unzipped, native_tool
         assert np.array_equal(a, b), (name, np.flatnonzero(a != b)[:5])
     tim = read_csv_exact(timings)
     assert len(tim) == 400 and np.all(tim["exec_ns"] > 0)
+    assert tim.dtype.names == ("step", "time", "exec_ns", "lateness_ns", "miss")
+    if mode == "realtime":
+        assert tim["miss"].sum() == int(re.search(r"deadline_misses: (\d+)", rep)[1])
+    else:
+        assert not tim["miss"].any()
+
+
+def test_rt_runner_flags_each_missed_deadline(controller_unzipped, native_tool, short_case):
+    """At a 100 ns period every step overruns: the report counts the misses, timings.csv marks
+    each one (anklehip steptest --native --fail-on-miss and realtime.json use the column)."""
+    csv_in, d = short_case
+    timings = d / "timings_tight.csv"
+    p = subprocess.run([str(native_tool("anklehip_rt_step")), "--fmu-dir", str(controller_unzipped), "--input",
+                        str(csv_in), "--step", "1e-7", "--stop-time", "1e-4", "--timings", str(timings)],
+                       capture_output=True, text=True, timeout=60)
+    assert p.returncode == 0, p.stderr
+    misses = int(re.search(r"deadline_misses: (\d+)", p.stdout)[1])
+    tim = read_csv_exact(timings)
+    assert len(tim) == 1000 and misses > 0 and tim["miss"].sum() == misses
+    assert set(np.unique(tim["miss"])) <= {0.0, 1.0}
 
 
 def test_rt_runner_usage_errors(controller_unzipped, native_tool, short_case, tmp_path):

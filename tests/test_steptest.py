@@ -1,4 +1,6 @@
 """Step tests of the controller FMU alone (FMI cross-check layout), recorder, real-time pacing."""
+import json
+import re
 from pathlib import Path
 
 import numpy as np
@@ -124,3 +126,149 @@ def test_case_works_with_fmpy_simulate_fmu(controller_fmu):
                        output_interval=opt["StepSize"])
     rep = compare(res, f["ref"], abs_tol=1e-9, rel_tol=1e-6)
     assert rep.passed, rep.text(verbose=False)
+
+
+# ----------------------------------------------------------------------------------------------
+# `--realtime`, `--native`: the verdict rule, realtime.json, histograms, the summary
+
+RUNNERS = ["python", "native"]
+
+
+def _runner_args(runner: str) -> list[str]:
+    if runner == "native":
+        assert find_rt_runner() is not None, "anklehip_rt_step not built: run `bash scripts/setup.sh`"
+        return ["--native"]
+    return []
+
+
+def _impossible_case(tmp_path: Path, name: str) -> Path:
+    """A case paced at 100 ns (1000 steps): no runner keeps that deadline, every run misses."""
+    case = tmp_path / name
+    case.mkdir()
+    f, g = case_files(CASES[0]), case_files(case)
+    g["in"].write_text(f["in"].read_text())
+    g["opt"].write_text("StartTime, 0\nStopTime, 0.0001\nStepSize, 1e-07\nRelTol, 1e-6\n")
+    return case
+
+
+def _documented_realtime_json_keys() -> set[str]:
+    """The keys of the realtime.json table in docs/step-tests.md."""
+    doc = (Path(__file__).parents[1] / "docs" / "step-tests.md").read_text()
+    table = doc[doc.index("**`realtime.json`**"):].split("\n\n")[1]
+    return set(re.findall(r"^\| `([^`]+)` \|", table, re.M))
+
+
+@pytest.mark.parametrize("runner", RUNNERS)
+def test_fail_on_miss_fails_an_impossible_deadline(controller_fmu, tmp_path, capsys, runner):
+    case = _impossible_case(tmp_path, "tight")
+    args = ["steptest", str(case), "--realtime", "--no-compare"] + _runner_args(runner)
+    assert main(args + ["--fail-on-miss"]) == 1
+    out = capsys.readouterr().out
+    assert re.search(r"^tight: FAIL: [1-9]\d* deadline misses \(--fail-on-miss\)$", out, re.M), out
+    assert main(args) == 0          # without --fail-on-miss the misses are reported, not failing
+    out = capsys.readouterr().out
+    assert "tight: PASS" in out and "not failing the run (no --fail-on-miss)" in out
+
+
+def test_fail_on_miss_and_histogram_need_a_timed_run(controller_fmu, capsys):
+    assert main(["steptest", str(CASES[0]), "--native", "--fail-on-miss"]) == 2
+    assert "--fail-on-miss needs --realtime" in capsys.readouterr().err
+    assert main(["steptest", str(CASES[0]), "--histogram", "h.png"]) == 2
+    assert "--histogram needs --realtime or --native" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("runner", RUNNERS)
+def test_realtime_json_per_case_with_the_documented_keys(controller_fmu, tmp_path, runner):
+    cases = [_impossible_case(tmp_path, n) for n in ("a", "b")]
+    out = tmp_path / "out"
+    assert main(["steptest", *map(str, cases), "--realtime", "--no-compare", "--out", str(out)]
+                + _runner_args(runner)) == 0
+    keys = _documented_realtime_json_keys()
+    assert {"runner", "mode", "deadline_misses", "exec_us", "lateness_us"} <= keys
+    for c in cases:
+        d = json.loads((out / c.name / "realtime.json").read_text())
+        assert set(d) == keys
+        assert d["runner"] == runner and d["mode"] == "realtime" and d["steps"] == 1000
+        assert d["period_us"] == pytest.approx(0.1) and d["deadline_misses"] > 0
+        assert set(d["exec_us"]) == set(d["lateness_us"]) == {"p50", "p99", "p99.9", "max"}
+        assert 0 < d["exec_us"]["p50"] <= d["exec_us"]["p99"] <= d["exec_us"]["max"]
+        if runner == "native":        # the count is the runner's, step by step
+            tim = np.genfromtxt(out / c.name / "timings.csv", delimiter=",", names=True)
+            assert d["deadline_misses"] == int(tim["miss"].sum())
+
+
+def test_native_fast_run_writes_realtime_json_without_deadlines(controller_fmu, tmp_path):
+    case = _impossible_case(tmp_path, "fast")
+    assert main(["steptest", str(case), "--no-compare", "--out", str(tmp_path / "o")] + _runner_args("native")) == 0
+    d = json.loads((tmp_path / "o" / "fast" / "realtime.json").read_text())
+    assert d["mode"] == "fast" and d["deadline_misses"] is None and d["lateness_us"] == {}
+    assert d["steps"] == 1000 and d["exec_us"]["max"] > 0
+
+
+@pytest.mark.parametrize("runner", RUNNERS)
+def test_histogram_per_case(controller_fmu, tmp_path, capsys, runner):
+    cases = [_impossible_case(tmp_path, n) for n in ("a", "b")]
+    h = tmp_path / "rt.png"
+    assert main(["steptest", *map(str, cases), "--realtime", "--no-compare", "--histogram", str(h)]
+                + _runner_args(runner)) == 0
+    files = [tmp_path / "rt_a.png", tmp_path / "rt_b.png"]
+    assert all(f.stat().st_size > 1000 for f in files) and not h.exists()
+    assert files[0].read_bytes() != files[1].read_bytes()
+    out = capsys.readouterr().out
+    assert f"histogram: {files[0]}" in out and f"histogram: {files[1]}" in out
+    # a single case keeps the name it was given
+    assert main(["steptest", str(cases[0]), "--realtime", "--no-compare", "--histogram", str(h)]
+                + _runner_args(runner)) == 0
+    assert h.stat().st_size > 1000
+
+
+@pytest.mark.parametrize("runner", RUNNERS)
+def test_summary_at_the_end_of_a_multi_case_run(controller_fmu, tmp_path, capsys, runner):
+    cases = [_impossible_case(tmp_path, "a"), _impossible_case(tmp_path, "b"), tmp_path / "missing"]
+    assert main(["steptest", *map(str, cases), "--realtime", "--no-compare", "--fail-on-miss"]
+                + _runner_args(runner)) == 2
+    out = capsys.readouterr().out
+    lines = out[out.index("summary:"):].splitlines()
+    assert lines[0] == "summary: 3 cases: 0 passed, 2 failed (a, b), 1 could not run (missing)"
+    m = re.fullmatch(r"  deadline misses: (\d+) in total \(a (\d+), b (\d+)\); failing the run \(--fail-on-miss\)",
+                     lines[1])
+    assert m and int(m[1]) == int(m[2]) + int(m[3]) > 0, lines[1]
+    assert re.fullmatch(rf"  worst-case doStep execution: [\d.]+ µs \([ab], {runner} runner; period 0.1 µs\)",
+                        lines[2]), lines[2]
+    assert lines[3].startswith("exit 2 (0: every case passed; 1: a case failed: ") and len(lines) == 4
+
+
+def test_summary_of_a_passing_run(controller_fmu, capsys):
+    assert main(["steptest", str(CASES[0]), str(CASES[1]), "--failed-only"]) == 0
+    out = capsys.readouterr().out
+    assert "summary: 2 cases: 2 passed, 0 failed, 0 could not run\n" in out
+    assert "  worst-case doStep execution: not measured (use --realtime or --native)\nexit 0 (" in out
+
+
+def test_histogram_is_readable():
+    """Log µs axis with labelled units, the period as a red line, median/p99/max labelled without
+    overlapping each other or the bars, the legend outside the data."""
+    from anklehip.steptest import RTStats, rt_histogram_figure
+    rng = np.random.default_rng(1)
+    exec_us = np.concatenate([rng.lognormal(0.0, 0.3, 5000), [2.5, 2.6, 15.0]])   # ~1 µs, a few outliers
+    late_us = rng.lognormal(np.log(80.0), 0.4, len(exec_us))
+    fig = rt_histogram_figure(RTStats(period_us=1000.0, exec_us=exec_us, late_us=late_us, misses=0), "synthetic")
+    fig.canvas.draw()
+    renderer = fig.canvas.get_renderer()
+    assert len(fig.axes) == 2
+    for ax in fig.axes:
+        assert ax.get_xscale() == "log" and ax.get_yscale() == "log"
+        assert "[µs]" in ax.get_xlabel() and ax.get_ylabel()
+        lo, hi = ax.get_xlim()
+        assert lo <= np.min(late_us if "lateness" in ax.get_xlabel() else exec_us) and hi >= 1000.0
+        assert any(line.get_xdata()[0] == 1000.0 and line.get_color() == "tab:red" for line in ax.get_lines())
+        labels = {t.get_text().split()[0]: t for t in ax.texts}
+        assert {"median", "p99", "max", "period"} <= set(labels), list(labels)
+        boxes = [t.get_window_extent(renderer) for t in labels.values()]
+        assert not any(a.overlaps(b) for i, a in enumerate(boxes) for b in boxes[i + 1:])
+        tallest = max(p.get_height() for p in ax.patches)
+        bar_top = ax.transData.transform((lo, tallest))[1]
+        assert all(b.y0 > bar_top for b in boxes)
+        assert ax.get_legend().get_window_extent(renderer).y1 <= ax.get_window_extent(renderer).y0
+    import matplotlib.pyplot as plt
+    plt.close(fig)

@@ -171,6 +171,8 @@ void usage(const char* a0) {
                "           binaries/win64/<id>.dll, and --fast is required)\n"
                "  --step   communication step = real-time period [s] (default: DefaultExperiment stepSize)\n"
                "  --fast   do not pace: run as fast as possible (WCET measurement)\n"
+               "  --timings  per step: step,time,exec_ns,lateness_ns,miss (miss = 1 when the step's\n"
+               "           work ended after the next deadline; lateness and miss are 0 with --fast)\n"
                "Exit status: 0 ok, 1 FMU error or I/O error, 2 usage error.\n",
                a0);
 }
@@ -398,6 +400,7 @@ int main(int argc, char** argv) {
   if (mlock || prio > 0) std::fprintf(stderr, "warning: --mlock and --rt-priority are ignored on Windows\n");
 #endif
   std::vector<int64_t> exec(nSteps), late(fast ? 0 : nSteps);
+  std::vector<char> missed(nSteps, 0);
   const int64_t periodNs = static_cast<int64_t>(std::llround(step * 1e9));
   size_t misses = 0, done = 0;
   int rc = 0;
@@ -414,7 +417,10 @@ int main(int argc, char** argv) {
     const int64_t b = nowNs();
     exec[s] = b - a;
     st = std::max(st, getOutputs(s + 1));
-    if (!fast && nowNs() > deadline + periodNs) ++misses;  // the period's work overran the next deadline
+    if (!fast && nowNs() > deadline + periodNs) {  // the period's work overran the next deadline
+      missed[s] = 1;
+      ++misses;
+    }
     done = s + 1;
     if (ds > fmi2Warning || st > fmi2Warning) {
       std::fprintf(stderr, "error: fmi2DoStep at t=%.17g returned status %d\n", tp[s], static_cast<int>(ds));
@@ -446,13 +452,12 @@ int main(int argc, char** argv) {
   }
   if (!timings.empty()) {
     FILE* ft = std::fopen(timings.c_str(), "w");
-    if (ft) {
-      std::fprintf(ft, "step,time,exec_ns,lateness_ns\n");
-      for (size_t s = 0; s < done; ++s)
-        std::fprintf(ft, "%zu,%.17g,%lld,%lld\n", s, tp[s], static_cast<long long>(exec[s]),
-                     fast ? 0LL : static_cast<long long>(late[s]));
-      std::fclose(ft);
-    }
+    if (!ft) { std::fprintf(stderr, "error: cannot write %s\n", timings.c_str()); return 1; }
+    std::fprintf(ft, "step,time,exec_ns,lateness_ns,miss\n");
+    for (size_t s = 0; s < done; ++s)
+      std::fprintf(ft, "%zu,%.17g,%lld,%lld,%d\n", s, tp[s], static_cast<long long>(exec[s]),
+                   fast ? 0LL : static_cast<long long>(late[s]), missed[s]);
+    if (std::fclose(ft) != 0) { std::fprintf(stderr, "error: cannot write %s\n", timings.c_str()); return 1; }
   }
   exec.resize(done);
   if (!fast) late.resize(done);
