@@ -129,7 +129,11 @@ function(add_fmu)
   # Packing.
   set(stage "${CMAKE_CURRENT_BINARY_DIR}/${name}.fmu.d")
   set(fmu "${ANKLEHIP_FMU_DIR}/${name}.fmu")
-  set(doc_cmds "")
+  # The project's license in documentation/licenses/ (FMI 2.0.4: the FMU's license files).
+  set(license "${_ADD_FMU_GLUE_SRC}/../../../LICENSE")
+  get_filename_component(license "${license}" ABSOLUTE)
+  set(doc_cmds COMMAND "${CMAKE_COMMAND}" -E copy "${license}" "${stage}/documentation/licenses/LICENSE.txt")
+  set(doc_deps "${license}")
   foreach(doc IN LISTS FMU_DOCUMENTATION)
     get_filename_component(doc_abs "${doc}" ABSOLUTE)
     list(APPEND doc_cmds COMMAND "${CMAKE_COMMAND}" -E copy "${doc_abs}" "${stage}/documentation/")
@@ -191,7 +195,7 @@ ${xml_files}      <IncludeDirectory name=\".\"/>
   endif()
   add_custom_command(OUTPUT "${fmu}"
     COMMAND "${CMAKE_COMMAND}" -E rm -rf "${stage}"
-    COMMAND "${CMAKE_COMMAND}" -E make_directory "${stage}/binaries/linux64" "${stage}/documentation" "${stage}/resources" "${ANKLEHIP_FMU_DIR}"
+    COMMAND "${CMAKE_COMMAND}" -E make_directory "${stage}/binaries/linux64" "${stage}/documentation/licenses" "${stage}/resources" "${ANKLEHIP_FMU_DIR}"
     COMMAND $<TARGET_FILE:${name}_gen> "${stage}" ${src_names}
     COMMAND "${CMAKE_COMMAND}" -E copy "${so}" "${stage}/binaries/linux64/${name}.so"
     ${win_cmds}

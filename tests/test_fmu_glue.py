@@ -4,6 +4,7 @@ hygiene, modelDescription.xml. Low-level calls go through ctypes (tests/conftest
 from __future__ import annotations
 
 import ctypes
+import os
 import shutil
 import subprocess
 import sys
@@ -669,20 +670,62 @@ def test_outputs_have_no_direct_feedthrough(raw_controller):
 
 def test_guid_is_deterministic(controller_fmu, native_tool, tmp_path):
     """The generator reproduces the shipped modelDescription.xml byte for byte (given the source
-    FMU's file list), and the list of source files does not enter the GUID (the binary computes
-    its GUID from the variable table alone)."""
+    FMU's file list and, as SOURCE_DATE_EPOCH, its generation date), and neither the list of
+    source files nor the generation date enters the GUID (the binary computes its GUID from the
+    variable table alone)."""
     import xml.etree.ElementTree as ET
+    from datetime import datetime
     gen = native_tool("AnkleHipController_gen")
     with zipfile.ZipFile(controller_fmu) as z:
         shipped = z.read("modelDescription.xml")
-    sources = [f.get("name") for f in ET.fromstring(shipped).findall("CoSimulation/SourceFiles/File")]
+    root = ET.fromstring(shipped)
+    sources = [f.get("name") for f in root.findall("CoSimulation/SourceFiles/File")]
     assert sources, "the controller FMU lists no source files"
-    for sub, args in (("with", sources), ("without", [])):
+    shipped_epoch = int(datetime.fromisoformat(root.get("generationDateAndTime").replace("Z", "+00:00")).timestamp())
+    for sub, args, epoch in (("with", sources, shipped_epoch), ("without", [], 0)):
         (tmp_path / sub / "documentation").mkdir(parents=True)
-        subprocess.run([str(gen), str(tmp_path / sub), *args], check=True)
+        subprocess.run([str(gen), str(tmp_path / sub), *args], check=True,
+                       env={**os.environ, "SOURCE_DATE_EPOCH": str(epoch)})
     assert (tmp_path / "with" / "modelDescription.xml").read_bytes() == shipped
-    guid = ET.fromstring(shipped).get("guid")
-    assert ET.parse(tmp_path / "without" / "modelDescription.xml").getroot().get("guid") == guid
+    without = ET.parse(tmp_path / "without" / "modelDescription.xml").getroot()
+    assert without.get("generationDateAndTime") == "1970-01-01T00:00:00Z"
+    assert without.get("guid") == root.get("guid")
+
+
+@pytest.mark.parametrize("model", ["AnkleHipController", "Hoap2Plant", "Hoap2Plant3D"])
+def test_model_description_metadata(model, fmu_path):
+    """Every unit has its SI base unit (J = kg.m2/s2; a unit the generator does not know fails
+    the build); angles, angular rates and accelerations offer degrees and show them by default;
+    the license names its text in the FMU and a URL; the generation date is an ISO 8601 UTC time."""
+    from datetime import datetime
+    with zipfile.ZipFile(fmu_path(model)) as z:
+        root = ET.fromstring(z.read("modelDescription.xml"))
+        license_text = z.read("documentation/licenses/LICENSE.txt").decode()
+    units = {u.get("name"): u for u in root.find("UnitDefinitions")}
+    for name, u in units.items():
+        assert u.find("BaseUnit") is not None, f"{model}: unit {name} has no BaseUnit"
+    if "J" in units:
+        assert units["J"].find("BaseUnit").attrib == {"kg": "1", "m": "2", "s": "-2"}
+    assert units["rad"].find("DisplayUnit").attrib == {"name": "deg", "factor": "57.29577951308232"}
+    for sv in root.iter("ScalarVariable"):
+        real = sv.find("Real")
+        if real is not None and real.get("unit") in ("rad", "rad/s", "rad/s2"):
+            assert real.get("displayUnit") == units[real.get("unit")].find("DisplayUnit").get("name"), sv.get("name")
+    assert "https://spdx.org/licenses/BSD-2-Clause.html" in root.get("license")
+    assert "documentation/licenses/LICENSE.txt" in root.get("license") and "BSD 2-Clause" in license_text
+    assert datetime.strptime(root.get("generationDateAndTime"), "%Y-%m-%dT%H:%M:%SZ")
+
+
+def test_generator_help_and_bad_arguments(native_tool, tmp_path):
+    """`<Model>_gen --help` prints its usage (exit 0); an unknown option or a missing output
+    folder is refused with a message that names it (exit 2 / 1), not 'cannot write'."""
+    gen = str(native_tool("AnkleHipController_gen"))
+    r = subprocess.run([gen, "--help"], capture_output=True, text=True)
+    assert r.returncode == 0 and "usage:" in r.stdout and "--markdown" in r.stdout
+    r = subprocess.run([gen, "--bogus"], capture_output=True, text=True)
+    assert r.returncode == 2 and "unknown option --bogus" in r.stderr
+    r = subprocess.run([gen, str(tmp_path / "missing")], capture_output=True, text=True)
+    assert r.returncode == 1 and "does not exist" in r.stderr and "missing" in r.stderr
 
 
 def test_packed_fmu_alone_in_empty_dir(controller_fmu, tmp_path):

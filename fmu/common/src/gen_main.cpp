@@ -52,9 +52,30 @@ std::string html(const std::string& s) {
   }
   return o;
 }
+
+void usage(std::ostream& o, const char* prog) {
+  o << "usage: " << prog << " <out-dir> [<source file>...]\n"
+    << "       " << prog << " --markdown\n\n"
+    << "Generates the FMU's description from its variable table (the table the binary uses at run time):\n"
+    << "  <out-dir>       an existing folder: writes modelDescription.xml, documentation/index.html and\n"
+    << "                  the model's resources/ files into it; <source file>s (names in sources/) make it\n"
+    << "                  a source FMU's description. The build runs this when it packs the FMU.\n"
+    << "  --markdown      prints the variable table as Markdown (docs/, scripts/update_docs.py)\n"
+    << "  -h, --help      this text\n"
+    << "SOURCE_DATE_EPOCH, when set, is the generationDateAndTime (reproducible builds).\n";
+}
 }  // namespace
 
 int main(int argc, char** argv) {
+  if (argc >= 2 && (std::string(argv[1]) == "--help" || std::string(argv[1]) == "-h")) {
+    usage(std::cout, argv[0]);
+    return 0;
+  }
+  if (argc < 2 || (argv[1][0] == '-' && std::string(argv[1]) != "--markdown")) {
+    if (argc >= 2) std::cerr << argv[0] << ": unknown option " << argv[1] << "\n";
+    usage(std::cerr, argv[0]);
+    return 2;
+  }
   const ModelInfo& info = modelInfo();
   std::string problems = validateModelInfo(info);
   if (!problems.empty()) {
@@ -70,11 +91,11 @@ int main(int argc, char** argv) {
                 << g(v.min) << " | " << g(v.max) << " | " << markdownCell(v.description) << " |\n";
     return 0;
   }
-  if (argc < 2) {
-    std::cerr << "usage: " << argv[0] << " <out-dir> [<source file>...] | --markdown\n";
-    return 2;
-  }
   std::string dir = argv[1];
+  if (!std::filesystem::is_directory(dir)) {
+    std::cerr << argv[0] << ": output folder " << dir << " does not exist\n";
+    return 1;
+  }
   const std::vector<std::string> source_files(argv + 2, argv + argc);
   {
     std::ofstream f(dir + "/modelDescription.xml", std::ios::binary);

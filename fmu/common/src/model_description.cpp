@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <ctime>
 #include <map>
 #include <set>
 #include <sstream>
@@ -50,8 +51,44 @@ const BaseUnit kUnits[] = {
     {"rad/s", 0, 0, -1, 1},   {"rad/s2", 0, 0, -2, 1},   {"m/s", 0, 1, -1, 0},      {"m/s2", 0, 1, -2, 0},
     {"kg.m2", 1, 2, 0, 0},    {"1/s", 0, 0, -1, 0},      {"s-1", 0, 0, -1, 0},      {"Hz", 0, 0, -1, 0},
     {"N/m", 1, 0, -2, 0},     {"N.s/m", 1, 0, -1, 0},    {"N/rad", 1, 1, -2, -1},   {"N.m.s", 1, 2, -1, 0},
-    {"m/rad", 0, 1, 0, -1},   {"1/rad", 0, 0, 0, -1},
+    {"m/rad", 0, 1, 0, -1},   {"1/rad", 0, 0, 0, -1},    {"J", 1, 2, -2, 0},        {"W", 1, 2, -3, 0},
+    {"1", 0, 0, 0, 0},  // dimensionless (a ratio, a gain)
 };
+const BaseUnit* baseUnit(const std::string& unit) {
+  for (const auto& k : kUnits)
+    if (unit == k.name) return &k;
+  return nullptr;
+}
+
+// Display units offered next to a unit (value in display unit = factor * value in unit); the
+// variables of that unit show the first one by default (displayUnit attribute): angles in degrees.
+struct DisplayUnit {
+  const char* unit;
+  const char* name;
+  double factor;
+};
+constexpr double kDegPerRad = 57.295779513082323;  // 180 / pi
+const DisplayUnit kDisplayUnits[] = {
+    {"rad", "deg", kDegPerRad}, {"rad/s", "deg/s", kDegPerRad}, {"rad/s2", "deg/s2", kDegPerRad},
+};
+const DisplayUnit* displayUnit(const std::string& unit) {
+  for (const auto& d : kDisplayUnits)
+    if (unit == d.unit) return &d;
+  return nullptr;
+}
+
+// generationDateAndTime: SOURCE_DATE_EPOCH (reproducible builds) or the time of generation, UTC.
+std::string generationDateAndTime() {
+  std::time_t t = std::time(nullptr);
+  if (const char* sde = std::getenv("SOURCE_DATE_EPOCH")) {
+    char* end = nullptr;
+    const long long v = std::strtoll(sde, &end, 10);
+    if (end != sde && *end == '\0' && v >= 0) t = static_cast<std::time_t>(v);
+  }
+  char buf[32];
+  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", std::gmtime(&t));  // the generator is single-threaded
+  return buf;
+}
 
 
 bool hasStart(const Variable& v) {
@@ -61,9 +98,10 @@ bool hasStart(const Variable& v) {
   return i == Initial::Exact || i == Initial::Approx;
 }
 
-// The XML with a given GUID string (the GUID itself is a hash of the XML with an empty GUID).
+// The XML with a given GUID string (the GUID itself is a hash of the XML with an empty GUID and
+// no generation date, so that it identifies the model, not the build).
 std::string xmlWithGuid(const ModelInfo& info, const std::string& guid,
-                        const std::vector<std::string>& source_files = {}) {
+                        const std::vector<std::string>& source_files = {}, const std::string& generated = "") {
   std::ostringstream o;
   o << "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n";
   o << "<fmiModelDescription fmiVersion=\"2.0\" modelName=\"" << esc(info.model_name) << "\" guid=\"" << guid
@@ -73,7 +111,9 @@ std::string xmlWithGuid(const ModelInfo& info, const std::string& guid,
   if (!info.version.empty()) o << "\n  version=\"" << esc(info.version) << "\"";
   if (!info.copyright.empty()) o << "\n  copyright=\"" << esc(info.copyright) << "\"";
   if (!info.license.empty()) o << "\n  license=\"" << esc(info.license) << "\"";
-  o << "\n  generationTool=\"anklehip fmuglue " << kGlueInterfaceVersion << "\""
+  o << "\n  generationTool=\"anklehip fmuglue " << kGlueInterfaceVersion << "\"";
+  if (!generated.empty()) o << "\n  generationDateAndTime=\"" << generated << "\"";
+  o
     << "\n  variableNamingConvention=\"structured\" numberOfEventIndicators=\"0\">\n";
   o << "  <CoSimulation modelIdentifier=\"" << esc(info.model_name) << "\" needsExecutionTool=\"false\""
     << " canHandleVariableCommunicationStepSize=\"" << (info.can_handle_variable_step ? "true" : "false") << "\""
@@ -94,19 +134,16 @@ std::string xmlWithGuid(const ModelInfo& info, const std::string& guid,
   if (!units.empty()) {
     o << "  <UnitDefinitions>\n";
     for (const auto& u : units) {
-      const BaseUnit* bu = nullptr;
-      for (const auto& k : kUnits)
-        if (u == k.name) bu = &k;
-      if (bu) {
-        o << "    <Unit name=\"" << esc(u) << "\"><BaseUnit";
-        if (bu->kg) o << " kg=\"" << bu->kg << "\"";
-        if (bu->m) o << " m=\"" << bu->m << "\"";
-        if (bu->s) o << " s=\"" << bu->s << "\"";
-        if (bu->rad) o << " rad=\"" << bu->rad << "\"";
-        o << "/></Unit>\n";
-      } else {
-        o << "    <Unit name=\"" << esc(u) << "\"/>\n";
-      }
+      const BaseUnit* bu = baseUnit(u);  // validateModelInfo: every unit is known
+      o << "    <Unit name=\"" << esc(u) << "\"><BaseUnit";
+      if (bu->kg) o << " kg=\"" << bu->kg << "\"";
+      if (bu->m) o << " m=\"" << bu->m << "\"";
+      if (bu->s) o << " s=\"" << bu->s << "\"";
+      if (bu->rad) o << " rad=\"" << bu->rad << "\"";
+      o << "/>";
+      if (const DisplayUnit* du = displayUnit(u))
+        o << "<DisplayUnit name=\"" << du->name << "\" factor=\"" << num(du->factor) << "\"/>";
+      o << "</Unit>\n";
     }
     o << "  </UnitDefinitions>\n";
   }
@@ -143,6 +180,7 @@ std::string xmlWithGuid(const ModelInfo& info, const std::string& guid,
       case Type::Real:
         o << "<Real";
         if (!v.unit.empty()) o << " unit=\"" << esc(v.unit) << "\"";
+        if (const DisplayUnit* du = displayUnit(v.unit)) o << " displayUnit=\"" << du->name << "\"";
         if (!std::isnan(v.min)) o << " min=\"" << num(v.min) << "\"";
         if (!std::isnan(v.max)) o << " max=\"" << num(v.max) << "\"";
         if (st) o << " start=\"" << num(v.start) << "\"";
@@ -244,6 +282,8 @@ std::string validateModelInfo(const ModelInfo& info) {
     if (v.type != Type::Real && v.variability == Variability::Continuous)
       err << w << "only Real variables can be continuous\n";
     if (v.type != Type::Real && !v.unit.empty()) err << w << "only Real variables have units\n";
+    if (!v.unit.empty() && !baseUnit(v.unit))
+      err << w << "unit \"" << v.unit << "\" has no base unit in model_description.cpp's kUnits\n";
     bool okVar = true;
     switch (v.causality) {
       case Causality::Parameter:
@@ -297,7 +337,7 @@ std::string modelGuid(const ModelInfo& info) {
 }
 
 std::string modelDescriptionXml(const ModelInfo& info, const std::vector<std::string>& source_files) {
-  return xmlWithGuid(info, modelGuid(info), source_files);
+  return xmlWithGuid(info, modelGuid(info), source_files, generationDateAndTime());
 }
 
 const char* xmlName(Type t) {

@@ -90,8 +90,9 @@ struct ModelInfo {
   // Project metadata shared by every FMU of the project; the version is CMake's PROJECT_VERSION.
   std::string author = "anklehip project";
   std::string version = ANKLEHIP_VERSION;
-  std::string copyright;
-  std::string license = "see the project repository";
+  std::string copyright = "Copyright (c) 2026 the anklehip authors";
+  // The project's LICENSE, packed as documentation/licenses/LICENSE.txt (cmake/AddFmu.cmake).
+  std::string license = "BSD-2-Clause (documentation/licenses/LICENSE.txt, https://spdx.org/licenses/BSD-2-Clause.html)";
   DefaultExperiment default_experiment;
   std::vector<Variable> variables;
   std::vector<LogCategoryInfo> extra_log_categories;  // indices kFirstModelCategory, +1, ...
