@@ -161,6 +161,8 @@ def write_container_fmu(path: str | Path, scenario: Scenario, models: Models, *,
     mappings: dict[ModelVariable, list] = {}
 
     def add(vname, type_, causality, variability, description, comp=None, cvar=None, start=None, initial=None):
+        # FMPy's writer has no type definitions: an enumeration (phase, contact_mode) is its Integer
+        type_ = "Integer" if type_ == "Enumeration" else type_
         v = ModelVariable(name=vname, valueReference=len(md.modelVariables), type=type_, causality=causality,
                           variability=variability, description=description, initial=initial)
         if start is not None:   # as text: container.json wants strings
@@ -197,7 +199,7 @@ def write_container_fmu(path: str | Path, scenario: Scenario, models: Models, *,
         # FMPy 0.3.32 writes a connection's variableType from the variable's FMI 2 type ("Real"),
         # which its container binary rejects ("unknown variant 'Real'"): give it the FMI 3 name.
         v = copy.copy(md_vars[comp][vname])
-        v.type = {"Real": "Float64", "Integer": "Int32"}.get(v.type, v.type)
+        v.type = {"Real": "Float64", "Integer": "Int32", "Enumeration": "Int32"}.get(v.type, v.type)
         return v
 
     conns = [Connection(startElement=comps[a], startConnectors=[connector(a, x)], endElement=comps[b],

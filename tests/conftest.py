@@ -351,7 +351,7 @@ class Slave:
         v = self.var[name]
         if v.type == "Real":
             self.fmu.setReal([v.valueReference], [float(value)])
-        elif v.type == "Integer":
+        elif v.type in ("Integer", "Enumeration"):
             self.fmu.setInteger([v.valueReference], [int(value)])
         else:
             self.fmu.setBoolean([v.valueReference], [bool(value)])
@@ -360,7 +360,7 @@ class Slave:
         v = self.var[name]
         if v.type == "Real":
             return self.fmu.getReal([v.valueReference])[0]
-        if v.type == "Integer":
+        if v.type in ("Integer", "Enumeration"):
             return self.fmu.getInteger([v.valueReference])[0]
         return self.fmu.getBoolean([v.valueReference])[0]
 

@@ -13,7 +13,7 @@ import zipfile
 
 import pytest
 
-from conftest import (fmi2Discard, fmi2Error, fmi2OK, fmi2Warning, CONTROLLER_OUTPUTS)
+from conftest import (fmi2Discard, fmi2Error, fmi2OK, fmi2Warning, CONTROLLER_OUTPUTS, REPO_ROOT)
 
 fmi2LastSuccessfulTime, fmi2Terminated = 2, 3
 
@@ -714,6 +714,20 @@ def test_model_description_metadata(model, fmu_path):
     assert "https://spdx.org/licenses/BSD-2-Clause.html" in root.get("license")
     assert "documentation/licenses/LICENSE.txt" in root.get("license") and "BSD 2-Clause" in license_text
     assert datetime.strptime(root.get("generationDateAndTime"), "%Y-%m-%dT%H:%M:%SZ")
+
+
+def test_phase_is_an_enumeration(controller_fmu, controller_unzipped):
+    """The controller's phase is an FMI Enumeration whose items are the C library's phases, read
+    with fmi2GetInteger (FMPy's reader resolves the declared type)."""
+    from fmpy import read_model_description
+    md = read_model_description(str(controller_fmu))
+    phase = next(v for v in md.modelVariables if v.name == "phase")
+    assert phase.type == "Enumeration" and phase.declaredType.name == "Phase"
+    assert [(i.name, int(i.value)) for i in phase.declaredType.items] == [
+        ("ankle", 0), ("ankle_to_hip", 1), ("hip", 2), ("hip_to_ankle", 3)]
+    header = (REPO_ROOT / "controller_c" / "include" / "ahc" / "controller.h").read_text()
+    for name, value in (("ANKLE", 0), ("ANKLE_TO_HIP", 1), ("HIP", 2), ("HIP_TO_ANKLE", 3)):
+        assert f"AHC_PHASE_{name} = {value}" in header
 
 
 def test_generator_help_and_bad_arguments(native_tool, tmp_path):

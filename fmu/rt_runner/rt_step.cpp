@@ -99,6 +99,7 @@ bool parseMd(const std::string& xml, Md& md, std::string& err) {
     if (t != std::string::npos) {
       size_t te = xml.find_first_of(" />", t + 1);
       v.type = xml.substr(t + 1, te - t - 1);
+      if (v.type == "Enumeration") v.type = "Integer";  // FMI 2.0: enumerations go through fmi2Get/SetInteger
     }
     md.vars.push_back(v);
     p = e;

@@ -86,7 +86,7 @@ int main(int argc, char** argv) {
     std::cout << "| name | vr | type | causality | variability | unit | start | min | max | description |\n"
               << "|---|---|---|---|---|---|---|---|---|---|\n";
     for (const auto& v : info.variables)
-      std::cout << "| `" << v.name << "` | " << v.vr << " | " << xmlName(v.type) << " | " << xmlName(v.causality)
+      std::cout << "| `" << v.name << "` | " << v.vr << " | " << xmlTypeName(v) << " | " << xmlName(v.causality)
                 << " | " << xmlName(v.variability) << " | " << v.unit << " | " << startText(v) << " | "
                 << g(v.min) << " | " << g(v.max) << " | " << markdownCell(v.description) << " |\n";
     return 0;
@@ -114,7 +114,7 @@ int main(int argc, char** argv) {
     f << ".</p>\n<table border=\"1\" cellspacing=\"0\" cellpadding=\"3\">\n<tr><th>name</th><th>vr</th><th>type</th>"
          "<th>causality</th><th>variability</th><th>unit</th><th>start</th><th>min</th><th>max</th><th>description</th></tr>\n";
     for (const auto& v : info.variables)
-      f << "<tr><td>" << html(v.name) << "</td><td>" << v.vr << "</td><td>" << xmlName(v.type) << "</td><td>"
+      f << "<tr><td>" << html(v.name) << "</td><td>" << v.vr << "</td><td>" << xmlTypeName(v) << "</td><td>"
         << xmlName(v.causality) << "</td><td>" << xmlName(v.variability) << "</td><td>" << html(v.unit)
         << "</td><td>" << html(startText(v)) << "</td><td>" << g(v.min) << "</td><td>" << g(v.max) << "</td><td>"
         << html(v.description) << "</td></tr>\n";

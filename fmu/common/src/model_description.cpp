@@ -148,6 +148,19 @@ std::string xmlWithGuid(const ModelInfo& info, const std::string& guid,
     o << "  </UnitDefinitions>\n";
   }
 
+  if (!info.enumerations.empty()) {
+    o << "  <TypeDefinitions>\n";
+    for (const auto& e : info.enumerations) {
+      o << "    <SimpleType name=\"" << esc(e.name) << "\" description=\"" << esc(e.description) << "\">\n"
+        << "      <Enumeration>\n";
+      for (const auto& it : e.items)
+        o << "        <Item name=\"" << esc(it.name) << "\" value=\"" << it.value << "\" description=\""
+          << esc(it.description) << "\"/>\n";
+      o << "      </Enumeration>\n    </SimpleType>\n";
+    }
+    o << "  </TypeDefinitions>\n";
+  }
+
   o << "  <LogCategories>\n"
        "    <Category name=\"logEvents\" description=\"Discrete events (phase changes, contact changes, faults)\"/>\n"
        "    <Category name=\"logStatusWarning\" description=\"Warnings\"/>\n"
@@ -187,7 +200,8 @@ std::string xmlWithGuid(const ModelInfo& info, const std::string& guid,
         o << "/>";
         break;
       case Type::Integer:
-        o << "<Integer";
+        o << "<" << xmlTypeName(v);
+        if (!v.enumeration.empty()) o << " declaredType=\"" << esc(v.enumeration) << "\"";
         if (!std::isnan(v.min)) o << " min=\"" << static_cast<long long>(v.min) << "\"";
         if (!std::isnan(v.max)) o << " max=\"" << static_cast<long long>(v.max) << "\"";
         if (st) o << " start=\"" << static_cast<long long>(v.start) << "\"";
@@ -270,6 +284,16 @@ std::string validateModelInfo(const ModelInfo& info) {
       err << "model_name \"" << info.model_name << "\" must be a C identifier\n";
       break;
     }
+  std::set<std::string> types;
+  for (const auto& e : info.enumerations) {
+    if (!types.insert(e.name).second) err << "enumeration \"" << e.name << "\": duplicate name\n";
+    if (e.items.empty()) err << "enumeration \"" << e.name << "\": no items\n";
+    std::set<std::string> item_names;
+    std::set<int> item_values;
+    for (const auto& it : e.items)
+      if (!item_names.insert(it.name).second || !item_values.insert(it.value).second)
+        err << "enumeration \"" << e.name << "\": item " << it.name << " = " << it.value << " repeats a name or value\n";
+  }
   std::set<std::string> names;
   std::set<fmi2ValueReference> vrs;
   for (const auto& v : info.variables) {
@@ -282,6 +306,17 @@ std::string validateModelInfo(const ModelInfo& info) {
     if (v.type != Type::Real && v.variability == Variability::Continuous)
       err << w << "only Real variables can be continuous\n";
     if (v.type != Type::Real && !v.unit.empty()) err << w << "only Real variables have units\n";
+    if (!v.enumeration.empty()) {
+      auto e = std::find_if(info.enumerations.begin(), info.enumerations.end(),
+                            [&](const EnumerationType& x) { return x.name == v.enumeration; });
+      if (v.type != Type::Integer) err << w << "only Integer variables have an enumeration\n";
+      if (e == info.enumerations.end()) {
+        err << w << "enumeration \"" << v.enumeration << "\" is not in ModelInfo::enumerations\n";
+      } else if (hasStart(v) && std::none_of(e->items.begin(), e->items.end(),
+                                             [&](const EnumerationItem& it) { return it.value == v.start; })) {
+        err << w << "start " << v.start << " is no item of enumeration \"" << v.enumeration << "\"\n";
+      }
+    }
     if (!v.unit.empty() && !baseUnit(v.unit))
       err << w << "unit \"" << v.unit << "\" has no base unit in model_description.cpp's kUnits\n";
     bool okVar = true;
@@ -348,6 +383,10 @@ const char* xmlName(Type t) {
     case Type::String: return "String";
   }
   return "?";
+}
+
+const char* xmlTypeName(const Variable& v) {
+  return v.type == Type::Integer && !v.enumeration.empty() ? "Enumeration" : xmlName(v.type);
 }
 
 const char* xmlName(Causality c) {

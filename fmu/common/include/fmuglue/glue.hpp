@@ -69,6 +69,21 @@ struct Variable {
   // them and every parameter as its dependencies, and no other input: an importer coupling two
   // FMUs output-to-input then sees no algebraic loop at initialization where there is none.
   std::vector<std::string> initial_inputs;
+  // Integer variables only: the name of an enumeration of ModelInfo::enumerations. The variable
+  // is then an FMI <Enumeration> (read and written with fmi2Get/SetInteger, as FMI 2.0 says).
+  std::string enumeration;
+};
+
+// An FMI 2.0 enumeration type (<TypeDefinitions><SimpleType><Enumeration>): named integer values.
+struct EnumerationItem {
+  std::string name;
+  int value;
+  std::string description;
+};
+struct EnumerationType {
+  std::string name;
+  std::string description;
+  std::vector<EnumerationItem> items;
 };
 
 // Extra log category declared by a model (the glue declares its own, see LogCategory).
@@ -96,6 +111,7 @@ struct ModelInfo {
   DefaultExperiment default_experiment;
   std::vector<Variable> variables;
   std::vector<LogCategoryInfo> extra_log_categories;  // indices kFirstModelCategory, +1, ...
+  std::vector<EnumerationType> enumerations;           // named by Variable::enumeration
   // Outputs whose value at a communication point depends directly on inputs set at that point.
   // false (typical for a sampled controller or an integrating plant): the <Outputs> entries get
   // dependencies="" (no direct feed-through), so masters see no algebraic loop.
@@ -335,6 +351,8 @@ std::string modelDescriptionXml(const ModelInfo& info, const std::vector<std::st
 // The modelDescription.xml spelling of each enum value ("" for Initial::Default): one table for the
 // XML, the generated documentation and log messages.
 const char* xmlName(Type t);
+// The variable's type element: xmlName(v.type), or "Enumeration" for an Integer with an enumeration.
+const char* xmlTypeName(const Variable& v);
 const char* xmlName(Causality c);
 const char* xmlName(Variability v);
 const char* xmlName(Initial i);
