@@ -35,6 +35,12 @@ def _err(msg: str) -> int:
     return EXIT_ERROR
 
 
+def _progress(a) -> bool | None:
+    """The `progress` argument of master.simulate and make_figures for a command's --no-progress:
+    False turns the bars off, None shows them when stderr is a terminal."""
+    return False if getattr(a, "no_progress", False) else None
+
+
 def check_output_folder(path: str | Path, option: str) -> Path:
     """An output folder that exists or can be created: the nearest existing ancestor is a
     writable folder. Checked before anything runs, so a bad --out costs no run."""
@@ -252,8 +258,7 @@ def _run(a, sc, models, out: Path) -> int:
     from .results import (atomic_write_csv, check_expect, clear_previous, format_summary, result_paths,
                           summarize_pushes, summary_dict, write_summary_json)
     paths = result_paths(out, sc.name)
-    res = simulate(sc, models, stop_time=a.stop_time, progress=None if not a.no_progress else False,
-                   engine=a.engine)
+    res = simulate(sc, models, stop_time=a.stop_time, progress=_progress(a), engine=a.engine)
     csv = paths["csv"] if res.complete else paths["incomplete_csv"]
     atomic_write_csv(csv, res.data)
     # only now that this run's data are in place: the previous run's files go (its complete CSV
@@ -292,7 +297,7 @@ def _run(a, sc, models, out: Path) -> int:
         anim = {"fps": a.fps, "speed": a.speed, "t_start": a.anim_start, "t_stop": a.anim_stop}
         try:
             for p in make_figures(sc.name, res.data, out, res, animate=a.animate, anim_args=anim, figures=a.plots,
-                                  progress=None if not a.no_progress else False):
+                                  progress=_progress(a)):
                 files[p.stem] = str(p)
         except Exception as e:
             warnings.append(f"figures failed: {type(e).__name__}: {e}")
@@ -347,7 +352,8 @@ def cmd_plot(a) -> int:
     if std:
         try:
             files = make_figures(name, data, out, animate=a.animate, params=params,
-                                 anim_args=dict(fps=a.fps, speed=a.speed, t_start=a.anim_start, t_stop=a.anim_stop))
+                                 anim_args=dict(fps=a.fps, speed=a.speed, t_start=a.anim_start, t_stop=a.anim_stop),
+                                 progress=_progress(a))
         except ValueError as e:       # e.g. an animation window outside the result
             return _err(f"{csv}: {e}")
     else:
@@ -447,7 +453,7 @@ def cmd_record(a) -> int:
         return _err(str(e))
     out = check_output_folder(a.out, "OUT")
     with output_lock(out):
-        res = simulate(sc, models, stop_time=a.stop_time, progress=None)
+        res = simulate(sc, models, stop_time=a.stop_time, progress=_progress(a))
         if res.outcome in ("error", "interrupted"):
             return _err(f"the run failed: {res.message}")
         files = record_case(res, out, res.controller_overrides, source=sc.name)
@@ -664,7 +670,7 @@ def cmd_soak(a) -> int:
     from .soak import soak
     try:
         out = check_output_folder(a.out if a.out else Path("results") / "soak", "--out")
-        rep = soak(a.duration, a.seed, a.fmu_dir, progress=not a.no_progress)
+        rep = soak(a.duration, a.seed, a.fmu_dir, progress=not a.no_progress and sys.stderr.isatty())
     except (MissingFileError, FMUError) as e:
         return _err(str(e))
     f = rep.figures()
@@ -682,6 +688,18 @@ def cmd_soak(a) -> int:
     for p in rep.problems:
         print(f"anklehip: soak: {p}", file=sys.stderr)
     return EXIT_OK if not rep.problems else EXIT_FAIL
+
+
+def cmd_info(a) -> int:
+    from .fmu import FMUError
+    from .info import format_text, interface, resolve_fmu, select
+    from .paths import MissingFileError
+    try:
+        info = select(interface(resolve_fmu(a.fmu, a.fmu_dir)), a.causality, a.name)
+    except (MissingFileError, FMUError) as e:
+        return _err(str(e))
+    print(json.dumps(info, indent=2) if a.json else format_text(info))
+    return EXIT_OK
 
 
 CONTROLLER_CONFIG_HELP = ("a named controller configuration (default: the scenario's controller_config or "
@@ -715,7 +733,7 @@ def cmd_regen(a) -> int:
         if sc.reference is None:
             print(f"{sc.name}: no [reference] table, skipped")
             continue
-        res = simulate(sc, models[sc.plant_model], progress=None)
+        res = simulate(sc, models[sc.plant_model], progress=_progress(a))
         checks = check_expect(res, sc.expect)
         bad = [c for c in checks if not c.ok]
         if bad and not a.force:
@@ -819,109 +837,165 @@ FINITE, NON_NEGATIVE, POSITIVE = _number(), _number(ge=0.0), _number(gt=0.0)
 
 
 def build_parser() -> argparse.ArgumentParser:
+    from .info import CAUSALITIES
     from .scenario import MAX_STEPS
     p = _Parser(prog="anklehip", description="Ankle/hip balance control FMUs: closed-loop "
-                                "scenarios, step tests, comparison, plots, sweeps.")
-    p.add_argument("--fmu-dir", help="folder with the .fmu files (default: $ANKLEHIP_FMU_DIR or <repo>/build/fmus)")
+                                "scenarios, step tests, comparison, plots, sweeps, FMU interfaces.")
+    p.add_argument("--fmu-dir", metavar="DIR",
+                   help="folder with the .fmu files (default: $ANKLEHIP_FMU_DIR or <repo>/build/fmus)")
     p.add_argument("--version", action="version", version=f"anklehip {__version__}",
                    help="print the package's version and exit")
-    sub = p.add_subparsers(dest="cmd", required=True, metavar="COMMAND")
+    sub = p.add_subparsers(dest="cmd", required=True, metavar="COMMAND",
+                           help="what to do; `anklehip COMMAND --help` lists its options")
+
+    def no_progress(s, what: str):
+        s.add_argument("--no-progress", action="store_true",
+                       help=f"no progress bars ({what}) on stderr; there are none when stderr is not a terminal")
 
     s = sub.add_parser("list", help="list the scenarios")
     s.set_defaults(fn=cmd_list)
 
+    s = sub.add_parser("info", help="an FMU's interface: model, platforms, default experiment, log categories, "
+                                    "parameters, inputs and outputs with units, start values and ranges")
+    s.add_argument("fmu", metavar="FMU",
+                   help="a .fmu file or extracted FMU folder, or a model name (e.g. AnkleHipController) looked "
+                        "up in --fmu-dir / $ANKLEHIP_FMU_DIR / <repo>/build/fmus")
+    s.add_argument("--json", action="store_true",
+                   help="print the same content as JSON on stdout instead of the tables")
+    s.add_argument("--causality", action="append", choices=CAUSALITIES, metavar="CAUSALITY",
+                   help="only the variables of this causality (repeatable; one of " + ", ".join(CAUSALITIES)
+                        + "; default: parameters, calculated/structural parameters, inputs, outputs)")
+    s.add_argument("--name", action="append", metavar="PATTERN",
+                   help="only variables whose name contains PATTERN, or matches it as a glob with * ? [ ] "
+                        "(case-insensitive; repeatable: any of them)")
+    s.set_defaults(fn=cmd_info)
+
     def anim_opts(s):
-        s.add_argument("--fps", type=POSITIVE, default=20.0, help="animation frames per second (default 20)")
-        s.add_argument("--speed", type=POSITIVE, default=1.0, help="simulated seconds per real second (default 1)")
-        s.add_argument("--anim-start", type=FINITE, help="animation start time [s]")
-        s.add_argument("--anim-stop", type=FINITE, help="animation stop time [s]")
+        s.add_argument("--fps", type=POSITIVE, default=20.0,
+                       help="animation frames per second (default %(default)g)")
+        s.add_argument("--speed", type=POSITIVE, default=1.0,
+                       help="simulated seconds per second of animation (default %(default)g)")
+        s.add_argument("--anim-start", type=FINITE, metavar="T0",
+                       help="animation start time [s] (default: the result's first time)")
+        s.add_argument("--anim-stop", type=FINITE, metavar="T1",
+                       help="animation stop time [s] (default: the result's last time)")
 
     s = sub.add_parser("run", help="run a scenario (CSV, summary, optional plots and animation)")
     s.add_argument("scenario", help="scenario name (scenarios/<name>.toml) or path")
-    s.add_argument("--out", help="output folder (default results/<scenario>)")
+    s.add_argument("--out", metavar="DIR", help="output folder (default: results/<scenario>)")
     s.add_argument("--plots", action="store_true", help="write the overview, Fig. 4 and Fig. 5 PNGs")
     s.add_argument("--animate", action="store_true", help="write a stick-figure GIF")
     s.add_argument("--set", action="append", metavar="FMU.NAME=VALUE",
-                   help="parameter override, e.g. controller.Ka=30 (repeatable)")
+                   help="parameter override, e.g. controller.Ka=30 or plant.h_push=0.3 (repeatable)")
     s.add_argument("--controller-config", metavar="NAME", help=CONTROLLER_CONFIG_HELP)
     s.add_argument("--fault", action="append", metavar="NAME=VALUE",
                    help="inject a fault on top of the scenario's [faults] (repeatable), e.g. zmp_noise=0.002 "
                         "drop_rate=0.1 delay_steps=2 mass_mismatch=-0.2; the keys: docs/scenarios.md")
     s.add_argument("--plant", choices=("sagittal", "3d"),
                    help="the plant model (default: the scenario's plant_model, else sagittal)")
-    s.add_argument("--stop-time", type=FINITE, help="stop at this time instead of the scenario's stop_time (no outcome "
-                   f"checks): > 0, a whole number of the scenario's steps, at most {MAX_STEPS} steps")
-    s.add_argument("--no-progress", action="store_true")
+    s.add_argument("--stop-time", type=FINITE, metavar="T",
+                   help="stop at this time [s] instead of the scenario's stop_time (no outcome or reference "
+                        f"checks): > 0, a whole number of the scenario's steps, at most {MAX_STEPS} steps")
+    no_progress(s, "simulated time, figures, GIF frames")
     s.add_argument("--engine", choices=("fmpy", "native"), default="fmpy",
-                   help="the closed-loop master: fmpy (default) or native (the same loop in C++, bit-identical "
-                        "results, several times faster; no sensor faults or transition pushes)")
+                   help="the closed-loop master (default %(default)s): fmpy, or native (the same loop in C++, "
+                        "bit-identical results, several times faster; no sensor faults or transition pushes)")
     s.add_argument("--no-compare", action="store_true", help="skip the comparison with the reference CSV")
-    s.add_argument("--record-steptest", metavar="DIR", help="also write the controller's step-test case")
+    s.add_argument("--record-steptest", metavar="DIR", help="also write the controller's step-test case into DIR")
     anim_opts(s)
     s.set_defaults(fn=cmd_run)
 
     s = sub.add_parser("plot", help="plot a results CSV")
-    s.add_argument("csv")
-    s.add_argument("--out", help="output folder (default: next to the CSV)")
-    s.add_argument("--animate", action="store_true")
+    s.add_argument("csv", metavar="CSV",
+                   help="a result CSV (time in the first column), e.g. results/<scenario>/<scenario>.csv; the "
+                        "standard figures need theta_ankle, theta_hip, zmp_x, com_x, else an overview of every column")
+    s.add_argument("--out", metavar="DIR", help="output folder (default: the CSV's folder)")
+    s.add_argument("--animate", action="store_true",
+                   help="also write a stick-figure GIF <name>.gif (body sizes: the plant FMU's defaults)")
+    no_progress(s, "figures, GIF frames")
     anim_opts(s)
     s.set_defaults(fn=cmd_plot)
 
     s = sub.add_parser("compare", help="compare a result CSV with a reference CSV (FMI cross-check band)")
-    s.add_argument("result")
-    s.add_argument("reference")
-    s.add_argument("--columns", help="comma-separated signals (default: all reference columns)")
-    s.add_argument("--num", type=_number(ge=2, integer=True), help="band samples (validate_signal num; default max(1000, reference rows))")
-    s.add_argument("--dx", type=_number(ge=1, integer=True), default=20, help="band horizontal width in samples (default 20)")
-    s.add_argument("--dy", type=NON_NEGATIVE, default=0.1, help="band vertical width relative to the range (default 0.1)")
-    s.add_argument("--abs-tol", type=NON_NEGATIVE, help="stricter tube: absolute tolerance")
-    s.add_argument("--rel-tol", type=NON_NEGATIVE, help="stricter tube: relative tolerance")
-    s.add_argument("--band-floor", type=NON_NEGATIVE, help="minimum band half-height (absolute) for nearly constant signals")
-    s.add_argument("--t-start", type=FINITE)
-    s.add_argument("--t-stop", type=FINITE)
+    s.add_argument("result", help="the result CSV to check (time in the first column)")
+    s.add_argument("reference", help="the reference CSV, e.g. scenarios/reference/<scenario>.csv")
+    s.add_argument("--columns", metavar="A,B,...", help="comma-separated signals (default: all reference columns)")
+    s.add_argument("--num", type=_number(ge=2, integer=True),
+                   help="band samples (validate_signal num; default: max(1000, reference rows))")
+    s.add_argument("--dx", type=_number(ge=1, integer=True), default=20,
+                   help="band horizontal half-width in samples (default %(default)s)")
+    s.add_argument("--dy", type=NON_NEGATIVE, default=0.1,
+                   help="band vertical half-width relative to the signal's range (default %(default)g)")
+    s.add_argument("--abs-tol", type=NON_NEGATIVE,
+                   help="stricter tube: absolute tolerance, in the signal's unit (default: none)")
+    s.add_argument("--rel-tol", type=NON_NEGATIVE,
+                   help="stricter tube: tolerance relative to |reference| (default: none)")
+    s.add_argument("--band-floor", type=NON_NEGATIVE,
+                   help="minimum band half-height, in the signal's unit, for nearly constant signals (default: none)")
+    s.add_argument("--t-start", type=FINITE, metavar="T0",
+                   help="compare from this time [s] on (default: the reference's start)")
+    s.add_argument("--t-stop", type=FINITE, metavar="T1",
+                   help="compare up to this time [s] (default: the reference's end)")
     s.add_argument("--allow-partial", action="store_true", help="do not fail when the result covers less time")
     s.add_argument("--plot", metavar="PNG", help="always write a plot of reference, band/tube, result and failing "
                    "samples: of the failed signals, or of every signal when all pass")
     s.add_argument("--json", metavar="FILE", help="write the report as JSON")
-    s.add_argument("--failed-only", action="store_true")
+    s.add_argument("--failed-only", action="store_true",
+                   help="list only the failed signals (default: every compared signal)")
     s.set_defaults(fn=cmd_compare)
 
     s = sub.add_parser("steptest", help="step the controller FMU on recorded inputs and compare (HIL style)")
-    s.add_argument("cases", nargs="+", help="case folder(s) with <Model>_in.csv, _ref.csv, _ref.opt")
+    s.add_argument("cases", nargs="+", metavar="CASE",
+                   help="case folder(s) with <Model>_in.csv, _ref.csv, _ref.opt")
     s.add_argument("--fmu", help="controller FMU (default: AnkleHipController.fmu in the FMU folder)")
-    s.add_argument("--out", help="write <out>/<case>/AnkleHipController_out.csv")
+    s.add_argument("--out", metavar="DIR", help="write <DIR>/<case>/AnkleHipController_out.csv (default: no output files)")
     s.add_argument("--realtime", action="store_true", help="pace the steps in wall-clock time (absolute deadlines)")
     s.add_argument("--native", action="store_true",
                    help="use the native anklehip_rt_step (fmu/rt_runner): paced with --realtime, else as fast as possible")
-    s.add_argument("--native-args", nargs=argparse.REMAINDER, help="extra arguments for anklehip_rt_step")
-    s.add_argument("--spin-us", type=NON_NEGATIVE, default=0.0, help="busy-wait the last N µs before a deadline")
+    s.add_argument("--native-args", nargs=argparse.REMAINDER, metavar="ARG",
+                   help="extra arguments for anklehip_rt_step: everything after this option (put it last)")
+    s.add_argument("--spin-us", type=NON_NEGATIVE, default=0.0, metavar="US",
+                   help="with --realtime: busy-wait the last US microseconds before a deadline (default %(default)g)")
     s.add_argument("--histogram", metavar="PNG", help="plot execution time and lateness histograms (with several "
                    "cases one file per case: <stem>_<case>.png beside PNG)")
     s.add_argument("--fail-on-miss", action="store_true", help="with --realtime: a case with a deadline miss fails "
                    "(exit 1), for both runners")
-    s.add_argument("--abs-tol", type=NON_NEGATIVE)
-    s.add_argument("--rel-tol", type=NON_NEGATIVE)
-    s.add_argument("--dx", type=_number(ge=1, integer=True))
-    s.add_argument("--dy", type=NON_NEGATIVE)
-    s.add_argument("--no-compare", action="store_true")
-    s.add_argument("--plot", action="store_true", help="plot the failed signals")
-    s.add_argument("--failed-only", action="store_true")
+    tol = "(default: the case's steptest.toml [compare]{})"
+    s.add_argument("--abs-tol", type=NON_NEGATIVE,
+                   help="tube: absolute tolerance, in the signal's unit " + tol.format(""))
+    s.add_argument("--rel-tol", type=NON_NEGATIVE,
+                   help="tube: tolerance relative to |reference| " + tol.format(""))
+    s.add_argument("--dx", type=_number(ge=1, integer=True),
+                   help="band horizontal half-width in samples " + tol.format(", else 20"))
+    s.add_argument("--dy", type=NON_NEGATIVE,
+                   help="band vertical half-width relative to the signal's range " + tol.format(", else 0.1"))
+    s.add_argument("--no-compare", action="store_true", help="only step the FMU, do not compare with _ref.csv")
+    s.add_argument("--plot", action="store_true", help="plot the failed signals (<case>/failed_signals.png)")
+    s.add_argument("--failed-only", action="store_true",
+                   help="list only the failed signals (default: every compared signal)")
     s.set_defaults(fn=cmd_steptest)
 
     s = sub.add_parser("record", help="run a scenario and write the controller's step-test case")
-    s.add_argument("scenario")
-    s.add_argument("out", help="case folder to write")
-    s.add_argument("--stop-time", type=FINITE, help="as for run")
-    s.add_argument("--set", action="append", metavar="FMU.NAME=VALUE")
+    s.add_argument("scenario", help="scenario name (scenarios/<name>.toml) or path")
+    s.add_argument("out", metavar="OUT", help="case folder to write")
+    s.add_argument("--stop-time", type=FINITE, metavar="T",
+                   help="record up to this time [s] instead of the scenario's stop_time: > 0, a whole number of "
+                        f"the scenario's steps, at most {MAX_STEPS} steps")
+    s.add_argument("--set", action="append", metavar="FMU.NAME=VALUE",
+                   help="parameter override, e.g. controller.Ka=30 (repeatable)")
     s.add_argument("--controller-config", metavar="NAME", help=CONTROLLER_CONFIG_HELP)
+    no_progress(s, "simulated time")
     s.set_defaults(fn=cmd_record)
 
     s = sub.add_parser("sweep", help="a sweep file (scenarios/sweeps/), or a scenario's peak push force x controller "
                                      "variants, on Dask -> a table of outcomes")
     s.add_argument("scenario", help="a sweep file (name in scenarios/sweeps/ or path), or a scenario with --forces")
-    s.add_argument("--forces", help="with a scenario: peak forces, start:stop:step (inclusive) or a,b,c [N]")
-    s.add_argument("--variant", action="append", help="repeatable: " + _variants_help())
-    s.add_argument("--workers", type=_number(ge=1, integer=True), default=2)
+    s.add_argument("--forces", metavar="GRID",
+                   help="with a scenario: peak forces [N], start:stop:step (inclusive) or a,b,c")
+    s.add_argument("--variant", action="append", metavar="VARIANT",
+                   help="repeatable: " + _variants_help() + " (default: one variant, default)")
+    s.add_argument("--workers", type=_number(ge=1, integer=True), default=2, metavar="N",
+                   help="processes of the local Dask cluster (default %(default)s; not used with --scheduler)")
     s.add_argument("--engine", choices=("fmpy", "native"),
                    help="the closed-loop master of each run (default: native when it is built, else fmpy)")
     s.add_argument("--scheduler", metavar="ADDRESS",
@@ -929,49 +1003,59 @@ def build_parser() -> argparse.ArgumentParser:
                         "$DASK_SCHEDULER_ADDRESS, else a local cluster of --workers processes)")
     s.add_argument("--restart", action="store_true",
                    help="discard the points an earlier (interrupted) run of this sweep left in --out")
-    s.add_argument("--out", help="output folder (default results/sweep_<scenario>); a rerun into the same "
-                                 "folder skips the points already done")
+    s.add_argument("--out", metavar="DIR", help="output folder (default: results/sweep_<name>); a rerun into the "
+                                                "same folder skips the points already done")
     s.set_defaults(fn=cmd_sweep)
 
     s = sub.add_parser("robustness", help="each fault (docs/scenarios.md) swept over its levels on a scenario "
                                           "-> the largest level that still completes every push cycle (Dask)")
-    s.add_argument("scenario")
+    s.add_argument("scenario", help="scenario name (scenarios/<name>.toml) or path")
     s.add_argument("--study", action="append", metavar="NAME",
                    help="only this study (a fault key or a study label; repeatable; default: all)")
     s.add_argument("--grid", action="append", metavar="KEY=GRID",
                    help="levels of a fault key instead of its default grid: start:stop:step or a,b,c (repeatable)")
-    s.add_argument("--workers", type=_number(ge=1, integer=True), default=2)
+    s.add_argument("--workers", type=_number(ge=1, integer=True), default=2, metavar="N",
+                   help="processes of the local Dask cluster (default %(default)s; not used with --scheduler)")
     s.add_argument("--scheduler", metavar="ADDRESS",
                    help="run on the Dask scheduler at ADDRESS (default: $DASK_SCHEDULER_ADDRESS, else a local cluster)")
     s.add_argument("--restart", action="store_true", help="discard the points an earlier run left in --out")
-    s.add_argument("--out", help="output folder (default results/robustness_<scenario>); a rerun into the same "
-                                 "folder skips the points already done")
+    s.add_argument("--out", metavar="DIR", help="output folder (default: results/robustness_<scenario>); a rerun "
+                                                "into the same folder skips the points already done")
     s.set_defaults(fn=cmd_robustness)
 
     s = sub.add_parser("soak", help="one pair of FMU instances for a long time under seeded random pushes: "
                                     "posture drift, memory growth, solver statistics (docs/reliability.md)")
-    s.add_argument("--duration", type=_number(gt=0, le=86400), default=3600.0, help="simulated seconds (default 3600)")
-    s.add_argument("--seed", type=_number(ge=0, integer=True), default=1, help="seed of the push schedule")
-    s.add_argument("--out", help="output folder (default results/soak)")
-    s.add_argument("--no-progress", action="store_true")
+    s.add_argument("--duration", type=_number(gt=0, le=86400), default=3600.0, metavar="S",
+                   help="simulated seconds, > 0 and <= 86400 (default %(default)g)")
+    s.add_argument("--seed", type=_number(ge=0, integer=True), default=1,
+                   help="seed of the push schedule, an integer >= 0 (default %(default)s)")
+    s.add_argument("--out", metavar="DIR", help="output folder (default: results/soak)")
+    no_progress(s, "simulated time")
     s.set_defaults(fn=cmd_soak)
 
     s = sub.add_parser("export", help="the closed loop of a scenario as an SSP file or as one container FMU")
-    s.add_argument("kind", choices=("ssp", "container"))
-    s.add_argument("scenario", help="its controller configuration and parameter overrides go into the artefact")
-    s.add_argument("--out", help="output file (default <scenario>.ssp / <scenario>.fmu)")
+    s.add_argument("kind", choices=("ssp", "container"),
+                   help="ssp: an SSP file (System Structure and Parameterization) with both FMUs; "
+                        "container: one co-simulation FMU holding both")
+    s.add_argument("scenario", help="scenario name or path; its controller configuration and parameter overrides "
+                                    "go into the artefact")
+    s.add_argument("--out", metavar="FILE", help="output file (default: <scenario>.ssp / <scenario>.fmu)")
     s.add_argument("--plant", choices=("sagittal", "3d"), help="the plant model (default: the scenario's)")
-    s.add_argument("--set", action="append", metavar="FMU.NAME=VALUE")
+    s.add_argument("--set", action="append", metavar="FMU.NAME=VALUE",
+                   help="parameter override written into the artefact, e.g. controller.Ka=30 (repeatable)")
     s.add_argument("--controller-config", metavar="NAME", help=CONTROLLER_CONFIG_HELP)
     s.add_argument("--libcosim", action="store_true",
                    help="ssp: no system-level push input (libcosim rejects it); drive plant.push_force instead")
     s.set_defaults(fn=cmd_export)
 
     s = sub.add_parser("regen-references", help="re-run the scenarios and rewrite scenarios/reference/*.csv")
-    s.add_argument("names", nargs="*", help="only these scenarios")
+    s.add_argument("names", nargs="*", metavar="NAME",
+                   help="only these scenarios (default: every scenario with a [reference] table, and the "
+                        "step-test cases)")
     s.add_argument("--force", action="store_true", help="write even if the expected outcome is not met")
     s.add_argument("--no-steptests", action="store_true",
                    help="do not re-record the step-test cases under tests/steptests/")
+    no_progress(s, "simulated time")
     s.set_defaults(fn=cmd_regen)
     return p
 
