@@ -99,6 +99,8 @@ def test_ssp_runs_in_fmpy_like_our_master(scenario, models, master_run, tmp_path
 
     t, r = run(params)
     n = len(t)
+    # the documented one tick of the lifted fault (fz = 0 from the zero-started connection)
+    assert r["controller.fault"][0] == 32 and not np.any(r["controller.fault"][1:n]), r["controller.fault"][:5]
     when = _compare(np.round(t, 9), r["plant.theta_ankle"][:n], r["plant.theta_hip"][:n],
                     r["controller.phase"][:n], master_run[1:])
     t0, r0 = run(None)           # defaults: the hip strategy starts elsewhere
@@ -122,7 +124,8 @@ def test_container_fmu_runs_the_loop_like_our_master(scenario, models, master_ru
     inp["push_force"][:-1] = scenario.push.step_averages(0.0, h, len(t) - 1)
     inp["push_force"][-1] = inp["push_force"][-2]
     r = fmpy.simulate_fmu(str(fmu), stop_time=STOP, step_size=h, output_interval=h, input=inp,
-                          output=["theta_ankle", "theta_hip", "phase", "controller.zmp_limit_front"])
+                          output=["theta_ankle", "theta_hip", "phase", "fault", "controller.zmp_limit_front"])
+    assert r["fault"][1] == 32 and not np.any(np.delete(r["fault"], 1)), r["fault"][:5]   # docs/fmu.md section 2
     assert np.all(r["controller.zmp_limit_front"] == 0.045)     # the scenario's configuration inside
     _compare(np.round(r["time"], 9), r["theta_ankle"], r["theta_hip"], r["phase"], master_run)
 
