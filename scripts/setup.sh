@@ -83,6 +83,10 @@ if [ "${#missing[@]}" -gt 0 ]; then
   apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
 fi
 
+# --- A moved or copied checkout: a .venv or build folder made for another path is rebuilt ------
+build="${ANKLEHIP_BUILD_DIR:-build}"
+bash scripts/check_location.sh "$root" "$build"
+
 # --- Python virtual environment ---------------------------------------------------------------
 py="${PYTHON:-python3}"
 if [ ! -x .venv/bin/python ]; then
@@ -102,7 +106,6 @@ fi
 # The venv's bin comes first on PATH so the FMPy-pulled cmake (4.x) is used when present, as a
 # user's activated venv would; the build also works with Debian's cmake 3.25.
 export PATH="$root/.venv/bin:$PATH"
-build="${ANKLEHIP_BUILD_DIR:-build}"
 win_flag=()
 [ "$win64" -eq 1 ] && win_flag=(-DANKLEHIP_WIN64=ON)
 if [ ! -f "$build/CMakeCache.txt" ]; then
