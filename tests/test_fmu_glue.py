@@ -714,6 +714,13 @@ def test_model_description_metadata(model, fmu_path):
     assert "https://spdx.org/licenses/BSD-2-Clause.html" in root.get("license")
     assert "documentation/licenses/LICENSE.txt" in root.get("license") and "BSD 2-Clause" in license_text
     assert datetime.strptime(root.get("generationDateAndTime"), "%Y-%m-%dT%H:%M:%SZ")
+    # numbers as the shortest text that reads back exactly (no 70.23960000000001 for a computed weight
+    # whose shortest form is shorter; an honest 17-digit value stays)
+    for el in root.iter():
+        for key in ("start", "min", "max", "factor", "nominal", "tolerance", "stepSize", "stopTime"):
+            text = el.get(key)
+            if text is not None and el.tag in ("Real", "DisplayUnit", "DefaultExperiment"):
+                assert len(text) <= len(repr(float(text))), f"{model}: {el.tag} {key}={text}"
 
 
 def test_phase_is_an_enumeration(controller_fmu, controller_unzipped):

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <ctime>
 #include <map>
 #include <set>
@@ -31,14 +32,26 @@ std::string esc(const std::string& s) {
   return o;
 }
 
-// Shortest decimal text that reads back to exactly the same double.
+// Shortest decimal text that reads back to exactly the same double: the fewest significant
+// digits, and of %g's exponent form and the plain form with those digits the shorter ("10", not
+// "1e+01"; "1e-08" and "1e+05" stay).
 std::string num(double v) {
   char buf[40];
-  for (int prec = 1; prec <= 17; ++prec) {
+  int prec = 1;
+  for (; prec <= 17; ++prec) {
     std::snprintf(buf, sizeof buf, "%.*g", prec, v);
     if (std::strtod(buf, nullptr) == v) break;
   }
-  return buf;
+  std::string best = buf;
+  const char* e = std::strchr(buf, 'e');
+  if (e) {
+    const int exp10 = std::atoi(e + 1);
+    if (exp10 >= 0 && exp10 < 17) {  // an integer-valued number: %g shows all its digits at that precision
+      std::snprintf(buf, sizeof buf, "%.*g", exp10 + 1, v);
+      if (std::strtod(buf, nullptr) == v && std::strlen(buf) <= best.size()) best = buf;
+    }
+  }
+  return best;
 }
 
 struct BaseUnit {
