@@ -1,5 +1,5 @@
 # add_fmu(NAME <ModelName> SOURCES <src>... [LINK <lib>...] [INCLUDE_DIRS <dir>...]
-#         [DOCUMENTATION <file>...] [OUTPUT_DIR <dir>]
+#         [DOCUMENTATION <file>...] [DOCUMENTATION_IMAGES <file>...] [OUTPUT_DIR <dir>]
 #         [SOURCE_FMU_FILES <file>... SOURCE_FMU_HEADER_DIRS <dir>...])
 #
 # Turns a model (sources defining fmuglue::modelInfo() and fmuglue::createModel(), see
@@ -14,7 +14,8 @@
 #   <ModelName>_fmu   (ALL) packs into OUTPUT_DIR (default ${ANKLEHIP_FMU_DIR}) modelDescription.xml,
 #                     binaries/linux64/<ModelName>.so (and binaries/win64/<ModelName>.dll with
 #                     -DANKLEHIP_WIN64=ON, cross-built by cmake/Win64Fmus.cmake) and
-#                     documentation/ (index.html + DOCUMENTATION files) and resources/ (ModelInfo::resources)
+#                     documentation/ (index.html + DOCUMENTATION files, DOCUMENTATION_IMAGES in
+#                     documentation/images/, as docs/*.md link them) and resources/ (ModelInfo::resources)
 #                     with `cmake -E tar --format=zip`.
 #   With SOURCE_FMU_FILES the FMU is also a source FMU: sources/ holds those files (compiled; the
 #   glue's fmi2_api.cpp, instance.cpp, state_format.cpp, model_description.cpp and plant_helpers.cpp
@@ -73,7 +74,7 @@ endfunction()
 
 function(add_fmu)
   cmake_parse_arguments(FMU "" "NAME;OUTPUT_DIR"
-                        "SOURCES;LINK;INCLUDE_DIRS;DOCUMENTATION;SOURCE_FMU_FILES;SOURCE_FMU_HEADER_DIRS" ${ARGN})
+                        "SOURCES;LINK;INCLUDE_DIRS;DOCUMENTATION;DOCUMENTATION_IMAGES;SOURCE_FMU_FILES;SOURCE_FMU_HEADER_DIRS" ${ARGN})
   if(NOT FMU_NAME OR NOT FMU_SOURCES)
     message(FATAL_ERROR "add_fmu: NAME and SOURCES are required")
   endif()
@@ -139,6 +140,11 @@ function(add_fmu)
     list(APPEND doc_cmds COMMAND "${CMAKE_COMMAND}" -E copy "${doc_abs}" "${stage}/documentation/")
     list(APPEND doc_deps "${doc_abs}")
   endforeach()
+  foreach(img IN LISTS FMU_DOCUMENTATION_IMAGES)
+    get_filename_component(img_abs "${img}" ABSOLUTE)
+    list(APPEND doc_cmds COMMAND "${CMAKE_COMMAND}" -E copy "${img_abs}" "${stage}/documentation/images/")
+    list(APPEND doc_deps "${img_abs}")
+  endforeach()
   set(src_cmds "")
   set(src_deps "")
   set(src_entry "")
@@ -195,7 +201,7 @@ ${xml_files}      <IncludeDirectory name=\".\"/>
   endif()
   add_custom_command(OUTPUT "${fmu}"
     COMMAND "${CMAKE_COMMAND}" -E rm -rf "${stage}"
-    COMMAND "${CMAKE_COMMAND}" -E make_directory "${stage}/binaries/linux64" "${stage}/documentation/licenses" "${stage}/resources" "${ANKLEHIP_FMU_DIR}"
+    COMMAND "${CMAKE_COMMAND}" -E make_directory "${stage}/binaries/linux64" "${stage}/documentation/licenses" "${stage}/documentation/images" "${stage}/resources" "${ANKLEHIP_FMU_DIR}"
     COMMAND $<TARGET_FILE:${name}_gen> "${stage}" ${src_names}
     COMMAND "${CMAKE_COMMAND}" -E copy "${so}" "${stage}/binaries/linux64/${name}.so"
     ${win_cmds}

@@ -760,3 +760,22 @@ def test_packed_fmu_alone_in_empty_dir(controller_fmu, tmp_path):
     env = {"PATH": "/usr/bin:/bin", "HOME": str(tmp_path)}
     p = subprocess.run([sys.executable, "-c", code, str(fmu)], cwd=lone, env=env, capture_output=True, text=True)
     assert p.returncode == 0 and "ok" in p.stdout, p.stderr
+
+
+@pytest.mark.parametrize("model", ["AnkleHipController", "Hoap2Plant", "Hoap2Plant3D"])
+def test_documentation_links_resolve_inside_the_fmu(model, fmu_path):
+    """Every relative Markdown link and image of the pages packed in documentation/ points at a
+    file in the FMU (the 3D plant's page carries its figures in documentation/images/); repository
+    paths are named as text, not linked."""
+    import posixpath
+    import re
+    with zipfile.ZipFile(fmu_path(model)) as z:
+        names = set(z.namelist())
+        pages = [n for n in names if n.startswith("documentation/") and n.endswith(".md")]
+        assert pages or model == "GlueTestModel"
+        for page in pages:
+            for target in re.findall(r"\]\(([^)\s]+)\)", z.read(page).decode()):
+                if re.match(r"[a-z]+://|#|mailto:", target):
+                    continue
+                path = posixpath.normpath(posixpath.join(posixpath.dirname(page), target.split("#")[0]))
+                assert path in names, f"{model}: {page} links {target}, not in the FMU"
