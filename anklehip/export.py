@@ -1,7 +1,7 @@
 """The closed loop as one artefact, for tools that do not run our master:
 
 * ``write_ssp``: an SSP 1.0 file (System Structure and Parameterization): the controller FMU and
-  a plant FMU, their connections (by name, DESIGN section 3, as the master connects them), the
+  a plant FMU, their connections (by name, as the master connects them), the
   push force as the system's input, and the scenario's parameter values as a parameter set (.ssv).
 * ``write_container_fmu``: one co-simulation FMU built with FMPy's container support that packs
   both FMUs; the push force is its only input, every plant output and the controller's outputs are

@@ -107,7 +107,7 @@ class _Layout:
         c_in = [v for v in ci.by_causality("input")]
         p_in = [v for v in pi.by_causality("input")]
         pnames = {v.name for v in p_out}
-        # connections by name (DESIGN section 3)
+        # connections by name (docs/scenarios.md, "The co-simulation master")
         for v in c_in:
             if v.name not in pnames:
                 raise FMUError(f"{ci.name} input {v.name!r} has no matching {pi.name} output")

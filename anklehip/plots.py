@@ -317,7 +317,7 @@ def frontal(d: np.ndarray, out: Path, title: str = "") -> Path:
 
 @dataclass
 class Geometry:
-    """Sagittal geometry for drawing [m]; defaults are DESIGN section 5."""
+    """Sagittal geometry for drawing [m]; defaults are the HOAP-2 numbers of docs/hoap2-model.md."""
     l1: float = 0.200
     lg2: float = 0.10
     trunk: float = 0.22          # hip -> top of the trunk (drawn)

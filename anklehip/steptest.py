@@ -289,7 +289,7 @@ def run_controller(fmu: Path | FMUInfo, inputs: np.ndarray, start: float, stop: 
                             f"{tk[0]:g}..{tk[-1]:g} s (StartTime .. StopTime - StepSize of the .opt file)")
     U = np.empty((n, len(in_vars)), float)
     for j, v in enumerate(in_vars):
-        # NaN/Inf inputs are passed on: the FMU must contain them (DESIGN 7)
+        # NaN/Inf inputs are passed on: the FMU must contain them (docs/fmu.md, fault bits)
         U[:, j] = np.interp(tk, t_in, np.asarray(inputs[v.name], float))   # exact on a matching grid
     reals = [v for v in out_vars if v.type == "Real"]
     ints = [v for v in out_vars if v.type in ("Integer", "Enumeration")]

@@ -1,5 +1,5 @@
 // AnkleHipController.fmu: the C99 controller library (controller_c, ahc_*) behind the FMI 2.0
-// co-simulation glue. Signals per DESIGN section 3; every ahc_params field is a parameter
+// co-simulation glue. Signals as docs/fmu.md names them; every ahc_params field is a parameter
 // generated from ahc_param_table() with start values from ahc_params_default() (one source of
 // truth). Sample grid rule (docs/fmu.md): fmi2DoStep(t, h) executes exactly the control ticks
 // k >= 1 with t0 + k*T in (t, t+h], counted with an integer tick counter:

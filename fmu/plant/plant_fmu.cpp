@@ -1,5 +1,5 @@
 // Hoap2Plant.fmu: the HOAP-2 sagittal plant (plant/, hoap2plant::Plant) behind the FMI 2.0
-// co-simulation glue (fmu/common). Signals per DESIGN section 3; model parameters carry the same
+// co-simulation glue (fmu/common). Signals as docs/plant.md names them; model parameters carry the same
 // names as the controller's ahc_params fields where they mean the same thing; start values come
 // from hoap2plant::default_params() (which reads hoap2/nominal.h: one source of truth).
 // Outputs are sampled at the communication points (no direct feed-through).
