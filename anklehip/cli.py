@@ -391,6 +391,9 @@ def cmd_steptest(a) -> int:
         return _err("--fail-on-miss needs --realtime (only a paced run has deadlines)")
     if a.histogram and not (a.realtime or a.native):
         return _err("--histogram needs --realtime or --native (a plain Python run is not timed)")
+    if a.spin_us and (a.native or not a.realtime):
+        return _err("--spin-us applies to the Python runner with --realtime (the native runner sleeps to "
+                    "absolute deadlines with clock_nanosleep and does not spin)")
     cases = [Path(c) for c in a.cases]
     names = [c.name for c in cases]
     if (a.out or a.histogram) and len(set(names)) < len(names):
@@ -955,7 +958,8 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--native-args", nargs=argparse.REMAINDER, metavar="ARG",
                    help="extra arguments for anklehip_rt_step: everything after this option (put it last)")
     s.add_argument("--spin-us", type=NON_NEGATIVE, default=0.0, metavar="US",
-                   help="with --realtime: busy-wait the last US microseconds before a deadline (default %(default)g)")
+                   help="with --realtime, Python runner only: busy-wait the last US microseconds before a deadline "
+                        "(default %(default)g)")
     s.add_argument("--histogram", metavar="PNG", help="plot execution time and lateness histograms (with several "
                    "cases one file per case: <stem>_<case>.png beside PNG)")
     s.add_argument("--fail-on-miss", action="store_true", help="with --realtime: a case with a deadline miss fails "

@@ -175,6 +175,9 @@ def test_fail_on_miss_and_histogram_need_a_timed_run(controller_fmu, capsys):
     assert "--fail-on-miss needs --realtime" in capsys.readouterr().err
     assert main(["steptest", str(CASES[0]), "--histogram", "h.png"]) == 2
     assert "--histogram needs --realtime or --native" in capsys.readouterr().err
+    for extra in (["--native", "--realtime"], []):    # the native runner does not spin; nor an unpaced run
+        assert main(["steptest", str(CASES[0]), "--spin-us", "50", *extra]) == 2
+        assert "--spin-us applies to the Python runner with --realtime" in capsys.readouterr().err
 
 
 @pytest.mark.parametrize("runner", RUNNERS)
