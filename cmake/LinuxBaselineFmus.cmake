@@ -10,7 +10,7 @@
 # against stubs of exactly that glibc version and brings its own C++ runtime (LLVM libc++, libc++abi,
 # libunwind), linked statically and hidden. SUNDIALS and ODE are compiled from the same Debian source
 # trees as this build's. add_fmu packs the .so files from ${ANKLEHIP_LINUX_BASELINE_BINARY_DIR}; this
-# build's own compiler still builds every test, tool and the generator. tests/test_glibc_baseline.py
+# build's own compiler still builds every test, tool and the generator. tests/test_linux_binaries.py
 # checks the highest GLIBC_ symbol version each packed binary needs.
 #
 # -DANKLEHIP_GLIBC_BASELINE= (empty) packs this build's own .so instead (its minimum glibc is then
@@ -21,7 +21,7 @@ set(ANKLEHIP_GLIBC_BASELINE "2.17" CACHE STRING
 if(ANKLEHIP_FMU_BINARIES_ONLY OR ANKLEHIP_SANITIZE OR WIN32 OR NOT ANKLEHIP_GLIBC_BASELINE)
   return()
 endif()
-include(ExternalProject)
+include(FmuBinariesSubbuild)
 
 # zig: the ziglang package of the build's Python (scripts/setup.sh installs it), or -DANKLEHIP_ZIG.
 if(NOT ANKLEHIP_ZIG)
@@ -60,20 +60,5 @@ set(ANKLEHIP_ZIG_RUNTIME ON)  # libc++ static and hidden by zig itself (cmake/Ad
 ")
 
 set(ANKLEHIP_LINUX_BASELINE_BINARY_DIR "${_lin_dir}/binaries")
-ExternalProject_Add(linux64_fmus
-  SOURCE_DIR "${PROJECT_SOURCE_DIR}"
-  PREFIX "${_lin_dir}-ep"
-  BINARY_DIR "${_lin_dir}"
-  CMAKE_ARGS
-    "-DCMAKE_TOOLCHAIN_FILE=${_toolchain}"
-    -DANKLEHIP_FMU_BINARIES_ONLY=ON
-    "-DCMAKE_BUILD_TYPE=${CMAKE_BUILD_TYPE}"
-    "-DFMI2_INCLUDE_DIR=${FMI2_INCLUDE_DIR}"
-    "-DEigen3_DIR=${Eigen3_DIR}"
-    "-DANKLEHIP_ODE_SOURCE_DIR=${_ode_src}"
-    "-DANKLEHIP_SUNDIALS_SOURCE_DIR=${_sun_src}"
-  # The sources are this project's own: let the sub-build decide what is out of date, every time.
-  BUILD_ALWAYS ON
-  INSTALL_COMMAND ""
-  LOG_CONFIGURE ON LOG_BUILD ON LOG_OUTPUT_ON_FAILURE ON)
+anklehip_fmu_binaries_subbuild(linux64_fmus "${_lin_dir}" "${_toolchain}")
 message(STATUS "Linux FMU binaries: glibc ${ANKLEHIP_GLIBC_BASELINE} baseline, zig (${ANKLEHIP_ZIG}) in ${_lin_dir}")

@@ -11,7 +11,7 @@ include_guard(GLOBAL)
 if(NOT ANKLEHIP_WIN64 OR ANKLEHIP_FMU_BINARIES_ONLY)
   return()
 endif()
-include(ExternalProject)
+include(FmuBinariesSubbuild)
 
 find_program(ANKLEHIP_MINGW_CXX x86_64-w64-mingw32-g++-posix)
 if(NOT ANKLEHIP_MINGW_CXX)
@@ -22,22 +22,5 @@ endif()
 
 set(_win_dir "${CMAKE_BINARY_DIR}/win64")
 set(ANKLEHIP_WIN64_BINARY_DIR "${_win_dir}/binaries")
-# The same build type as this build (Release unless asked otherwise).
-set(_win_args
-  "-DCMAKE_TOOLCHAIN_FILE=${PROJECT_SOURCE_DIR}/cmake/toolchains/mingw-w64-x86_64.cmake"
-  -DANKLEHIP_FMU_BINARIES_ONLY=ON
-  "-DCMAKE_BUILD_TYPE=${CMAKE_BUILD_TYPE}"
-  "-DFMI2_INCLUDE_DIR=${FMI2_INCLUDE_DIR}"
-  "-DEigen3_DIR=${Eigen3_DIR}"
-  "-DANKLEHIP_ODE_SOURCE_DIR=${_ode_src}"
-  "-DANKLEHIP_SUNDIALS_SOURCE_DIR=${_sun_src}")
-ExternalProject_Add(win64_fmus
-  SOURCE_DIR "${PROJECT_SOURCE_DIR}"
-  PREFIX "${_win_dir}-ep"
-  BINARY_DIR "${_win_dir}"
-  CMAKE_ARGS ${_win_args}
-  # The sources are this project's own: let the sub-build decide what is out of date, every time.
-  BUILD_ALWAYS ON
-  INSTALL_COMMAND ""
-  LOG_CONFIGURE ON LOG_BUILD ON LOG_OUTPUT_ON_FAILURE ON)
+anklehip_fmu_binaries_subbuild(win64_fmus "${_win_dir}" "${PROJECT_SOURCE_DIR}/cmake/toolchains/mingw-w64-x86_64.cmake")
 message(STATUS "Windows 64-bit FMU binaries: mingw-w64 (${ANKLEHIP_MINGW_CXX}) in ${_win_dir}")

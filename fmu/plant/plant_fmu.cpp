@@ -93,11 +93,6 @@ const RealParam kParams[] = {
     {"atol", &Params::atol, "", "Absolute tolerance of the integrator (all states)", 1e-16, 1e-2},
 };
 constexpr int kNumParams = sizeof(kParams) / sizeof(kParams[0]);
-int paramIndex(double Params::*field) {
-  for (int i = 0; i < kNumParams; ++i)
-    if (kParams[i].field == field) return i;
-  return -1;
-}
 
 ModelInfo makeInfo() {
   Params def = hoap2plant::default_params();
@@ -185,12 +180,11 @@ bool paramsFromStore(const Context& ctx, Params& p, std::string& why) {
   // The integrator's relative tolerance: the parameter rtol when set (> 0, the user's explicit
   // choice); else the importer's fmi2SetupExperiment tolerance when it defines one; else the
   // model's default, which the DefaultExperiment advertises.
-  if (p.rtol == 0.0) p.rtol = ctx.tolerance_defined() ? ctx.tolerance() : hoap2plant::default_params().rtol;
+  const bool rtol_is_parameter = p.rtol > 0.0;
+  if (!rtol_is_parameter) p.rtol = ctx.tolerance_defined() ? ctx.tolerance() : hoap2plant::default_params().rtol;
   if (!(p.rtol >= kMinRtol && p.rtol <= kMaxRtol)) {
     std::snprintf(buf, sizeof buf, "relative tolerance %g (%s) is outside [%g, %g]", p.rtol,
-                  ctx.real(vr::first_real_param + paramIndex(&Params::rtol)) > 0.0 ? "parameter rtol"
-                                                                                    : "fmi2SetupExperiment's tolerance",
-                  kMinRtol, kMaxRtol);
+                  rtol_is_parameter ? "parameter rtol" : "fmi2SetupExperiment's tolerance", kMinRtol, kMaxRtol);
   } else if (!(p.toe_x > p.heel_x)) {
     std::snprintf(buf, sizeof buf, "toe_x (%g) must be > heel_x (%g)", p.toe_x, p.heel_x);
   } else if (p.h_push <= p.ankle_height + p.l1) {

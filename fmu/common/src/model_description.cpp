@@ -37,8 +37,7 @@ std::string esc(const std::string& s) {
 // "1e+01"; "1e-08" and "1e+05" stay).
 std::string num(double v) {
   char buf[40];
-  int prec = 1;
-  for (; prec <= 17; ++prec) {
+  for (int prec = 1; prec <= 17; ++prec) {
     std::snprintf(buf, sizeof buf, "%.*g", prec, v);
     if (std::strtod(buf, nullptr) == v) break;
   }
@@ -126,8 +125,7 @@ std::string xmlWithGuid(const ModelInfo& info, const std::string& guid,
   if (!info.license.empty()) o << "\n  license=\"" << esc(info.license) << "\"";
   o << "\n  generationTool=\"anklehip fmuglue " << kGlueInterfaceVersion << "\"";
   if (!generated.empty()) o << "\n  generationDateAndTime=\"" << generated << "\"";
-  o
-    << "\n  variableNamingConvention=\"structured\" numberOfEventIndicators=\"0\">\n";
+  o << "\n  variableNamingConvention=\"structured\" numberOfEventIndicators=\"0\">\n";
   o << "  <CoSimulation modelIdentifier=\"" << esc(info.model_name) << "\" needsExecutionTool=\"false\""
     << " canHandleVariableCommunicationStepSize=\"" << (info.can_handle_variable_step ? "true" : "false") << "\""
     << " canInterpolateInputs=\"false\" maxOutputDerivativeOrder=\"0\" canRunAsynchronuously=\"false\""
