@@ -673,7 +673,7 @@ def cmd_soak(a) -> int:
     from .soak import soak
     try:
         out = check_output_folder(a.out if a.out else Path("results") / "soak", "--out")
-        rep = soak(a.duration, a.seed, a.fmu_dir, progress=not a.no_progress and sys.stderr.isatty())
+        rep = soak(a.duration, a.seed, a.fmu_dir, progress=not a.no_progress)
     except (MissingFileError, FMUError) as e:
         return _err(str(e))
     f = rep.figures()

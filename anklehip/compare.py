@@ -42,8 +42,6 @@ class SignalResult:
     name: str
     passed: bool
     discrete: bool = False
-    band_ok: bool = True
-    tube_ok: bool | None = None
     n_samples: int = 0
     n_outside: int = 0
     first_outside: float | None = None       # first time outside the band or the tube (or differing)
@@ -205,7 +203,7 @@ def compare_signal(name: str, t: np.ndarray, y: np.ndarray, t_ref: np.ndarray, y
         return r
     nan_ref = ~np.isfinite(y_ref)
     if nan_ref.any():
-        r.passed, r.band_ok = False, False
+        r.passed = False
         r.message = f"reference has NaN/Inf at t={t_ref[np.argmax(nan_ref)]:.6g}"
         return r
     inside = (t >= t_ref[0]) & (t <= t_ref[-1])
@@ -240,15 +238,15 @@ def compare_signal(name: str, t: np.ndarray, y: np.ndarray, t_ref: np.ndarray, y
             y_band = np.interp(t_band, t_ref, y_ref)
             y_min = np.minimum(y_min, y_band - band_floor)
             y_max = np.maximum(y_max, y_band + band_floor)
-            lo_i, hi_i = np.interp(t, t_band, y_min), np.interp(t, t_band, y_max)
-            i_out = ((yv < lo_i) | (yv > hi_i)) & (t > t_band[0]) & (t < t_band[-1])
         r.band = (t_band, y_min, y_max)
-        r.band_ok = not i_out.any()
         lo = np.interp(t, t_band, y_min)
         hi = np.interp(t, t_band, y_max)
+        if band_floor:
+            i_out = ((yv < lo) | (yv > hi)) & (t > t_band[0]) & (t < t_band[-1])
+        band_ok = not i_out.any()
         exc = np.where(inside & np.isfinite(y), np.maximum(lo - y, y - hi), 0.0)
         r.max_excess = float(max(0.0, exc.max())) if len(exc) else 0.0
-        if not r.band_ok:
+        if not band_ok:
             msgs.append(f"outside the band by up to {r.max_excess:.4g}")
         out = i_out | nan
 
@@ -259,8 +257,7 @@ def compare_signal(name: str, t: np.ndarray, y: np.ndarray, t_ref: np.ndarray, y
             lim = (abs_tol or 0.0) + (rel_tol or 0.0) * np.abs(yr_at)
             r.tube = (yr_at - lim, yr_at + lim)
             tube_out = inside & ~(dev <= lim)
-            r.tube_ok = not tube_out.any()
-            if not r.tube_ok:
+            if tube_out.any():
                 k = int(np.argmax(tube_out))
                 msgs.append(f"outside the tube (abs {abs_tol or 0:g}, rel {rel_tol or 0:g}) from t={t[k]:.6g}")
             out |= tube_out

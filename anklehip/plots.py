@@ -1,5 +1,5 @@
 """Figures (matplotlib, Agg): the paper's Fig. 4 and Fig. 5, an overview of any result, a
-stick-figure animation (GIF) and the real-time histogram."""
+stick-figure animation (GIF)."""
 from __future__ import annotations
 
 import math
@@ -537,7 +537,6 @@ def animate(d: np.ndarray, out: Path, geom: Geometry | None = None, fps: float =
         f_arrow.xy = (py, g.push_height)
         f_arrow.set_position((py - L, g.push_height))
         f_arrow.set_visible(abs(f) > 1e-9)
-        return (*f_soles, *f_legs, f_pelvis, f_trunk, f_head, f_com, f_zmp, f_comp, f_arrow)
 
     def update(i):
         k = idx[i]
@@ -562,8 +561,8 @@ def animate(d: np.ndarray, out: Path, geom: Geometry | None = None, fps: float =
         ph = int(d["phase"][k]) if "phase" in names else -1
         extra = f"\npush y {float(d['push_force_y'][k]):+4.1f} N" if frontal and "push_force_y" in names else ""
         txt.set_text(f"t = {t[k]:6.2f} s\nphase {PHASE_LABELS.get(ph, '?')}\npush {f:+6.1f} N{extra}")
-        arts = (foot, legs, trunk, head, com, zmp_m, comp_m, arrow, txt)
-        return arts + (update_frontal(k) if frontal else ())
+        if frontal:
+            update_frontal(k)
 
     out = Path(out)
     out.parent.mkdir(parents=True, exist_ok=True)

@@ -198,7 +198,7 @@ def soak(duration: float = 3600.0, seed: int = 1, fmu_dir=None, step: float = 1e
         bar = None
         if progress:
             from tqdm import tqdm
-            bar = tqdm(total=duration, unit="s sim", leave=False)
+            bar = tqdm(total=duration, unit="s sim", leave=False, disable=None)   # off on a non-TTY
         for k in range(n):
             t = k * step
             st = p_getR(pc, vr_p_out, len(c_in), sens)

@@ -18,7 +18,7 @@ import math
 import os
 import subprocess
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -239,12 +239,11 @@ class StepTestResult:
     data: np.ndarray | None             # the outputs; None when the native runner failed
     report: CompareReport | None
     rt: RTStats | None = None
-    notes: list[str] = field(default_factory=list)
     runner_error: str | None = None     # why the native runner failed (its exit status)
 
     @property
     def passed(self) -> bool:
-        return not self.runner_error and (self.report is None or self.report.passed)
+        return not failures(self)
 
 
 def run_controller(fmu: Path | FMUInfo, inputs: np.ndarray, start: float, stop: float, step: float,
@@ -537,13 +536,8 @@ def _us(x: float) -> str:
 
 def rt_histogram(rt: RTStats, out: Path, title: str = "") -> Path:
     """rt_histogram_figure as a PNG."""
-    import matplotlib.pyplot as plt
-    fig = rt_histogram_figure(rt, title)
-    out = Path(out)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(out, dpi=120)
-    plt.close(fig)
-    return out
+    from .plots import _save
+    return _save(rt_histogram_figure(rt, title), out)
 
 
 def rt_histogram_figure(rt: RTStats, title: str = ""):
