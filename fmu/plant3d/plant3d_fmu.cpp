@@ -42,9 +42,9 @@ enum : fmi2ValueReference {
   gyro_x = 62, gyro_y = 63, gyro_z = 64, sink_depth = 65, feet_x = 66, feet_y = 67,
   first_cell = 70,         // 8 load cells
   first_joint = 80,        // 12 joint angles
-  ode_steps = 95, mode_switches = 96, contacts = 97,
+  ode_steps = 95, mode_switches = 96, contacts = 97, held_feet = 98,
   first_real_param = 100,  // 100 + index into realParams()
-  servo_on = 190, seed = 191
+  servo_on = 190, seed = 191, flat_foot_weld = 192
 };
 }
 
@@ -65,7 +65,8 @@ const std::vector<RealParam>& realParams() {
          [](Params& p) -> double& { return p.contact_stiffness; }},
         {"contact_damping", "N.s/m", "Normal damping of each sole-corner contact", 0.0, 1e7,
          [](Params& p) -> double& { return p.contact_damping; }},
-        {"internal_step", "s", "ODE step inside a communication step (upper bound; equal steps)", 1e-6, 0.01,
+        {"internal_step", "s",
+         "ODE step while both feet are held flat (upper bound; equal steps in a communication step)", 1e-6, 0.01,
          [](Params& p) -> double& { return p.internal_step; }},
         {"h_push", "m", "Height of the push point above the sole (erect posture), on the trunk above the hips", 0.0, 10.0,
          [](Params& p) -> double& { return p.h_push; }},
@@ -110,6 +111,11 @@ const std::vector<RealParam>& realParams() {
                      f.min, f.max, [k, m](Params& p) -> double& { return p.servo[k].*m; }});
       }
     }
+    // appended: value references are 100 + the row index
+    t.push_back({"rocking_step", "s",
+                 "ODE step while a foot rocks or lifts, and for a step in which a held foot is released (upper bound; "
+                 "equal steps in an internal step)",
+                 1e-6, 0.01, [](Params& p) -> double& { return p.rocking_step; }});
     return t;
   }();
   return table;
@@ -203,7 +209,9 @@ ModelInfo makeInfo() {
       "theta_knee_ref (0 = healthy)");
   add("ode_steps", vr::ode_steps, I, Out, Disc, "", "ODE steps so far");
   add("mode_switches", vr::mode_switches, I, Out, Disc, "", "Contact mode switches so far");
-  add("contacts", vr::contacts, I, Out, Disc, "", "Sole-corner contacts in the last ODE step");
+  add("contacts", vr::contacts, I, Out, Disc, "", "Sole-corner contacts in the last ODE step (a held foot: 4)");
+  add("held_feet", vr::held_feet, I, Out, Disc, "",
+      "Feet held flat (flat_foot_weld): 0 none, 1 left, 2 right, 3 both");
 
   const auto& params = realParams();
   for (size_t i = 0; i < params.size(); ++i) {
@@ -213,6 +221,10 @@ ModelInfo makeInfo() {
   }
   add("servo_on", vr::servo_on, B, Par, Fix, "", "Joint servos active (false: joints passive)", def.servo_on ? 1 : 0);
   add("seed", vr::seed, I, Par, Fix, "", "Seed of the sensor-noise generator (splitmix64)", double(def.seed), 0, 2147483647);
+  add("flat_foot_weld", vr::flat_foot_weld, B, Par, Fix, "",
+      "A foot resting flat, sticking, is held still (the rigid limit of its corner contacts) until its ground "
+      "reaction would lift a corner or slip; false: always on the corner contacts",
+      def.flat_foot_weld ? 1 : 0);
   return m;
 }
 
@@ -234,6 +246,7 @@ Params paramsFromStore(const Context& ctx) {
     params[i].field(p) = ctx.real(vr::first_real_param + static_cast<fmi2ValueReference>(i));
   p.servo_on = ctx.boolean(vr::servo_on);
   p.seed = static_cast<std::uint64_t>(ctx.integer(vr::seed));
+  p.flat_foot_weld = ctx.boolean(vr::flat_foot_weld);
   return p;
 }
 
@@ -250,7 +263,8 @@ class Plant3DFmu : public Model {
  public:
   void reset(Context&) override { plant_.reset(); }
 
-  std::uint32_t state_version() const override { return 2; }  // 2: field by field, parameters from the store
+  // 2: field by field, parameters from the store; 3: the held feet
+  std::uint32_t state_version() const override { return 3; }
 
   fmi2Status exit_initialization(Context& ctx) override {
     const Params p = paramsFromStore(ctx);
@@ -280,11 +294,12 @@ class Plant3DFmu : public Model {
     return fmi2OK;
   }
 
-  // At most kMaxOdeStepsPerStep ODE steps per fmi2DoStep (50 s at the default 0.5 ms internal
+  // At most kMaxOdeStepsPerStep ODE steps per fmi2DoStep (25 s at the default 0.25 ms rocking
   // step, a few seconds of computation): a longer step is refused before anything runs.
   static constexpr double kMaxOdeStepsPerStep = 1e5;
   double max_step_size(const Context&) const override {
-    return plant_ ? kMaxOdeStepsPerStep * plant_->params().internal_step : std::numeric_limits<double>::infinity();
+    return plant_ ? kMaxOdeStepsPerStep * std::min(plant_->params().internal_step, plant_->params().rocking_step)
+                  : std::numeric_limits<double>::infinity();
   }
 
   StepResult do_step(Context& ctx, double t, double h, bool) override {
@@ -379,6 +394,7 @@ class Plant3DFmu : public Model {
     ctx.set_boolean(vr::fallen, o.fallen);
     ctx.set_integer(vr::ode_steps, clampi(plant_->stats().ode_steps));
     ctx.set_integer(vr::mode_switches, clampi(plant_->stats().mode_switches));
+    ctx.set_integer(vr::held_feet, (plant_->welded(Left) ? 1 : 0) + (plant_->welded(Right) ? 2 : 0));
   }
 
   std::unique_ptr<Plant3D> plant_;

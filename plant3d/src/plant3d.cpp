@@ -49,6 +49,11 @@ namespace {
 constexpr double kPi = 3.14159265358979323846;
 
 constexpr int kMaxContacts = 8;  // per foot (box-plane gives at most 4)
+// A corner whose normal force is below this fraction of the weight may lift in the next step: the
+// step after starts with the contacts' inequality rows (Plant3D::within_limits).
+constexpr double kNearLift = 1e-3;
+// A free foot on four corners is held once no corner moves faster than this [m/s].
+constexpr double kWeldSpeed = 1e-4;
 
 // --- ODE's process-wide state: initialised once (thread-safe), its error hooks throw ------------
 [[noreturn]] void ode_throw(int num, const char* msg, va_list ap) {
@@ -112,6 +117,12 @@ void cross(const double a[3], const double b[3], double c[3]) {
   c[2] = a[0] * b[1] - a[1] * b[0];
 }
 double dot(const double a[3], const double b[3]) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+void mat_vec(const double* R, const double* v, double* out) {  // R 3x4 row-major
+  for (int r = 0; r < 3; ++r) out[r] = R[r * 4] * v[0] + R[r * 4 + 1] * v[1] + R[r * 4 + 2] * v[2];
+}
+void mat_t_vec(const double* R, const double* v, double* out) {
+  for (int c = 0; c < 3; ++c) out[c] = R[c] * v[0] + R[4 + c] * v[1] + R[8 + c] * v[2];
+}
 
 struct Mass {  // accumulated about the world origin
   double m = 0, first[3] = {0, 0, 0}, second[6] = {0, 0, 0, 0, 0, 0};  // I about the origin
@@ -170,9 +181,27 @@ double Params::mass() const {
   return m;
 }
 
+double critical_contact_damping(double k) {
+  // Eight corners at x_i = +-a from the sole centre give the pitch mode a stiffness K = 8 k a^2 and
+  // a damping 8 c a^2; critical: 8 c a^2 = 2 sqrt(K J), so c = sqrt(k J / 2) / a. J: every proto
+  // body in the standing posture, about the y axis through the soles' centre on the ground.
+  double ankle_x = 0;
+  for (const hoap2_body& b : HOAP2_BODIES)
+    if (std::strcmp(b.joint, "lleg_joint_5") == 0) ankle_x = b.anchor[0];
+  const double xs = ankle_x + 0.5 * (HOAP2_TOE_X + HOAP2_HEEL_X), zs = -HOAP2_ROBOT_ORIGIN_HEIGHT;
+  double J = 0;
+  for (const hoap2_body& b : HOAP2_BODIES) {
+    const double dx = b.com[0] - xs, dz = b.com[2] - zs;
+    J += b.inertia[1] + b.mass * (dx * dx + dz * dz);
+  }
+  const double a = 0.5 * (HOAP2_TOE_X - HOAP2_HEEL_X);
+  return std::sqrt(k * J / 2.0) / a;
+}
+
 Params default_params() {
   Params p;
   p.g = HOAP2_G;
+  p.contact_damping = critical_contact_damping(p.contact_stiffness);
   // pitch joints: Hoap2Plant's defaults (both legs together); the others as stiff as the ankle
   p.servo[AnklePitch] = {400.0, 20.0, 18.0, 5.0, 0.0};
   p.servo[HipPitch] = {150.0, 5.0, 18.0, 5.0, 0.0};
@@ -209,7 +238,12 @@ struct Plant3D::World {
   // last ODE step
   int ncontact[kLegs] = {};
   dContactGeom cg[kLegs][kMaxContacts];
-  dJointFeedback fb[kLegs][kMaxContacts];
+  dJointFeedback fb[kLegs][kMaxContacts];        // the force of each corner contact on its foot
+  dJointFeedback fb_row[kLegs][kMaxContacts][3];  // equality rows (make_contacts): normal, 2 tangents
+  bool contact_rows = false;                      // the last step's contacts were equality rows
+  bool welded[kLegs] = {};                         // the foot is held (an ODE kinematic body)
+  unsigned broken_welds = 0;                       // the held feet the last WeldBroken step released
+  dJointFeedback ankle_fb[kLegs][2];               // ankle joint and ankle servos: on the foot
   double fdir[kLegs][2] = {};                 // first friction direction of each foot's contacts
   double tau[kLegs][kLegJoints] = {};
   double max_depth = 0;
@@ -390,6 +424,7 @@ Plant3D::Plant3D(const Params& p) : P_(p), w_(std::make_unique<World>()) {
         dJointSetUniversalAxis2(j, 1, 0, 0);  // roll, on the foot
       }
       w.link[s][g] = j;
+      if (g == AnkleGroup) dJointSetFeedback(j, &w.ankle_fb[s][0]);
       // The servos: a separate motor joint rather than the joints' own motors keeps the joints'
       // rows unbounded, which ODE's LCP factorises at once (ODE step.cpp, Stage0_Joints).
       const dJointID m = dJointCreateAMotor(w.world, nullptr);
@@ -397,6 +432,7 @@ Plant3D::Plant3D(const Params& p) : P_(p), w_(std::make_unique<World>()) {
       dJointSetAMotorMode(m, dAMotorUser);
       dJointSetAMotorNumAxes(m, kGroupCount[g]);
       w.motor[s][g] = m;
+      if (g == AnkleGroup) dJointSetFeedback(m, &w.ankle_fb[s][1]);
       for (int i = 0; i < kGroupCount[g]; ++i) {
         const int k = kGroupFirst[g] + i;
         const hoap2_body* jb = joint_of[s][k];
@@ -491,15 +527,18 @@ bool Plant3D::initialize(double t0) {
   group_anchor(w, Left, HipGroup, a);
   turn(above_hip, a, P_.theta_hip_init);
 
-  // Settle under the initial set points, then start the clock.
+  // Settle under the initial set points (the soles on the ground, held if flat_foot_weld), then
+  // start the clock.
   Inputs hold;
   hold.ref[AnklePitch] = P_.theta_ankle_init;
   hold.ref[HipPitch] = P_.theta_hip_init;
   in_ = hold;
   const int n = static_cast<int>(std::ceil(P_.settle_time / P_.internal_step - 1e-9));
+  for (int side = 0; side < kLegs; ++side) weld(side, P_.flat_foot_weld);
   try {
     for (int i = 0; i < n; ++i) {
-      if (!ode_step(P_.settle_time / n)) return false;
+      if (ode_step(P_.settle_time / n) != StepResult::Ok) return false;
+      weld_resting_feet();
       if (check_fall()) {
         msg_ = "the robot falls while settling into the initial posture: " + msg_;
         return false;
@@ -543,10 +582,9 @@ void Plant3D::make_contacts(double dt, bool bounded) {
   const double erp = dt * k / (dt * k + ce), cfm = 1.0 / (dt * k + ce);
   dJointGroupEmpty(w.contact_group);
   w.max_depth = 0;
+  w.contact_rows = !bounded;
   for (int s = 0; s < kLegs; ++s) {
     const dBodyID foot = w.body[body_index(s, Foot)];
-    const int n = dCollide(w.foot_geom[s], w.ground, kMaxContacts, w.cg[s], sizeof(dContactGeom));
-    w.ncontact[s] = n;
     const double* R = dBodyGetRotation(foot);
     double fx = R[0], fy = R[4];  // the foot's x axis, horizontal part: first friction direction
     const double nrm = std::hypot(fx, fy);
@@ -554,24 +592,69 @@ void Plant3D::make_contacts(double dt, bool bounded) {
     fy = nrm > 1e-9 ? fy / nrm : 0.0;
     w.fdir[s][0] = fx;
     w.fdir[s][1] = fy;
+    if (w.welded[s]) {  // held: no contact rows (weld_reactions gives its corner forces)
+      w.ncontact[s] = 0;
+      continue;
+    }
+    const int n = dCollide(w.foot_geom[s], w.ground, kMaxContacts, w.cg[s], sizeof(dContactGeom));
+    w.ncontact[s] = n;
     for (int i = 0; i < n; ++i) {
+      const dContactGeom& g = w.cg[s][i];
+      w.max_depth = std::max(w.max_depth, static_cast<double>(g.depth));
+      if (!bounded) {
+        // Every corner pushing and sticking: the contact's three rows as equality rows. A DBall
+        // (distance) joint between the corner and a point 1 m away along a row's direction has
+        // exactly that row: direction u at the corner, right-hand side ERP/h (target - distance),
+        // the joint's CFM (ODE joints/dball.cpp). Normal: u = n, target 1 m + depth, the contact's
+        // ERP and CFM (the soft row above); tangents: u = t1, t2 = n x t1, ERP 0 (rate only, as
+        // the contact's friction rows), the world's CFM (which ODE gives the contact's friction rows:
+        // the sixteen tangent rows of two flat feet are redundant, the LDLT needs it).
+        const double t1[3] = {fx, fy, 0.0};
+        double t2[3];
+        cross(g.normal, t1, t2);
+        const double* dirs[3] = {g.normal, t1, t2};
+        for (int r = 0; r < 3; ++r) {
+          const double* u = dirs[r];
+          dJointID j = dJointCreateDBall(w.world, w.contact_group);
+          dJointAttach(j, foot, nullptr);
+          dJointSetDBallAnchor1(j, g.pos[0], g.pos[1], g.pos[2]);
+          dJointSetDBallAnchor2(j, g.pos[0] - u[0], g.pos[1] - u[1], g.pos[2] - u[2]);
+          dJointSetDBallDistance(j, r == 0 ? 1.0 + g.depth : 1.0);
+          dJointSetDBallParam(j, dParamERP, r == 0 ? erp : 0.0);
+          dJointSetDBallParam(j, dParamCFM, r == 0 ? cfm : dWorldGetCFM(w.world));
+          dJointSetFeedback(j, &w.fb_row[s][i][r]);
+        }
+        continue;
+      }
       dContact ct;
       std::memset(&ct, 0, sizeof ct);
-      ct.geom = w.cg[s][i];
+      ct.geom = g;
       // the friction pyramid: |f1|, |f2| <= mu fn along the foot and across it
-      ct.surface.mode = (bounded ? dContactApprox1 : 0) | dContactSoftERP | dContactSoftCFM | dContactFDir1;
-      ct.surface.mu = bounded ? P_.mu : dInfinity;
+      ct.surface.mode = dContactApprox1 | dContactSoftERP | dContactSoftCFM | dContactFDir1;
+      ct.surface.mu = P_.mu;
       ct.surface.soft_erp = erp;
       ct.surface.soft_cfm = cfm;
       ct.fdir1[0] = fx;
       ct.fdir1[1] = fy;
       ct.fdir1[2] = 0;
-      w.max_depth = std::max(w.max_depth, static_cast<double>(ct.geom.depth));
       dJointID cj = dJointCreateContact(w.world, w.contact_group, &ct);
       dJointAttach(cj, foot, nullptr);
       dJointSetFeedback(cj, &w.fb[s][i]);
     }
   }
+}
+
+// After an ODE step with equality contact rows: each corner's force, the sum of its three rows'.
+static void sum_contact_rows(Plant3D::World& w) {
+  if (!w.contact_rows) return;
+  for (int s = 0; s < kLegs; ++s)
+    for (int i = 0; i < w.ncontact[s]; ++i) {
+      dJointFeedback& f = w.fb[s][i];
+      for (int c = 0; c < 3; ++c) {
+        f.f1[c] = w.fb_row[s][i][0].f1[c] + w.fb_row[s][i][1].f1[c] + w.fb_row[s][i][2].f1[c];
+        f.t1[c] = w.fb_row[s][i][0].t1[c] + w.fb_row[s][i][1].t1[c] + w.fb_row[s][i][2].t1[c];
+      }
+    }
 }
 
 // Whether the last step's motor torques and friction forces lie within their limits, and whether
@@ -594,16 +677,17 @@ bool Plant3D::within_limits(bool& near) const {
       const double* nz = w.cg[s][i].normal;
       double t2[3];
       cross(nz, t1, t2);
-      const double fn = std::fabs(dot(f, nz)), lim = P_.mu * fn;
+      const double fn = dot(f, nz), lim = P_.mu * std::fabs(fn);
       const double f1 = std::fabs(dot(f, t1)), f2 = std::fabs(dot(f, t2));
-      ok = ok && f1 <= lim * (1 + 1e-9) + 1e-12 && f2 <= lim * (1 + 1e-9) + 1e-12;
-      near = near || f1 > 0.99 * lim || f2 > 0.99 * lim;
+      // an equality row may pull: then this corner lifts, and only the LCP knows how
+      ok = ok && fn >= 0 && f1 <= lim * (1 + 1e-9) + 1e-12 && f2 <= lim * (1 + 1e-9) + 1e-12;
+      near = near || f1 > 0.99 * lim || f2 > 0.99 * lim || fn < kNearLift * P_.mass() * P_.g;
     }
   }
   return ok;
 }
 
-bool Plant3D::ode_step(double dt) {
+Plant3D::StepResult Plant3D::ode_step(double dt, bool release) {
   World& w = *w_;
   tl_logger = &logger;
   // servos: the velocity loop is the ODE motor row (implicit), the position loop sets its target.
@@ -642,16 +726,29 @@ bool Plant3D::ode_step(double dt) {
     if (in_.push_x != 0.0 || in_.push_y != 0.0)
       dBodyAddForceAtRelPos(w.body[0], in_.push_x, in_.push_y, 0.0, w.push_point[0], w.push_point[1], w.push_point[2]);
   };
+  // A held foot is a guess of the same kind: its ground reaction must press every corner and stick;
+  // if not, the foot is released onto its corner contacts and the step solved again.
   BodyState saved[kBodies];
   bool bounded = limits_near_;
-  if (!bounded) save_bodies(saved);
+  const bool any_weld = w.welded[Left] || w.welded[Right];
+  if (!bounded || any_weld) save_bodies(saved);
   for (;;) {
     set_motor_limits(w, bounded);
     push();
     make_contacts(dt, bounded);
     dWorldStep(w.world, dt);
+    sum_contact_rows(w);
     ++stats_.ode_steps;
     refresh_kinematics(w);
+    if (const unsigned broken = weld_reactions()) {
+      restore_bodies(saved);
+      refresh_kinematics(w);
+      w.broken_welds = broken;
+      if (!release) return StepResult::WeldBroken;
+      for (int s = 0; s < kLegs; ++s)
+        if (broken & (1u << s)) weld(s, false);
+      continue;
+    }
     bool near = false;
     const bool ok = within_limits(near);
     if (ok || bounded) {
@@ -677,21 +774,105 @@ bool Plant3D::ode_step(double dt) {
     for (int c = 0; c < 3; ++c) {
       if (!std::isfinite(p[c]) || !std::isfinite(v[c]) || !std::isfinite(om[c])) {
         msg_ = "non-finite state of body " + w.info[i].name + " after an ODE step";
-        return false;
+        return StepResult::Error;
       }
     }
   }
-  return true;
+  return StepResult::Ok;
 }
 
-namespace {
-void mat_vec(const double* R, const double* v, double* out) {  // R 3x4 row-major
-  for (int r = 0; r < 3; ++r) out[r] = R[r * 4] * v[0] + R[r * 4 + 1] * v[1] + R[r * 4 + 2] * v[2];
+bool Plant3D::welded(int side) const { return w_->welded[side]; }
+
+void Plant3D::weld(int side, bool on) {
+  World& w = *w_;
+  if (w.welded[side] == on) return;
+  const dBodyID foot = w.body[body_index(side, Foot)];
+  w.welded[side] = on;
+  if (on) {
+    dBodySetKinematic(foot);  // infinite mass: still while its velocity is zero
+    dBodySetLinearVel(foot, 0, 0, 0);
+    dBodySetAngularVel(foot, 0, 0, 0);
+  } else {
+    dBodySetDynamic(foot);
+    ++stats_.unwelds;
+  }
+  w.kinematics_fresh = false;
 }
-void mat_t_vec(const double* R, const double* v, double* out) {
-  for (int c = 0; c < 3; ++c) out[c] = R[c] * v[0] + R[4 + c] * v[1] + R[8 + c] * v[2];
+
+// A free foot is held once its four corners press the ground inside the friction pyramid and none
+// moves faster than kWeldSpeed: the contacts then hold it still, up to the springs' deflection.
+void Plant3D::weld_resting_feet() {
+  World& w = *w_;
+  if (!P_.flat_foot_weld) return;
+  for (int s = 0; s < kLegs; ++s) {
+    if (w.welded[s] || w.ncontact[s] != kCells) continue;
+    const dBodyID foot = w.body[body_index(s, Foot)];
+    bool rest = true;
+    const double t1[3] = {w.fdir[s][0], w.fdir[s][1], 0.0};
+    for (int i = 0; i < kCells && rest; ++i) {
+      const double* f = w.fb[s][i].f1;
+      const double* nz = w.cg[s][i].normal;
+      double t2[3], v[3];
+      cross(nz, t1, t2);
+      const double fn = dot(f, nz);
+      dBodyGetPointVel(foot, w.cg[s][i].pos[0], w.cg[s][i].pos[1], w.cg[s][i].pos[2], v);
+      rest = fn > 0 && std::fabs(dot(f, t1)) < P_.mu * fn && std::fabs(dot(f, t2)) < P_.mu * fn &&
+             dot(v, v) < kWeldSpeed * kWeldSpeed;
+    }
+    if (rest) weld(s, true);
+  }
 }
-}  // namespace
+
+// A held foot is static: its ground reaction balances the ankle joint's and the ankle servos' forces
+// on it and its weight. Four equal corner springs under a rigid sole share that wrench as
+//   f_i = Fz/4 + Mx y_i / (4 b^2) - My x_i / (4 a^2)   (corners at x_i = +-a, y_i = +-b from the
+// sole centre, moments about it, foot axes), and the sticking tangential rows, all of equal
+// compliance, by the least-norm split: (fx_i, fy_i) = (Fx, Fy)/4 + Mz (-y_i, x_i) / (4 (a^2 + b^2)).
+// Written as the foot's contacts (corner positions and forces) for the outputs and checks.
+unsigned Plant3D::weld_reactions() {
+  World& w = *w_;
+  unsigned broken = 0;
+  const double a = 0.5 * w.sole_len, b = 0.5 * w.sole_width;
+  const double xs[kCells] = {a, a, -a, -a}, ys[kCells] = {b, -b, b, -b};
+  for (int s = 0; s < kLegs; ++s) {
+    if (!w.welded[s]) continue;
+    const dBodyID foot = w.body[body_index(s, Foot)];
+    const double* R = dBodyGetRotation(foot);
+    const double* pc = dBodyGetPosition(foot);
+    const dJointFeedback &jf = w.ankle_fb[s][0], &mf = w.ankle_fb[s][1];
+    const double mg = w.info[body_index(s, Foot)].mass * P_.g;
+    const double F[3] = {-jf.f2[0] - mf.f2[0], -jf.f2[1] - mf.f2[1], -jf.f2[2] - mf.f2[2] + mg};
+    double c[3], M[3];
+    dBodyGetRelPointPos(foot, w.sole_center[s][0], w.sole_center[s][1], w.sole_center[s][2], c);
+    const double r[3] = {pc[0] - c[0], pc[1] - c[1], pc[2] - c[2]};
+    cross(r, F, M);  // moment about the sole centre: about the CoM, plus r x F
+    for (int k = 0; k < 3; ++k) M[k] -= jf.t2[k] + mf.t2[k];
+    double Fl[3], Ml[3];
+    mat_t_vec(R, F, Fl);
+    mat_t_vec(R, M, Ml);
+    const double lam = Ml[2] / (4 * (a * a + b * b));
+    const double t1[3] = {w.fdir[s][0], w.fdir[s][1], 0.0};
+    const double nz[3] = {R[2], R[6], R[10]};
+    double t2[3];
+    cross(nz, t1, t2);
+    w.ncontact[s] = kCells;
+    for (int i = 0; i < kCells; ++i) {
+      const double fl[3] = {Fl[0] / 4 - lam * ys[i], Fl[1] / 4 + lam * xs[i],
+                            Fl[2] / 4 + Ml[0] * ys[i] / (4 * b * b) - Ml[1] * xs[i] / (4 * a * a)};
+      dContactGeom& g = w.cg[s][i];
+      dBodyGetRelPointPos(foot, w.sole_corner[s][i][0], w.sole_corner[s][i][1], w.sole_corner[s][i][2], g.pos);
+      std::copy(nz, nz + 3, g.normal);
+      g.depth = std::max(0.0, -static_cast<double>(g.pos[2]));
+      w.max_depth = std::max(w.max_depth, static_cast<double>(g.depth));
+      double* f = w.fb[s][i].f1;
+      mat_vec(R, fl, f);
+      const double fn = fl[2], f1 = std::fabs(dot(f, t1)), f2 = std::fabs(dot(f, t2));
+      if (!(fn >= 0) || f1 > P_.mu * fn || f2 > P_.mu * fn) broken |= 1u << s;
+    }
+  }
+  return broken;
+}
+
 
 bool Plant3D::check_fall() {
   World& w = *w_;
@@ -725,28 +906,54 @@ bool Plant3D::check_fall() {
   return false;
 }
 
+Plant3D::Result Plant3D::fall_check() {
+  if (!check_fall()) return Result::Ok;
+  fallen_ = true;
+  t_fall_ = t_;
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "t=%.6f s: FALLEN: ", t_);
+  msg_ = buf + msg_;
+  evaluate_outputs();
+  log(msg_);
+  return Result::Fallen;
+}
+
+// ODE's constraint rows hold a joint or a contact at the velocity level, so its step is first-order
+// accurate, with the largest error where the robot turns about a sole edge. Steps of internal_step
+// while both feet are held flat; of rocking_step otherwise, and for a step in which a held foot is
+// released (docs/plant3d.md section 2, "Time step").
 Plant3D::Result Plant3D::do_step(double h) {
   if (fallen_) return Result::Fallen;
   if (!(h > 0) || !std::isfinite(h)) {
     msg_ = "communication step must be positive and finite";
     return Result::Error;
   }
+  World& w = *w_;
   const int n = std::max(1, static_cast<int>(std::ceil(h / P_.internal_step - 1e-9)));
   const double dt = h / n, t0 = t_;
+  const int m = std::max(1, static_cast<int>(std::ceil(dt / P_.rocking_step - 1e-9)));
   const int mode_before = out_.contact_mode;
   try {
     for (int i = 0; i < n; ++i) {
-      if (!ode_step(dt)) return Result::Error;
-      t_ = t0 + (i + 1) * dt;
-      if (check_fall()) {
-        fallen_ = true;
-        t_fall_ = t_;
-        char buf[64];
-        std::snprintf(buf, sizeof buf, "t=%.6f s: FALLEN: ", t_);
-        msg_ = buf + msg_;
-        evaluate_outputs();
-        log(msg_);
-        return Result::Fallen;
+      bool fine = m > 1;
+      if (m == 1 || (w.welded[Left] && w.welded[Right])) {
+        const StepResult r = ode_step(dt, m == 1);
+        if (r == StepResult::Error) return Result::Error;
+        if (r == StepResult::WeldBroken) {  // restored: release the feet, take it in rocking steps
+          for (int s = 0; s < kLegs; ++s)
+            if (w.broken_welds & (1u << s)) weld(s, false);
+        } else {
+          fine = false;
+          weld_resting_feet();
+          t_ = t0 + (i + 1) * dt;
+          if (fall_check() == Result::Fallen) return Result::Fallen;
+        }
+      }
+      for (int j = 0; fine && j < m; ++j) {
+        if (ode_step(dt / m) != StepResult::Ok) return Result::Error;
+        weld_resting_feet();
+        t_ = t0 + i * dt + (j + 1) * (dt / m);
+        if (fall_check() == Result::Fallen) return Result::Fallen;
       }
     }
   } catch (const std::exception& e) {
@@ -1009,6 +1216,7 @@ Snapshot Plant3D::snapshot() const {
   s.mode = out_.contact_mode;
   save_bodies(s.body);
   s.limits_near = limits_near_;
+  for (int i = 0; i < kLegs; ++i) s.welded[i] = w_->welded[i];
   std::memcpy(static_cast<void*>(&s.in), &in_, sizeof in_);
   s.rng = rng_;
   std::memcpy(static_cast<void*>(&s.stats), &stats_, sizeof stats_);
@@ -1028,6 +1236,13 @@ bool Plant3D::restore(const Snapshot& s) {
     for (double x : st.quat) if (!std::isfinite(x)) return false;
     for (double x : st.lvel) if (!std::isfinite(x)) return false;
     for (double x : st.avel) if (!std::isfinite(x)) return false;
+  }
+  for (std::int32_t x : s.welded)
+    if (x < 0 || x > 1) return false;
+  for (int i = 0; i < kLegs; ++i) {
+    const std::int64_t unwelds = stats_.unwelds;
+    weld(i, s.welded[i] != 0);
+    stats_.unwelds = unwelds;
   }
   restore_bodies(s.body);
   limits_near_ = s.limits_near != 0;

@@ -7,7 +7,7 @@
 //     --push F         push on the trunk, x [N] (default 0); --push-y F likewise in y
 //     --push-from T0 --push-to T1   push window [s] (default: always)
 //     --ramp R         push growing at R N/s from --push-from (instead of a step)
-//     --set NAME=V     a parameter: mu, contact_stiffness, contact_damping, internal_step,
+//     --set NAME=V     a parameter: mu, contact_stiffness, contact_damping, internal_step, rocking_step,
 //                      h_push, theta_ankle_init, theta_hip_init, settle_time, kp_ankle, kd_ankle,
 //                      kp_hip, kd_hip (repeatable)
 #include <algorithm>
@@ -53,7 +53,7 @@ int describe() {
 bool set_param(Params& p, const std::string& name, double v) {
   const std::map<std::string, double*> reals = {
       {"mu", &p.mu}, {"contact_stiffness", &p.contact_stiffness}, {"contact_damping", &p.contact_damping},
-      {"internal_step", &p.internal_step}, {"h_push", &p.h_push}, {"theta_ankle_init", &p.theta_ankle_init},
+      {"internal_step", &p.internal_step}, {"rocking_step", &p.rocking_step}, {"h_push", &p.h_push}, {"theta_ankle_init", &p.theta_ankle_init},
       {"theta_hip_init", &p.theta_hip_init}, {"settle_time", &p.settle_time},
       {"kp_ankle", &p.servo[AnklePitch].kp}, {"kd_ankle", &p.servo[AnklePitch].kd},
       {"kp_hip", &p.servo[HipPitch].kp}, {"kd_hip", &p.servo[HipPitch].kd},

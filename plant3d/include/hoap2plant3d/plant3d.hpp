@@ -44,10 +44,20 @@ struct Params {
   Servo servo[kLegJoints] = {};      // per joint kind (default_params())
   // --- contact: each sole a box on the plane z = 0, corner contacts ---
   double mu = 1.0;                   // Coulomb friction coefficient (pyramid, axes along the foot)
-  double contact_stiffness = 2e5;    // normal stiffness of each corner contact [N/m]
-  double contact_damping = 1e3;      // normal damping of each corner contact [N s/m]
-  double internal_step = 5e-4;       // ODE step inside a communication step (upper bound) [s]:
-                                     // chosen by the convergence study (test plant3d.convergence)
+  // A sole resting flat (four corners on the ground, sticking, at rest) is held still, the rigid
+  // limit of its corner contacts, until its ground reaction would pull a corner or slip (docs
+  // section 2, "Flat feet"); false: always on the corner contacts
+  bool flat_foot_weld = true;
+  // normal spring-damper of each corner contact: the stiffness is chosen by the contact study (test
+  // plant3d.contact_study: rocking converges to a rigid block's), the damping by default_params()
+  // as the critical damping of the sole-pitch mode (critical_contact_damping)
+  double contact_stiffness = 2e8;    // [N/m]
+  double contact_damping = 0.0;      // [N s/m]
+  // ODE steps inside a communication step (upper bounds, equal steps) [s]: internal_step while
+  // both feet are held flat, rocking_step otherwise and for a step in which a held foot is
+  // released; chosen by the convergence studies (tests plant3d.convergence, plant3d.flat_convergence)
+  double internal_step = 1e-3;
+  double rocking_step = 2.5e-4;
   // --- push: horizontal force at a trunk point, h_push above the sole in the erect posture ---
   double h_push = 0.335;
   // --- fall detection ---
@@ -67,6 +77,11 @@ struct Params {
 };
 
 Params default_params();
+
+// The per-corner damping that makes the robot's pitch mode on its eight corner springs of
+// stiffness k critically damped (the whole robot rigid, standing, pitching about the soles' centre
+// line): c = sqrt(k J / 2) / a, J its inertia about that line, a half the sole length.
+double critical_contact_damping(double k);
 
 struct Inputs {
   double ref[kLegJoints] = {};       // set points, both legs alike [rad]
@@ -103,6 +118,7 @@ struct Stats {
   std::int64_t ode_steps = 0;      // ODE steps taken, re-solved ones included
   std::int64_t resolves = 0;       // steps solved again with torque / friction limits (see ode_step)
   std::int64_t mode_switches = 0;
+  std::int64_t unwelds = 0;        // flat feet released onto their corner contacts
 };
 
 // One body's state: all ODE keeps of it between steps (the rotation matrix is stored too, so a
@@ -114,10 +130,11 @@ struct BodyState {
 // Everything that determines the future, bit for bit (plain old data).
 struct Snapshot {
   std::uint32_t magic = 0x48335053u;  // "H3PS"
-  std::uint32_t version = 2;
+  std::uint32_t version = 3;
   double t = 0, t_fall = 0;
   std::int32_t fallen = 0, mode = 0;
   std::int32_t limits_near = 0, pad = 0;
+  std::int32_t welded[kLegs] = {};    // the feet held flat (Params::flat_foot_weld)
   BodyState body[kBodies] = {};
   Inputs in;
   std::uint64_t rng = 0;
@@ -135,6 +152,7 @@ void visit_fields(S& s, F&& f) {
   f("fallen", s.fallen);
   f("mode", s.mode);
   f("limits_near", s.limits_near);
+  for (auto& x : s.welded) f("welded", x);
   for (auto& b : s.body) {
     for (auto& x : b.pos) f("body.pos", x);
     for (auto& x : b.quat) f("body.quat", x);
@@ -149,6 +167,7 @@ void visit_fields(S& s, F&& f) {
   f("stats.ode_steps", s.stats.ode_steps);
   f("stats.resolves", s.stats.resolves);
   f("stats.mode_switches", s.stats.mode_switches);
+  f("stats.unwelds", s.stats.unwelds);
   auto& o = s.out;
   for (auto* x : {&o.theta_ankle, &o.theta_hip, &o.dtheta_ankle, &o.dtheta_hip, &o.zmp_x, &o.zmp_y, &o.fz, &o.f_toe,
                   &o.f_heel, &o.fx, &o.fy, &o.fz_true, &o.zmp_true_x, &o.zmp_true_y, &o.moment_ankle, &o.com_x,
@@ -191,7 +210,8 @@ class Plant3D {
   bool initialize(double t0);
   void set_inputs(const Inputs& in) { in_ = in; }
   enum class Result { Ok, Fallen, Error };
-  Result do_step(double h);           // t -> t + h in equal ODE steps of at most internal_step
+  Result do_step(double h);           // t -> t + h (ODE steps of internal_step / rocking_step)
+  bool welded(int side) const;        // the foot is held flat (Params::flat_foot_weld)
 
   const Params& params() const { return P_; }
   const Outputs& outputs() const { return out_; }
@@ -216,7 +236,15 @@ class Plant3D {
   struct World;                        // the ODE objects (plant3d.cpp)
 
  private:
-  bool ode_step(double dt);           // one ODE step; false on a non-finite state
+  enum class StepResult { Ok, Error, WeldBroken };
+  // One ODE step. A held foot whose ground reaction breaks the contact's limits is released and
+  // the step taken again if `release`, otherwise the bodies are restored and WeldBroken returned.
+  StepResult ode_step(double dt, bool release = true);
+  void weld(int side, bool on);       // hold a foot still (ODE kinematic body) or free it
+  void weld_resting_feet();           // hold every free foot that rests flat, sticking, at rest
+  unsigned weld_reactions();          // held feet: corner forces from their ground reaction; the
+                                      // bit of each foot whose reaction breaks the contact's limits
+  Result fall_check();                // after a step: Fallen (time, message, log) or Ok
   void make_contacts(double dt, bool bounded);
   bool within_limits(bool& near) const;
   void save_bodies(BodyState* out) const;
