@@ -35,6 +35,7 @@ typedef struct {
     double rx_meas, rz_meas; /* the same from the measured angles: the physical CoM, used by the
                                 disturbance estimate and the com_x/com_z outputs */
     double a;        /* k_m lg2 C12 = second entry of J_cx (eq. 20) */
+    double e2;       /* hip reference from the erect posture: th2 - th2_erect */
     double ratio;    /* reactionless ratio (eq. 15) */
     double Ja;       /* whole-body inertia about the ankle (eq. 11 denominator) */
     double d;        /* disturbance moment estimate */
@@ -65,8 +66,10 @@ static void compute_derived(ahc_controller *c)
     const ahc_params *p = &c->p;
     c->m = p->m1 + p->m2;
     c->km = p->m2 / c->m;
-    c->J2 = p->I2 + p->m2 * p->lg2 * p->lg2;
-    ahc_com(p, 0.0, 0.0, NULL, &c->rz_erect);
+    c->J2 = p->link2_com_x != 0.0 ? p->I2 + p->m2 * (p->lg2 * p->lg2 + p->link2_com_x * p->link2_com_x)
+                                  : p->I2 + p->m2 * p->lg2 * p->lg2;
+    ahc_erect_posture(p, &c->th1_erect, &c->th2_erect);
+    ahc_com(p, c->th1_erect, c->th2_erect, NULL, &c->rz_erect);
     c->zmp_alpha = p->zmp_filter_tau > 0.0 ? 1.0 - exp(-p->sample_period / p->zmp_filter_tau) : 1.0;
     c->d_alpha = p->zmp_filter_tau > 0.0 ? 1.0 - exp(-2.0 * p->sample_period / p->zmp_filter_tau) : 1.0;
     c->lean_alpha = 1.0 - exp(-2.0 * p->sample_period / p->lean_tau);
@@ -155,7 +158,7 @@ static void enter_hip_to_ankle(ahc_controller *c)
     c->phase = AHC_PHASE_HIP_TO_ANKLE;
     c->phase_time = 0.0;
     c->fallback_timer = 0.0;
-    c->hip_bump = c->dth2 + c->p.Kp_theta * c->th2;
+    c->hip_bump = c->dth2 + c->p.Kp_theta * (c->th2 - c->th2_erect);
 }
 
 /* ------------------------------------------------------------------------------------------- */
@@ -195,7 +198,7 @@ static void phase_transitions(ahc_controller *c, const tick_ctx *k)
         const double drz = k->rz - c->rz_erect;
         const int paper = drz >= p->rz_band_low && drz <= p->rz_band_high &&
                           (double)c->push_sign * c->zmp_f < 0.0;
-        const int quiet = fabs(k->d) <= p->fallback_disturbance_tol && fabs(c->th2) <= p->fallback_hip_tol;
+        const int quiet = fabs(k->d) <= p->fallback_disturbance_tol && fabs(k->e2) <= p->fallback_hip_tol;
         c->fallback_timer = quiet ? c->fallback_timer + k->h : 0.0;
         if (paper || (quiet && c->fallback_timer >= p->fallback_dwell - 0.5 * k->h))
             enter_hip_to_ankle(c);
@@ -206,7 +209,7 @@ static void phase_transitions(ahc_controller *c, const tick_ctx *k)
         if (zmp_beyond_limit(c, &sign)) {
             c->push_sign = sign;
             enter_hip(c);
-        } else if (fabs(c->th2) <= p->return_hip_angle_tol && fabs(c->dth2) <= p->return_hip_rate_tol &&
+        } else if (fabs(k->e2) <= p->return_hip_angle_tol && fabs(c->dth2) <= p->return_hip_rate_tol &&
                    fabs(c->lean) <= LEAN_RETURN_TOL) {
             /* 3 -> 0: hip back at erect (and, with lean_enabled, the lean released: eq. 11 would
              * otherwise give way to a push that is still on). */
@@ -222,27 +225,29 @@ static void phase_transitions(ahc_controller *c, const tick_ctx *k)
 /* ------------------------------------------------------------------------------------------- */
 /* Control laws; each integrates the reference over one tick. */
 
-/* Eq. 11: th1'' = (d - Ca th1' - Ka th1) / (I + m lg^2). Semi-implicit Euler. */
+/* Eq. 11: th1'' = (d - Ca th1' - Ka th1) / (I + m lg^2), th1 from the erect posture. Semi-implicit
+ * Euler. */
 static void law_ankle_strategy(ahc_controller *c, const tick_ctx *k)
 {
-    const double acc = (k->d - c->p.Ca * c->dth1 - c->p.Ka * c->th1) / k->Ja;
+    const double acc = (k->d - c->p.Ca * c->dth1 - c->p.Ka * (c->th1 - c->th1_erect)) / k->Ja;
     c->dth1 += k->h * acc;
     c->th1 += k->h * c->dth1;
 }
 
 /* Eq. 16: th2'' = (m2 g (p - r_x) - Ch th2' - Kh th2) / (I2 + m2 lg2^2), with
- * m2 g (p - r_x) = k_m d. Semi-implicit Euler. */
+ * m2 g (p - r_x) = k_m d, th2 from the erect posture. Semi-implicit Euler. */
 static void law_hip_strategy(ahc_controller *c, const tick_ctx *k)
 {
-    const double acc = (c->km * k->d - c->p.Ch * c->dth2 - c->p.Kh * c->th2) / c->J2;
+    const double acc = (c->km * k->d - c->p.Ch * c->dth2 - c->p.Kh * (c->th2 - c->th2_erect)) / c->J2;
     c->dth2 += k->h * acc;
     c->th2 += k->h * c->dth2;
 }
 
-/* Eq. 25: th2' = -Kp_theta th2 (+ decaying bumpless offset). Explicit Euler. */
+/* Eq. 25: th2' = -Kp_theta th2 (+ decaying bumpless offset), th2 from the erect posture. Explicit
+ * Euler. */
 static void law_hip_regulator(ahc_controller *c, const tick_ctx *k)
 {
-    c->dth2 = -c->p.Kp_theta * c->th2 + c->hip_bump;
+    c->dth2 = -c->p.Kp_theta * (c->th2 - c->th2_erect) + c->hip_bump;
     c->th2 += k->h * c->dth2;
     c->hip_bump *= exp(-c->p.Kp_theta * k->h);
 }
@@ -411,6 +416,18 @@ static double external_moment(ahc_controller *c, const ahc_sensors *s, const tic
     ddz1 = -p->lg1 * (S1 * a1 + C1 * w1 * w1);
     ddx2 = p->l1 * (C1 * a1 - S1 * w1 * w1) + p->lg2 * (C12 * a12 - S12 * w12 * w12);
     ddz2 = -p->l1 * (S1 * a1 + C1 * w1 * w1) - p->lg2 * (S12 * a12 + C12 * w12 * w12);
+    if (p->link1_com_x != 0.0 || p->link2_com_x != 0.0) {
+        /* the CoM offsets: d C added to x, -d S to z (and their second derivatives) */
+        const double d1 = p->link1_com_x, d2 = p->link2_com_x;
+        x1 += d1 * C1;
+        z1 -= d1 * S1;
+        x2 += d2 * C12;
+        z2 -= d2 * S12;
+        ddx1 += -d1 * (S1 * a1 + C1 * w1 * w1);
+        ddz1 -= d1 * (C1 * a1 - S1 * w1 * w1);
+        ddx2 += -d2 * (S12 * a12 + C12 * w12 * w12);
+        ddz2 -= d2 * (C12 * a12 - S12 * w12 * w12);
+    }
     dH = p->m1 * (x1 * ddz1 - z1 * ddx1) + p->m2 * (x2 * ddz2 - z2 * ddx2) - p->I1 * a1 - p->I2 * a12;
 
     /* Gravity moment of the measured posture, and of the feet if modelled. */
@@ -516,7 +533,9 @@ void ahc_step(ahc_controller *c, const ahc_sensors *s, ahc_outputs *out)
     kin2 = p->kinematics_source == AHC_KIN_REFERENCE ? c->th2 : s->theta_hip;
     ahc_com(p, kin1, kin2, &k.rx, &k.rz);
     ahc_com(p, s->theta_ankle, s->theta_hip, &k.rx_meas, &k.rz_meas);
-    k.a = c->km * p->lg2 * cos(kin1 + kin2);
+    k.a = p->link2_com_x != 0.0 ? c->km * (p->lg2 * cos(kin1 + kin2) - p->link2_com_x * sin(kin1 + kin2))
+                                : c->km * p->lg2 * cos(kin1 + kin2);
+    k.e2 = c->th2 - c->th2_erect;
     k.ratio = ahc_reactionless_ratio(p, kin1, kin2);
     k.Ja = ahc_ankle_inertia(p, kin2);
 
@@ -628,6 +647,7 @@ int ahc_state_validate(const ahc_controller *c, char *msg, size_t msg_size)
     ref = *c; /* derived constants must be those of the parameters */
     compute_derived(&ref);
     if (ref.m != c->m || ref.km != c->km || ref.J2 != c->J2 || ref.rz_erect != c->rz_erect ||
+        ref.th1_erect != c->th1_erect || ref.th2_erect != c->th2_erect ||
         ref.zmp_alpha != c->zmp_alpha || ref.d_alpha != c->d_alpha || ref.lean_alpha != c->lean_alpha)
         return STATE_FAIL("derived constants do not match the parameters");
 

@@ -6,38 +6,75 @@
 
 #include "ahc/controller.h"
 
+/* The CoM offsets d1, d2 enter only when set, so that the paper's model (both 0) computes exactly
+ * the paper's expressions, bit for bit. */
+static int has_offsets(const ahc_params *p) { return p->link1_com_x != 0.0 || p->link2_com_x != 0.0; }
+
 void ahc_com(const ahc_params *p, double th1, double th2, double *rx, double *rz)
 {
     const double m = p->m1 + p->m2;
     const double s1 = sin(th1), c1 = cos(th1);
     const double s12 = sin(th1 + th2), c12 = cos(th1 + th2);
+    if (has_offsets(p)) {
+        const double d1 = p->link1_com_x, d2 = p->link2_com_x;
+        if (rx) *rx = (p->m1 * (p->lg1 * s1 + d1 * c1) + p->m2 * (p->l1 * s1 + p->lg2 * s12 + d2 * c12)) / m;
+        if (rz) *rz = (p->m1 * (p->lg1 * c1 - d1 * s1) + p->m2 * (p->l1 * c1 + p->lg2 * c12 - d2 * s12)) / m;
+        return;
+    }
     if (rx) *rx = (p->m1 * p->lg1 * s1 + p->m2 * (p->l1 * s1 + p->lg2 * s12)) / m;
     if (rz) *rz = (p->m1 * p->lg1 * c1 + p->m2 * (p->l1 * c1 + p->lg2 * c12)) / m;
 }
 
-/* Paper eq. 20: J_cx = [r_z, k_m lg2 C12]. */
+/* Paper eq. 20: J_cx = [r_z, k_m lg2 C12] (with link 2's offset: k_m (lg2 C12 - d2 S12)). */
 void ahc_com_jacobian_x(const ahc_params *p, double th1, double th2, double J[2])
 {
+    const double km = p->m2 / (p->m1 + p->m2);
     double rz = 0.0;
     ahc_com(p, th1, th2, NULL, &rz);
     J[0] = rz;
-    J[1] = p->m2 / (p->m1 + p->m2) * p->lg2 * cos(th1 + th2);
+    J[1] = has_offsets(p) ? km * (p->lg2 * cos(th1 + th2) - p->link2_com_x * sin(th1 + th2))
+                          : p->m2 / (p->m1 + p->m2) * p->lg2 * cos(th1 + th2);
 }
 
-/* Paper eq. 15. */
+/* Paper eq. 15: the ankle rate that keeps r_x still while the hip moves, -J_cx[1] / J_cx[0]. */
 double ahc_reactionless_ratio(const ahc_params *p, double th1, double th2)
 {
     const double c1 = cos(th1), c12 = cos(th1 + th2);
-    const double num = p->m2 * p->lg2 * c12;
-    const double den = (p->m1 * p->lg1 + p->m2 * p->l1) * c1 + num;
+    double num, den;
+    if (has_offsets(p)) {
+        const double s1 = sin(th1), s12 = sin(th1 + th2);
+        num = p->m2 * (p->lg2 * c12 - p->link2_com_x * s12);
+        den = p->m1 * (p->lg1 * c1 - p->link1_com_x * s1) + p->m2 * p->l1 * c1 + num;
+    } else {
+        num = p->m2 * p->lg2 * c12;
+        den = (p->m1 * p->lg1 + p->m2 * p->l1) * c1 + num;
+    }
     if (fabs(den) < 1e-12) return 0.0;
     return -num / den;
 }
 
+/* Eq. 11's inertia about the ankle: I1 + m1 |c1|^2 + I2 + m2 |hip + c2|^2, with
+ * |hip + c2|^2 = l1^2 + lg2^2 + d2^2 + 2 l1 (lg2 cos th2 - d2 sin th2). */
 double ahc_ankle_inertia(const ahc_params *p, double th2)
 {
+    if (has_offsets(p)) {
+        const double d1 = p->link1_com_x, d2 = p->link2_com_x;
+        return p->I1 + p->m1 * (p->lg1 * p->lg1 + d1 * d1) + p->I2 +
+               p->m2 * (p->l1 * p->l1 + p->lg2 * p->lg2 + d2 * d2 + 2.0 * p->l1 * (p->lg2 * cos(th2) - d2 * sin(th2)));
+    }
     return p->I1 + p->m1 * p->lg1 * p->lg1 + p->I2 +
            p->m2 * (p->l1 * p->l1 + p->lg2 * p->lg2 + 2.0 * p->l1 * p->lg2 * cos(th2));
+}
+
+void ahc_erect_posture(const ahc_params *p, double *th1, double *th2)
+{
+    double t1 = 0.0, t12 = 0.0;
+    if (has_offsets(p)) {
+        t12 = -atan2(p->link2_com_x, p->lg2);
+        t1 = -atan2(p->m1 * p->link1_com_x, p->m1 * p->lg1 + p->m2 * p->l1);
+    }
+    if (th1) *th1 = t1;
+    if (th2) *th2 = t12 - t1;
 }
 
 void ahc_quintic_init(ahc_quintic *q, double x0, double v0, double a0,

@@ -202,6 +202,10 @@ static const ahc_param_info k_table[] = {
          "Sustained-push lean (our extension, not the paper's): 1 the CoM reference of phases 1-3 leans against the low-passed disturbance"),
     PI_D(lean_tau, "s", 0.01, 100.0, "Time constant of the disturbance low-pass the lean follows"),
     PI_D(lean_margin, "m", 0.0, 1.0, "The leaned CoM reference stays this far inside the toe and heel edges"),
+    PI_D(link1_com_x, "m", -1.0, 1.0,
+         "Link 1 (legs): CoM forward of the ankle-hip line, perpendicular to it (0 = on the line, paper)"),
+    PI_D(link2_com_x, "m", -1.0, 1.0,
+         "Link 2 (upper body): CoM forward of its line through the hip, perpendicular to it (0 = on the line, paper)"),
 };
 
 #define TABLE_LEN (sizeof k_table / sizeof k_table[0])

@@ -212,6 +212,25 @@ Params default_params() {
   return p;
 }
 
+// The ground reaction the outputs are made of, in world coordinates: the force, the first moments
+// of its components about the world axes (for the centre of pressure and the ankle moment), and the
+// sole-normal force of each load cell. Linear in the contact forces, so it can be averaged.
+struct GroundReaction {
+  double F[3] = {0, 0, 0};
+  double fz_p[2] = {0, 0};     // sum of f_z p_x, f_z p_y
+  double pz_f[2] = {0, 0};     // sum of p_z f_x, p_z f_y
+  double cells[kLegs][kCells] = {};
+  void add(const GroundReaction& g, double w) {
+    for (int c = 0; c < 3; ++c) F[c] += w * g.F[c];
+    for (int c = 0; c < 2; ++c) {
+      fz_p[c] += w * g.fz_p[c];
+      pz_f[c] += w * g.pz_f[c];
+    }
+    for (int s = 0; s < kLegs; ++s)
+      for (int c = 0; c < kCells; ++c) cells[s][c] += w * g.cells[s][c];
+  }
+};
+
 struct Plant3D::World {
   dWorldID world = nullptr;
   dThreadingImplementationID threading = nullptr;  // this world's own (ODE's default one is shared)
@@ -247,6 +266,10 @@ struct Plant3D::World {
   double fdir[kLegs][2] = {};                 // first friction direction of each foot's contacts
   double tau[kLegs][kLegJoints] = {};
   double max_depth = 0;
+  // the ground reaction averaged over the ODE steps of the current communication step (the
+  // impulse over it divided by its length): what the load cells and force outputs report
+  GroundReaction reaction_sum;
+  double reaction_time = 0;
 
   ~World() {
     if (contact_group) dJointGroupDestroy(contact_group);
@@ -320,6 +343,39 @@ void refresh_kinematics(Plant3D::World& w) {
     }
   }
   w.kinematics_fresh = true;
+}
+
+// The last ODE step's ground reaction from its contacts (for a held foot: weld_reactions' corner
+// forces); the cells share each contact force's sole-normal component bilinearly by where it acts
+// on the sole (exact for corner contacts; the cells' centre of pressure is the contacts').
+GroundReaction step_reaction(const Plant3D::World& w) {
+  GroundReaction g;
+  for (int s = 0; s < kLegs; ++s) {
+    const dBodyID foot = w.body[body_index(s, Foot)];
+    const double* R = dBodyGetRotation(foot);
+    const double* fp = dBodyGetPosition(foot);
+    const double nz[3] = {R[2], R[6], R[10]};  // the sole's normal
+    for (int i = 0; i < w.ncontact[s]; ++i) {
+      const double* f = w.fb[s][i].f1;
+      const double* p = w.cg[s][i].pos;
+      for (int c = 0; c < 3; ++c) g.F[c] += f[c];
+      for (int c = 0; c < 2; ++c) {
+        g.fz_p[c] += f[2] * p[c];
+        g.pz_f[c] += p[2] * f[c];
+      }
+      const double d[3] = {p[0] - fp[0], p[1] - fp[1], p[2] - fp[2]};
+      double local[3];
+      mat_t_vec(R, d, local);
+      const double u = std::clamp((local[0] - w.sole_corner[s][RearLeft][0]) / w.sole_len, 0.0, 1.0);
+      const double v = std::clamp((local[1] - w.sole_corner[s][FrontRight][1]) / w.sole_width, 0.0, 1.0);
+      const double fn = f[0] * nz[0] + f[1] * nz[1] + f[2] * nz[2];
+      g.cells[s][FrontLeft] += fn * u * v;
+      g.cells[s][FrontRight] += fn * u * (1 - v);
+      g.cells[s][RearLeft] += fn * (1 - u) * v;
+      g.cells[s][RearRight] += fn * (1 - u) * (1 - v);
+    }
+  }
+  return g;
 }
 
 void group_anchor(const Plant3D::World& w, int s, int g, double a[3]) {
@@ -537,6 +593,8 @@ bool Plant3D::initialize(double t0) {
   for (int side = 0; side < kLegs; ++side) weld(side, P_.flat_foot_weld);
   try {
     for (int i = 0; i < n; ++i) {
+      w.reaction_sum = GroundReaction();
+      w.reaction_time = 0;
       if (ode_step(P_.settle_time / n) != StepResult::Ok) return false;
       weld_resting_feet();
       if (check_fall()) {
@@ -778,6 +836,8 @@ Plant3D::StepResult Plant3D::ode_step(double dt, bool release) {
       }
     }
   }
+  w.reaction_sum.add(step_reaction(w), dt);
+  w.reaction_time += dt;
   return StepResult::Ok;
 }
 
@@ -933,6 +993,8 @@ Plant3D::Result Plant3D::do_step(double h) {
   const double dt = h / n, t0 = t_;
   const int m = std::max(1, static_cast<int>(std::ceil(dt / P_.rocking_step - 1e-9)));
   const int mode_before = out_.contact_mode;
+  w.reaction_sum = GroundReaction();
+  w.reaction_time = 0;
   try {
     for (int i = 0; i < n; ++i) {
       bool fine = m > 1;
@@ -1002,43 +1064,22 @@ void Plant3D::evaluate_outputs() {
   auto feet_x = [&](const double* p) { return (p[0] - ankle[0]) * ex[0] + (p[1] - ankle[1]) * ex[1]; };
   auto feet_y = [&](const double* p) { return (p[0] - ankle[0]) * ey[0] + (p[1] - ankle[1]) * ey[1]; };
 
-  // ground reaction from the contact joints; the cells share each contact force bilinearly by
-  // where it acts on the sole (exact for corner contacts; reproduces the centre of pressure)
-  double F[3] = {0, 0, 0}, cop[2] = {0, 0}, true_cells[kLegs][kCells] = {};
-  double moment = 0;
-  o.contacts = 0;
-  for (int s = 0; s < kLegs; ++s) {
-    const dBodyID foot = w.body[body_index(s, Foot)];
-    const double* R = dBodyGetRotation(foot);
-    const double* fp = dBodyGetPosition(foot);
-    const double nz[3] = {R[2], R[6], R[10]};  // the sole's normal
-    for (int i = 0; i < w.ncontact[s]; ++i) {
-      const double* f = w.fb[s][i].f1;
-      const double* p = w.cg[s][i].pos;
-      for (int c = 0; c < 3; ++c) F[c] += f[c];
-      cop[0] += f[2] * p[0];
-      cop[1] += f[2] * p[1];
-      moment += (p[2] - ankle[2]) * (f[0] * ex[0] + f[1] * ex[1]) - feet_x(p) * f[2];
-      const double d[3] = {p[0] - fp[0], p[1] - fp[1], p[2] - fp[2]};
-      double local[3];
-      mat_t_vec(R, d, local);
-      const double u = std::clamp((local[0] - w.sole_corner[s][RearLeft][0]) / w.sole_len, 0.0, 1.0);
-      const double v = std::clamp((local[1] - w.sole_corner[s][FrontRight][1]) / w.sole_width, 0.0, 1.0);
-      const double fn = f[0] * nz[0] + f[1] * nz[1] + f[2] * nz[2];
-      true_cells[s][FrontLeft] += fn * u * v;
-      true_cells[s][FrontRight] += fn * u * (1 - v);
-      true_cells[s][RearLeft] += fn * (1 - u) * v;
-      true_cells[s][RearRight] += fn * (1 - u) * (1 - v);
-      ++o.contacts;
-    }
-  }
+  // the ground reaction averaged over the communication step (the last step's before the first)
+  GroundReaction g;
+  if (w.reaction_time > 0) g.add(w.reaction_sum, 1.0 / w.reaction_time);
+  else g = step_reaction(w);
+  const double* F = g.F;
+  const double* true_cells[kLegs] = {g.cells[Left], g.cells[Right]};
+  o.contacts = w.ncontact[Left] + w.ncontact[Right];
   o.fx = F[0];
   o.fy = F[1];
   o.fz_true = F[2];
-  o.moment_ankle = moment;
+  // moment about the mean ankle axis: sum (p_z - a_z)(f . e_x) - ((p - a) . e_x) f_z
+  o.moment_ankle = g.pz_f[0] * ex[0] + g.pz_f[1] * ex[1] - ankle[2] * (F[0] * ex[0] + F[1] * ex[1]) -
+                   (g.fz_p[0] * ex[0] + g.fz_p[1] * ex[1]) + (ankle[0] * ex[0] + ankle[1] * ex[1]) * F[2];
   o.required_mu = F[2] > 0 ? std::hypot(F[0], F[1]) / F[2] : 0.0;
   if (F[2] > 0) {
-    const double z[3] = {cop[0] / F[2], cop[1] / F[2], 0};
+    const double z[3] = {g.fz_p[0] / F[2], g.fz_p[1] / F[2], 0};
     o.zmp_true_x = feet_x(z);
     o.zmp_true_y = feet_y(z);
   }

@@ -165,6 +165,13 @@ typedef struct {
     double lean_tau;            /* time constant of the external-moment low-pass the lean follows
                                    (two first-order stages of lean_tau/2) [s]                    */
     double lean_margin;         /* the leaned CoM reference stays this far inside toe and heel [m] */
+
+    /* model of the robot, appended: where each link's CoM lies off its joint line (forward of it,
+     * perpendicular to it, in the link's own frame) [m]. 0 (default) is the paper's model, CoMs on
+     * the joint lines; the whole-body kinematics use them, and they define the erect posture
+     * (docs/controller.md section 2.1) */
+    double link1_com_x;         /* link 1's CoM forward of the ankle-hip line [m]                 */
+    double link2_com_x;         /* link 2's CoM forward of its line through the hip [m]           */
 } ahc_params;
 
 /* Fill with the HOAP-2 defaults (hoap2/nominal.h) and the SI gains. */
@@ -252,6 +259,8 @@ typedef struct {
     double km;                /* m2 / m                                                      */
     double J2;                /* I2 + m2 lg2^2 (eq. 16 denominator)                          */
     double rz_erect;          /* erect CoM height of the model                               */
+    double th1_erect, th2_erect; /* the erect posture: the whole CoM above the ankle and link
+                                 2's above the hip (0, 0 with the CoMs on the joint lines) [rad] */
     double zmp_alpha;         /* ZMP filter coefficient 1 - exp(-h/tau)                      */
     /* time */
     unsigned long long tick;  /* number of completed ahc_step calls                          */
@@ -323,11 +332,18 @@ double ahc_time(const ahc_controller *c);
  * Pure helpers (model of docs/controller.md §2; useful to tests and other components)
  * ------------------------------------------------------------------------------------------- */
 /* CoM of the two-link body: rx = (m1 lg1 S1 + m2 (l1 S1 + lg2 S12))/m,
- *                           rz = (m1 lg1 C1 + m2 (l1 C1 + lg2 C12))/m.  Either pointer may be NULL. */
+ *                           rz = (m1 lg1 C1 + m2 (l1 C1 + lg2 C12))/m,
+ * each link's CoM moved by its offset d_i = link<i>_com_x forward of its joint line (lg_i S + d_i C
+ * for x, lg_i C - d_i S for z).  Either pointer may be NULL. */
 void ahc_com(const ahc_params *p, double th1, double th2, double *rx, double *rz);
 
-/* x row of the CoM Jacobian (eq. 20): J[0] = d rx/d th1 = r_z, J[1] = d rx/d th2 = k_m lg2 C12. */
+/* x row of the CoM Jacobian (eq. 20): J[0] = d rx/d th1 = r_z,
+ * J[1] = d rx/d th2 = k_m (lg2 C12 - d2 S12). */
 void ahc_com_jacobian_x(const ahc_params *p, double th1, double th2, double J[2]);
+
+/* The erect posture: link 2's CoM above the hip and the whole CoM above the ankle,
+ *   th1 + th2 = -atan2(d2, lg2),   th1 = -atan2(m1 d1, m1 lg1 + m2 l1);  both 0 when d1 = d2 = 0. */
+void ahc_erect_posture(const ahc_params *p, double *th1, double *th2);
 
 /* Reactionless ratio of eq. 15: dth1/dth2 that keeps rx fixed,
  * -m2 lg2 C12 / ((m1 lg1 + m2 l1) C1 + m2 lg2 C12). Returns 0 if the denominator vanishes. */
