@@ -18,12 +18,14 @@ from pathlib import Path
 from typing import Any
 
 from ..files import read_toml
+from ..scenario import ScenarioError
 
 FORMAT = 1
 
 
-class RobotFileError(ValueError):
-    """A robot file (or a description being lumped) is wrong; the message names file and field."""
+class RobotFileError(ScenarioError):
+    """A robot file (or a description being lumped) is wrong; the message names file and field.
+    Wrong input like a wrong scenario (the command line exits 2)."""
 
 
 @dataclass(frozen=True)
