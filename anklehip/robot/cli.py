@@ -13,8 +13,6 @@ from __future__ import annotations
 
 import json
 import math
-import shlex
-import sys
 from pathlib import Path
 
 from .robotfile import RobotFileError
@@ -48,8 +46,6 @@ def cmd_lump(a) -> int:
                       hip=_pair(a.hip, "--hip") if a.hip else None, sole_tolerance=a.sole_tolerance,
                       name=a.name, package_dirs=dict(_pair_eq(x) for x in a.package_dir or []))
     out = Path(a.out) if a.out else Path(f"{robot.name}.toml")
-    cmd = "anklehip robot lump " + " ".join(shlex.quote(x) for x in sys.argv[3:]) if len(sys.argv) > 3 else ""
-    robot.source["command"] = cmd.strip() or f"anklehip robot lump {a.file}"
     robot.write(out, f"Robot file of {robot.name} (docs/your-robot.md): lumped from {Path(a.file).name} by anklehip.")
     print(summary(robot))
     print(f"wrote {out}")
@@ -120,6 +116,9 @@ def cmd_scale(a) -> int:
         if r.name in out:
             print(f"{r.fmu:<11}{r.name:<26}{float(anchor[r.name]):>12.6g}{out[r.name]:>14.6g}  {s.how[(r.fmu, r.name)]}")
     print(f"{'plant':<11}{'h_push':<26}{float(p0['h_push']):>12.6g}{s.plant['h_push']:>14.6g}  {s.how[('plant', 'h_push')]}")
+    if "feet_offset_mode" in s.controller:
+        print(f"{'controller':<11}{'feet_offset_mode':<26}{int(c0['feet_offset_mode']):>12}"
+              f"{s.controller['feet_offset_mode']:>14}  {s.how[('controller', 'feet_offset_mode')]}")
     return 0
 
 
