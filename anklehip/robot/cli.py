@@ -126,7 +126,8 @@ def register(sub) -> None:
     """Add ``anklehip robot`` to the command line's subparsers."""
     p = sub.add_parser("robot", help="your robot: lump a URDF or MJCF into a robot file, check it, show its "
                                      "scaled gains (docs/your-robot.md)")
-    rs = p.add_subparsers(dest="robot_cmd", required=True, metavar="ACTION")
+    rs = p.add_subparsers(dest="robot_cmd", required=True, metavar="ACTION",
+                          help="lump, check or scale; `anklehip robot ACTION --help` lists its options")
     s = rs.add_parser("lump", help="lump a URDF or MJCF into a robot file (TOML, every number with its source)")
     s.add_argument("file", metavar="FILE", help="a URDF (<robot>) or MJCF (<mujoco>) file")
     s.add_argument("--out", metavar="ROBOT.toml", help="the robot file to write (default: <name>.toml)")
@@ -149,7 +150,7 @@ def register(sub) -> None:
                    help="where package://NAME/ points (default: a folder NAME above the file, or ROS_PACKAGE_PATH)")
     s.set_defaults(fn=cmd_lump)
     s = rs.add_parser("check", help="read a robot file and check that it makes physical sense")
-    s.add_argument("robot", metavar="ROBOT.toml")
+    s.add_argument("robot", metavar="ROBOT.toml", help="the robot file to read (e.g. robots/talos.toml)")
     s.set_defaults(fn=cmd_check)
     s = rs.add_parser("scale", help="the parameters both FMUs get for a robot: its numbers and the scaled gains")
     s.add_argument("robot", metavar="ROBOT", help="a robot file, or a name in robots/ (e.g. hoap2)")

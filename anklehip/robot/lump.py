@@ -280,6 +280,10 @@ def lump_file(path: str | Path, posture: dict[str, float] | None = None, keyfram
     with `srdf`); other joints at 0. forward: the description's forward axis (+x, -x, +y, -y).
     ankle, hip: (left, right) pitch joint names, found by default. Raises RobotFileError naming the
     file and the field."""
+    if not (math.isfinite(sole_tolerance) and 0 <= sole_tolerance <= 0.05):
+        raise RobotFileError(f"--sole-tolerance {sole_tolerance}: must be a finite length in [0, 0.05] m")
+    if not (math.isfinite(sample_period) and sample_period > 0):
+        raise RobotFileError(f"sample_period {sample_period}: must be a finite time > 0 s")
     d = load_description(path, posture, keyframe, srdf, forward, package_dirs)
     robot = lump_description(d, ankle, hip, sole_tolerance, name, sample_period=sample_period)
     robot.source["forward"] = forward
