@@ -22,6 +22,7 @@ from pathlib import Path
 from typing import Any
 
 from ..bounds import robot_from_plant_params, static_tipping_force
+from ..master import check_overrides
 from ..scenario import PushProfile, PushSegment, Scenario, ScenarioError, time_grid_problem
 from .robotfile import Robot, load_robot
 from .scaling import Scaled, Scales, scale
@@ -111,7 +112,10 @@ def apply_robot(sc: Scenario, models, robot: str | Path | Robot | None = None) -
     anchor_tip = tipping_forces({**p_anchor, **c_anchor})
 
     def robot_params(rb: Robot) -> Scaled:
-        return scale(rb, c_anchor, p_anchor)
+        s = scale(rb, c_anchor, p_anchor)
+        # the FMUs' ranges, naming the robot file (before anything runs)
+        check_overrides(models, s.controller, s.plant, f"robot file {rb.where()} (scaled)")
+        return s
 
     written_for = load_robot(find_robot(sc.robot)) if sc.robot else None
     target = robot if isinstance(robot, Robot) else (load_robot(find_robot(robot)) if robot else written_for)
