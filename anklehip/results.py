@@ -365,7 +365,7 @@ def robot_summary(sc: Scenario, res: RunResult, pushes: list[PushSummary]) -> di
     s = run.summary()
     toe, heel = s["toe_x_m"], s["heel_x_m"]
     s["pushes"] = [{"peak_force_fraction": p.peak_force / (run.tipping[0] if p.peak_force >= 0 else -run.tipping[1]),
-                    "peak_zmp_fraction": p.peak_zmp / (toe if p.peak_zmp >= 0 else -heel),
+                    "peak_zmp_fraction": abs(p.peak_zmp) / (toe if p.peak_zmp >= 0 else -heel),
                     "peak_hip_rad": p.peak_hip,
                     "recovery_T_p": None if p.time_to_recover is None else p.time_to_recover / run.T_p}
                    for p in pushes]
