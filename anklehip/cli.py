@@ -228,6 +228,9 @@ def _scenario_and_models(a):
     for fmu, info, over in (("controller", models.controller, c_set), ("plant", models.plant, p_set)):
         for k, v in over.items():
             info.check_overrides({k: v}, f"--set {fmu}.{k}, scenario {_rel(sc.path)}")
+    if getattr(a, "robot", None) or sc.robot or sc.push_units != "SI":    # docs/your-robot.md
+        from .robot.experiment import apply_robot
+        sc = apply_robot(sc, models, getattr(a, "robot", None))
     sc.controller.update(c_set)
     sc.plant.update(p_set)
     if getattr(a, "fault", None):
@@ -270,9 +273,9 @@ def _run(a, sc, models, out: Path) -> int:
     cmp = None
     warnings: list[str] = []
     # overrides change the reference; an interrupted or failed run is not a result to compare
-    changed = a.set or a.controller_config or a.fault
+    changed = a.set or a.controller_config or a.fault or a.robot
     if changed and sc.reference is not None and not a.no_compare:
-        print("anklehip: note: --set / --controller-config / --fault change the run, so it is not compared with "
+        print("anklehip: note: --set / --controller-config / --fault / --robot change the run, so it is not compared with "
               f"{_rel(sc.reference.file)}", file=sys.stderr)
     if not a.no_compare and a.stop_time is None and not changed and res.outcome not in ("error", "interrupted"):
         try:
@@ -896,6 +899,9 @@ def build_parser() -> argparse.ArgumentParser:
                         "drop_rate=0.1 delay_steps=2 mass_mismatch=-0.2; the keys: docs/scenarios.md")
     s.add_argument("--plant", choices=("sagittal", "3d"),
                    help="the plant model (default: the scenario's plant_model, else sagittal)")
+    s.add_argument("--robot", metavar="ROBOT",
+                   help="run on this robot: a robot file (anklehip robot lump) or a name in robots/; both FMUs' "
+                        "parameters from it, gains scaled, pushes and times in the robot's units (docs/your-robot.md)")
     s.add_argument("--stop-time", type=FINITE, metavar="T",
                    help="stop at this time [s] instead of the scenario's stop_time (no outcome or reference "
                         f"checks): > 0, a whole number of the scenario's steps, at most {MAX_STEPS} steps")
@@ -1061,6 +1067,8 @@ def build_parser() -> argparse.ArgumentParser:
                    help="do not re-record the step-test cases under tests/steptests/")
     no_progress(s, "simulated time")
     s.set_defaults(fn=cmd_regen)
+    from .robot.cli import register as register_robot     # anklehip robot lump|check|scale
+    register_robot(sub)
     return p
 
 

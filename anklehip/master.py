@@ -202,6 +202,9 @@ def simulate(scenario: Scenario, models: Models | None = None, *, fmu_dir=None,
     if engine not in ENGINES:
         raise ValueError(f"engine {engine!r}: one of {', '.join(ENGINES)}")
     models = models or Models.load(fmu_dir)
+    if scenario.robot_run is None and (scenario.robot or scenario.push_units != "SI"):
+        from .robot.experiment import apply_robot    # the scenario's robot file / robot units
+        scenario = apply_robot(scenario, models)
     faults = faults if faults is not None else scenario.faults
     c_over, p_over = scenario_parameters(scenario, models, controller_overrides, plant_overrides, faults)
     L = _Layout(models)

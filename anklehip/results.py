@@ -353,14 +353,40 @@ def summary_dict(sc: Scenario, res: RunResult, pushes: list[PushSummary], checks
         "faults": res.faults,
         "transition_pushes": res.transition_pushes,
         "files": files,
+        **({"robot": robot_summary(sc, res, pushes)} if getattr(sc, "robot_run", None) is not None else {}),
     }
+
+
+def robot_summary(sc: Scenario, res: RunResult, pushes: list[PushSummary]) -> dict[str, Any]:
+    """The robot a scenario ran on (anklehip.robot) and the run in its units: each push's peak force
+    as a fraction of the static tipping force, peak ZMP as a fraction of the toe (heel for a push on
+    the chest), recovery time in pendulum time constants."""
+    run = sc.robot_run
+    s = run.summary()
+    toe, heel = s["toe_x_m"], s["heel_x_m"]
+    s["pushes"] = [{"peak_force_fraction": p.peak_force / (run.tipping[0] if p.peak_force >= 0 else -run.tipping[1]),
+                    "peak_zmp_fraction": abs(p.peak_zmp) / (toe if p.peak_zmp >= 0 else -heel),
+                    "peak_hip_rad": p.peak_hip,
+                    "recovery_T_p": None if p.time_to_recover is None else p.time_to_recover / run.T_p}
+                   for p in pushes]
+    return s
 
 
 def format_summary(s: dict[str, Any], pushes: list[PushSummary]) -> str:
     lines = [f"scenario {s['scenario']}: {s['message']}  ({s['end_time']:.3f} of {s['stop_time']:g} s simulated, "
              f"{s['steps']} steps, wall {s['wall_time_s']:.2f} s, real-time factor {s['real_time_factor']})"]
-    for p in pushes:
+    r = s.get("robot")
+    if r:
+        lines.append(f"  robot {r['name']}: {r['mass_kg']:.2f} kg, CoM {r['com_height_m']:.3f} m above the ankle, "
+                     f"T_p {1000 * r['pendulum_time_s']:.1f} ms, static tipping force {r['static_tipping_force_N'][0]:.2f} N; "
+                     f"times x{r['time_factor']:.4g}, forces x{r['force_factor'][0]:.4g} (docs/your-robot.md)")
+    for i, p in enumerate(pushes):
         lines.append("  " + p.line())
+        if r and i < len(r["pushes"]):
+            q = r["pushes"][i]
+            rec = f"{q['recovery_T_p']:.2f} T_p" if q["recovery_T_p"] is not None else "never"
+            lines.append(f"          robot units: peak {q['peak_force_fraction']:.3f} of the tipping force, peak ZMP "
+                         f"{q['peak_zmp_fraction']:.3f} of the sole edge, recovered after {rec}")
     for c in s["checks"]:
         lines.append(f"  [{'PASS' if c['ok'] else 'FAIL'}] {c['name']}: {c['detail']}")
     if s.get("comparison"):

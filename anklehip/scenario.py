@@ -240,6 +240,9 @@ class Scenario:
     reference: Reference | None = None
     tags: list[str] = field(default_factory=list)
     faults: Faults = field(default_factory=Faults)   # [faults]: anklehip.faults
+    robot: str | None = None              # the robot file the scenario is written for (anklehip.robot)
+    push_units: str = "SI"                # "robot": pushes and times in the robot's units (docs/your-robot.md)
+    robot_run: Any = None                 # anklehip.robot.experiment.RobotRun once the robot is applied
 
     @property
     def n_steps(self) -> int:
@@ -312,8 +315,9 @@ def _tname(v: Any) -> str:
 
 
 TOP_KEYS = {"name", "description", "stop_time", "step", "push", "push_y", "plant_model", "controller_config",
-            "controller", "plant", "faults",
+            "controller", "plant", "faults", "robot", "push_units",
             "expect", "reference", "tags"}
+PUSH_UNITS = ("SI", "robot")
 PUSH_KEYS = {
     "step": ({"kind", "t", "to"}, {"to"}),
     "ramp": ({"kind", "t", "to", "duration"}, {"to", "duration"}),
@@ -479,9 +483,20 @@ def parse_scenario(data: dict, where: str = "<scenario>", path: Path | None = No
     if "stop_time" not in data:
         v.fail("stop_time", "required key missing")
     sc.stop_time = v.num(data["stop_time"], "stop_time", gt=0.0)
+    if "push_units" in data:
+        sc.push_units = v.str_(data["push_units"], "push_units")
+        if sc.push_units not in PUSH_UNITS:
+            v.fail("push_units", f"must be one of {', '.join(PUSH_UNITS)}, got {sc.push_units!r}")
+    if "robot" in data:
+        sc.robot = v.str_(data["robot"], "robot")
+        if not sc.robot:
+            v.fail("robot", "must name a robot file (a path, or a name in robots/), got an empty string")
+        if path is not None and ("/" in sc.robot or sc.robot.endswith(".toml")) and not Path(sc.robot).is_absolute():
+            sc.robot = str(path.parent / sc.robot)     # relative to the scenario file
     if "step" in data:
-        sc.step = v.num(data["step"], "step", gt=0.0, le=sc.stop_time)
-    problem = time_grid_problem(sc.stop_time, sc.step)
+        sc.step = v.num(data["step"], "step", gt=0.0, le=None if sc.push_units == "robot" else sc.stop_time)
+    # in robot units stop_time counts pendulum time constants: checked once converted to seconds
+    problem = time_grid_problem(sc.stop_time, sc.step) if sc.push_units == "SI" else None
     if problem:
         v.fail("step" if "step" in data else "stop_time", f"stop_time {sc.stop_time:g} {problem}")
     if "push" in data:

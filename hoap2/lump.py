@@ -140,6 +140,15 @@ def lump(bodies: list[Body]) -> Lump:
     return Lump(m, c, iyy)
 
 
+def pitch_limits(joint: dict) -> tuple[float, float]:
+    """A pitch joint's (min, max) as the sagittal angle theta = -q (axis . y) (docs/controller.md
+    conventions): for HOAP-2's axes (0 1 0) the proto's hip pitch range -1.431..+1.239 rad is
+    theta2 in -1.239..+1.431 rad (the trunk pitches forward up to 82 deg)."""
+    s = -1.0 if joint["axis"][1] > 0 else 1.0
+    a, b = sorted((s * joint["min"], s * joint["max"]))
+    return a, b
+
+
 def group_of(name: str) -> str:
     part = name.split("_", 1)[1] if name.startswith(("lleg_", "rleg_")) else ""
     if part in FEET:
@@ -163,7 +172,9 @@ def lumped(data: dict | None = None) -> dict:
     toe = fb["translation"][0] + fb["size"][0] / 2
     heel = fb["translation"][0] - fb["size"][0] / 2
     f, l1, l2 = groups["feet"], groups["link1"], groups["link2"]
-    lim = {b.joint["name"]: (b.joint["min"], b.joint["max"]) for b in bodies.values() if b.joint}
+    # the pitch limits as the sagittal angles: + when the body above the joint pitches forward; the
+    # joint turns the lower body (its child) by q about its axis, so theta = -q (axis . y)
+    lim = {b.joint["name"]: pitch_limits(b.joint) for b in bodies.values() if b.joint}
     ankle_lim, hip_lim = lim["lleg_joint_5"], lim["lleg_joint_3"]
     if ankle_lim != lim["rleg_joint_5"] or hip_lim != lim["rleg_joint_3"]:
         raise ValueError("left and right pitch limits differ in the proto data")
@@ -205,10 +216,10 @@ MACROS = [
     ("ANKLE_HEIGHT", "ankle_height", "Height of the ankle pitch axis above the sole [m] (the proto's standing height\n"
                                      " * 0.29 m of the Robot origin minus 0.055 + 0.1 + 0.1)."),
     ("SOLE_WIDTH", "sole_width", "Width of one sole [m] (foot bounding box)."),
-    ("ANKLE_MIN", "ankle_min", "Ankle pitch lower limit [rad] (lleg/rleg_joint_5)."),
+    ("ANKLE_MIN", "ankle_min", "Ankle pitch lower limit [rad] (theta1 = -q of lleg/rleg_joint_5)."),
     ("ANKLE_MAX", "ankle_max", "Ankle pitch upper limit [rad]."),
-    ("HIP_MIN", "hip_min", "Hip pitch lower limit [rad] (lleg/rleg_joint_3)."),
-    ("HIP_MAX", "hip_max", "Hip pitch upper limit [rad]."),
+    ("HIP_MIN", "hip_min", "Hip pitch lower limit [rad] (theta2 = -q of lleg/rleg_joint_3: the proto's -max)."),
+    ("HIP_MAX", "hip_max", "Hip pitch upper limit [rad] (the proto's -min)."),
     ("LINK1_COM_X", "link1_com_x", "Informational, not used by the sagittal models: CoM of link 1 forward of the ankle-hip\n"
                                    " * line in the proto [m] (the sagittal links carry their CoM on the joint line)."),
     ("LINK2_COM_X", "link2_com_x", "Informational, not used by the sagittal models: CoM of link 2 forward of the hip axis\n"

@@ -97,7 +97,7 @@ stamp=.venv/.anklehip-installed
 if [ ! -f "$stamp" ] || [ pyproject.toml -nt "$stamp" ]; then
   echo "setup: installing the Python package and its test dependencies into .venv"
   log=.venv/pip-install.log
-  { .venv/bin/python -m pip install --upgrade pip && .venv/bin/python -m pip install -e ".[test,build]"; } >"$log" 2>&1 \
+  { .venv/bin/python -m pip install --upgrade pip && .venv/bin/python -m pip install -e ".[test,build,robot]"; } >"$log" 2>&1 \
     || { tail -n 40 "$log"; echo "setup: pip install failed (full log: $log)" >&2; exit 1; }
   touch "$stamp"
 fi

@@ -53,14 +53,14 @@
 #define HOAP2_ANKLE_HEIGHT 0.035
 /* Width of one sole [m] (foot bounding box). */
 #define HOAP2_SOLE_WIDTH 0.065
-/* Ankle pitch lower limit [rad] (lleg/rleg_joint_5). */
+/* Ankle pitch lower limit [rad] (theta1 = -q of lleg/rleg_joint_5). */
 #define HOAP2_ANKLE_MIN (-1.06465)
 /* Ankle pitch upper limit [rad]. */
 #define HOAP2_ANKLE_MAX 1.06465
-/* Hip pitch lower limit [rad] (lleg/rleg_joint_3). */
-#define HOAP2_HIP_MIN (-1.43117)
-/* Hip pitch upper limit [rad]. */
-#define HOAP2_HIP_MAX 1.23918
+/* Hip pitch lower limit [rad] (theta2 = -q of lleg/rleg_joint_3: the proto's -max). */
+#define HOAP2_HIP_MIN (-1.23918)
+/* Hip pitch upper limit [rad] (the proto's -min). */
+#define HOAP2_HIP_MAX 1.43117
 /* Informational, not used by the sagittal models: CoM of link 1 forward of the ankle-hip
  * line in the proto [m] (the sagittal links carry their CoM on the joint line). */
 #define HOAP2_LINK1_COM_X 0.00440608
