@@ -213,6 +213,7 @@ def _scenario_and_models(a):
     c_set, p_set = parse_set(a.set or [])
     check_stop_time(sc, getattr(a, "stop_time", None))
     if getattr(a, "plant", None):
+        a.plant_changed = a.plant != sc.plant_model   # the scenario's reference is of its own plant
         sc.plant_model = a.plant
     if sc.push_y.peak() != 0 and sc.plant_model == "sagittal":
         raise ScenarioError(f"{_rel(sc.path)}: push_y: a sideways push needs the 3D plant (--plant 3d)")
@@ -273,10 +274,10 @@ def _run(a, sc, models, out: Path) -> int:
     cmp = None
     warnings: list[str] = []
     # overrides change the reference; an interrupted or failed run is not a result to compare
-    changed = a.set or a.controller_config or a.fault or a.robot
+    changed = a.set or a.controller_config or a.fault or a.robot or getattr(a, "plant_changed", False)
     if changed and sc.reference is not None and not a.no_compare:
-        print("anklehip: note: --set / --controller-config / --fault / --robot change the run, so it is not compared with "
-              f"{_rel(sc.reference.file)}", file=sys.stderr)
+        print("anklehip: note: --set / --controller-config / --fault / --robot / --plant change the run, so it is not "
+              f"compared with {_rel(sc.reference.file)}", file=sys.stderr)
     if not a.no_compare and a.stop_time is None and not changed and res.outcome not in ("error", "interrupted"):
         try:
             rep = compare_with_reference(sc, res)

@@ -92,6 +92,12 @@ class FMUInfo:
     def parameters(self) -> dict[str, Var]:
         return {v.name: v for v in self.vars.values() if v.causality == "parameter"}
 
+    def constants(self) -> dict[str, Any]:
+        """The constant outputs and their values: numbers of the model (e.g. Hoap2Plant3D's
+        robot numbers that the controller's model needs, named after its parameters)."""
+        return {v.name: v.start for v in self.vars.values()
+                if v.causality == "output" and v.variability == "constant" and v.start is not None}
+
     def start_values(self) -> dict[str, Any]:
         return {v.name: v.start for v in self.vars.values() if v.start is not None}
 

@@ -169,11 +169,16 @@ def scenario_parameters(scenario: Scenario, models: Models, controller_overrides
                         plant_overrides: dict | None = None, faults: Faults | None = None
                         ) -> tuple[dict[str, Any], dict[str, Any]]:
     """The controller's and the plant's parameter values a scenario sets (checked against the
-    FMUs). Precedence: the named configuration < the scenario's [controller] / [plant] tables <
-    the caller's overrides < the parameter faults (torque_scale, mass/length_mismatch: scaled
-    from the values so far)."""
+    FMUs). Precedence: the plant's robot numbers (its constant outputs named after controller
+    parameters, e.g. Hoap2Plant3D's link CoM offsets: the controller knows the robot it stands
+    on) < the named configuration < the scenario's [controller] / [plant] tables < the caller's
+    overrides < the parameter faults (torque_scale, mass/length_mismatch: scaled from the values
+    so far)."""
     origin = str(scenario.path) if scenario.path else scenario.name
-    c_over = {**models.controller.configuration(scenario.controller_config, f"{origin}: controller_config"),
+    params = models.controller.parameters()
+    robot = {k: v for k, v in models.plant.constants().items() if k in params}
+    c_over = {**robot,
+              **models.controller.configuration(scenario.controller_config, f"{origin}: controller_config"),
               **scenario.controller, **(controller_overrides or {})}
     p_over = dict(scenario.plant, **(plant_overrides or {}))
     check_overrides(models, c_over, p_over, origin)

@@ -43,6 +43,7 @@ enum : fmi2ValueReference {
   first_cell = 70,         // 8 load cells
   first_joint = 80,        // 12 joint angles
   ode_steps = 95, mode_switches = 96, contacts = 97, held_feet = 98,
+  link1_com_x = 170, link2_com_x = 171,  // constants: the robot's CoM offsets for the controller
   first_real_param = 100,  // 100 + index into realParams()
   servo_on = 190, seed = 191, flat_foot_weld = 192
 };
@@ -212,6 +213,15 @@ ModelInfo makeInfo() {
   add("contacts", vr::contacts, I, Out, Disc, "", "Sole-corner contacts in the last ODE step (a held foot: 4)");
   add("held_feet", vr::held_feet, I, Out, Disc, "",
       "Feet held flat (flat_foot_weld): 0 none, 1 left, 2 right, 3 both");
+  // The robot's numbers that the controller's sagittal model needs beyond the lumped masses and
+  // lengths, named after the controller's parameters (docs/plant3d.md section 6, docs/fmu.md).
+  const auto Const = Variability::Constant;
+  add("link1_com_x", vr::link1_com_x, R, Out, Const, "m",
+      "Constant: link 1's CoM (both legs) forward of the ankle-hip line; set the controller's link1_com_x to it",
+      HOAP2_LINK1_COM_X);
+  add("link2_com_x", vr::link2_com_x, R, Out, Const, "m",
+      "Constant: link 2's CoM (upper body) forward of its line through the hip; set the controller's link2_com_x to it",
+      HOAP2_LINK2_COM_X);
 
   const auto& params = realParams();
   for (size_t i = 0; i < params.size(); ++i) {

@@ -30,6 +30,8 @@ namespace {
 // M_PI is POSIX, not ISO C++ (MinGW has none); the same literal as glibc's, so the same double.
 constexpr double kPi = 3.14159265358979323846;
 constexpr int kNumRoots = 5;
+// The integrator's vector: the 10 states (q, qd), then the ground impulse's 3 quadrature components.
+constexpr int kStateSize = 13;
 
 int solver_rhs(realtype t, N_Vector y, N_Vector yd, void* ud) {
   return static_cast<Plant*>(ud)->rhs(t, N_VGetArrayPointer(y), N_VGetArrayPointer(yd));
@@ -71,6 +73,7 @@ Plant::~Plant() {
   if (ls_) SUNLinSolFree(static_cast<SUNLinearSolver>(ls_));
   if (mat_) SUNMatDestroy(static_cast<SUNMatrix>(mat_));
   if (nv_) N_VDestroy(static_cast<N_Vector>(nv_));
+  if (atol_) N_VDestroy(static_cast<N_Vector>(atol_));
   if (sunctx_) {
     SUNContext ctx = static_cast<SUNContext>(sunctx_);
     SUNContext_Free(&ctx);
@@ -90,21 +93,31 @@ double Plant::gauss() {
 int Plant::rhs(double, const double* y, double* yd) {
   ++stats_.rhs_evals;
   const Vec5 q = Eigen::Map<const Vec5>(y), qd = Eigen::Map<const Vec5>(y + 5);
-  if (mode_ == ContactMode::Flat) {  // the foot is fixed: only the joints move
-    const Vec2 a = model_.flat_joint_accelerations(q, qd, in_[0], in_[1], in_[2]);
-    for (int i = 0; i < 10; ++i) yd[i] = 0.0;
-    yd[3] = qd[3];
-    yd[4] = qd[4];
-    yd[8] = a[0];
-    yd[9] = a[1];
-  } else {
+  if (mode_ == ContactMode::Airborne) {
     const auto d = model_.dynamics(mode_, q, qd, in_[0], in_[1], in_[2], pivot_);
     for (int i = 0; i < 5; ++i) {
       yd[i] = qd[i];
       yd[5 + i] = d.qdd[i];
     }
+    yd[10] = yd[11] = yd[12] = 0.0;
+  } else {
+    const auto d = model_.dynamics(mode_, q, qd, in_[0], in_[1], in_[2], pivot_);
+    if (mode_ == ContactMode::Flat) {  // the foot is fixed: only the joints move (2 x 2 system)
+      const Vec2 a = model_.flat_joint_accelerations(q, qd, in_[0], in_[1], in_[2]);
+      for (int i = 0; i < 10; ++i) yd[i] = 0.0;
+      yd[3] = qd[3];
+      yd[4] = qd[4];
+      yd[8] = a[0];
+      yd[9] = a[1];
+    } else {
+      for (int i = 0; i < 5; ++i) {
+        yd[i] = qd[i];
+        yd[5 + i] = d.qdd[i];
+      }
+    }
+    for (int i = 0; i < 3; ++i) yd[10 + i] = d.Qc[i];  // the ground impulse's quadrature
   }
-  for (int i = 0; i < 10; ++i)
+  for (int i = 0; i < kStateSize; ++i)
     if (!std::isfinite(yd[i])) return 1;  // recoverable: the integrator retries with a smaller step
   return 0;
 }
@@ -165,6 +178,7 @@ void Plant::accumulate_stats() {
 bool Plant::solver_restart() {
   N_Vector y = static_cast<N_Vector>(nv_);
   std::memcpy(N_VGetArrayPointer(y), y_, sizeof y_);
+  std::memcpy(N_VGetArrayPointer(y) + 10, impulse_, sizeof impulse_);
   int dir[kNumRoots] = {-1, -1, -1, -1, -1};
   if (mode_ == ContactMode::Heel) dir[0] = +1;
   if (model_.P.integrator == Integrator::Bdf) {
@@ -213,6 +227,16 @@ void Plant::set_mode(ContactMode m, const char* why) {
   ++stats_.mode_switches;
 }
 
+// An impact's ground impulse: the generalized impulse M (qd+ - qd-) on the foot's coordinates
+// (x, z, pitch about the ankle), as Qc's (any impulsive joint torque acts on the joint rows only).
+void Plant::add_impulse(const Vec5& qd_before, const Vec5& qd_after) {
+  Mat5 M;
+  Vec5 hb;
+  model_.mass_bias(q(), qd_before, M, hb);
+  const Vec5 J = M * (qd_after - qd_before);
+  for (int i = 0; i < 3; ++i) impulse_[i] += J[i];
+}
+
 // The rocking foot is back at phi = 0 (rotating into the ground): apply the landing impact and
 // return the mode after it. Free joints (default): the whole sole stops the foot, the joints keep
 // their momenta. Locked joints: the robot is one rigid body; the impulse acts at the landing edge
@@ -230,6 +254,7 @@ ContactMode Plant::land_flat() {
   }
   if (next == ContactMode::Flat) qd2 = model_.impact(ContactMode::Flat, q, qd);
   if (qd2 != qd) ++stats_.impacts;
+  add_impulse(qd, qd2);
   restart_ = event_ = true;
   for (int i = 0; i < 5; ++i) y_[5 + i] = qd2[i];
   y_[2] = 0.0;
@@ -283,16 +308,19 @@ bool Plant::ensure_solver() {
     SUNContext ctx = nullptr;
     if (SUNContext_Create(nullptr, &ctx) != 0) return msg_ = "SUNContext_Create failed", false;
     sunctx_ = ctx;
-    N_Vector y = N_VNew_Serial(10, ctx);
+    N_Vector y = N_VNew_Serial(kStateSize, ctx);
     nv_ = y;
     N_VEnableFusedOps_Serial(y, SUNTRUE);  // one loop per linear combination of stages
     std::memcpy(N_VGetArrayPointer(y), y_, sizeof y_);
+    std::memcpy(N_VGetArrayPointer(y) + 10, impulse_, sizeof impulse_);
+    N_Vector w = N_VClone(y);
+    atol_ = w;
     if (P.integrator == Integrator::Bdf) {
       solver_ = CVodeCreate(CV_BDF, ctx);
       if (!solver_) return msg_ = "CVodeCreate failed", false;
       CVodeSetErrHandlerFn(solver_, solver_err, this);
       if (CVodeInit(solver_, solver_rhs, t_, y) != CV_SUCCESS) return msg_ = "CVodeInit failed", false;
-      SUNMatrix A = SUNDenseMatrix(10, 10, ctx);
+      SUNMatrix A = SUNDenseMatrix(kStateSize, kStateSize, ctx);
       mat_ = A;
       SUNLinearSolver LS = SUNLinSol_Dense(y, A, ctx);
       ls_ = LS;
@@ -318,8 +346,15 @@ bool Plant::ensure_solver() {
       ERKStepSetMaxNumSteps(solver_, -1);
     }
   }
-  const int tol = P.integrator == Integrator::Bdf ? CVodeSStolerances(solver_, P.rtol, P.atol)
-                                                  : ERKStepSStolerances(solver_, P.rtol, P.atol);
+  // The impulse quadrature follows the states' steps and is left out of the error test (an
+  // absolute tolerance beyond any value): it is an integral of the steps' solution, not a state.
+  // The error and Newton tests take the RMS over all 13 components; tolerances scaled by
+  // sqrt(10/13) make it the RMS over the 10 states that rtol and atol are about.
+  const double c = std::sqrt(10.0 / kStateSize);
+  N_Vector atol = static_cast<N_Vector>(atol_);
+  for (int i = 0; i < kStateSize; ++i) N_VGetArrayPointer(atol)[i] = i < 10 ? c * P.atol : 1e300;
+  const int tol = P.integrator == Integrator::Bdf ? CVodeSVtolerances(solver_, c * P.rtol, atol)
+                                                  : ERKStepSVtolerances(solver_, c * P.rtol, atol);
   if (tol != 0) return msg_ = "bad tolerances", false;
   return true;
 }
@@ -440,6 +475,7 @@ bool Plant::handle_roots(double t, const int* found) {
           log(buf);
         }
       }
+      add_impulse(qd(), qd2);
       for (int i = 0; i < 5; ++i) y_[5 + i] = qd2[i];
       ++stats_.impacts;
       restart_ = event_ = true;
@@ -457,6 +493,9 @@ Plant::Result Plant::do_step(double h) {
   for (double v : in_)
     if (!std::isfinite(v)) return msg_ = "non-finite input", Result::Error;
   const double tout = t_ + h;
+  step_t0_ = t_;
+  std::memcpy(step_impulse0_, impulse_, sizeof impulse_);
+  step_started_ = true;
   if (restart_) resolve_mode("inputs changed");
   if (restart_ && !solver_restart()) return msg_ = "integrator restart failed", Result::Error;
   N_Vector y = static_cast<N_Vector>(nv_);
@@ -475,6 +514,7 @@ Plant::Result Plant::do_step(double h) {
     {
       const double x_keep = y_[0];
       std::memcpy(y_, N_VGetArrayPointer(y), sizeof y_);
+      std::memcpy(impulse_, N_VGetArrayPointer(y) + 10, sizeof impulse_);
       if (mode_ == ContactMode::Flat) {  // the foot is fixed: remove corrector round-off (~1e-25)
         y_[0] = x_keep;
         y_[1] = model_.P.ankle_height;
@@ -521,8 +561,17 @@ void Plant::evaluate_outputs() {
   o.com_z = c.y() - q[1];
   o.energy = model_.kinetic_energy(q, qd) + model_.potential_energy(q);
   model_.joint_torques(q, qd, in_[0], in_[1], o.tau_ankle, o.tau_hip);
+  // The ground reaction: its mean over the communication step (the impulse over it divided by its
+  // length, what an anti-aliased load-cell converter reads: the servos' position error jumps at
+  // each set-point update, so the reaction ripples within the step); before the first step the
+  // instantaneous value.
   double Fx = 0, Fz = 0, MA = 0;
-  if (mode_ != ContactMode::Airborne) {
+  if (step_started_ && t_ > step_t0_) {
+    const double h = t_ - step_t0_;
+    Fx = (impulse_[0] - step_impulse0_[0]) / h;
+    Fz = (impulse_[1] - step_impulse0_[1]) / h;
+    MA = (impulse_[2] - step_impulse0_[2]) / h;
+  } else if (mode_ != ContactMode::Airborne) {
     const auto d = model_.dynamics(mode_, q, qd, in_[0], in_[1], in_[2], pivot_);
     Fx = d.Qc[0];
     Fz = d.Qc[1];
@@ -559,6 +608,7 @@ Snapshot Plant::snapshot() const {
   Snapshot s;
   s.t = t_;
   std::memcpy(s.y, y_, sizeof y_);
+  std::memcpy(s.impulse, impulse_, sizeof impulse_);
   s.mode = static_cast<int>(mode_);
   s.fallen = fallen_ ? 1 : 0;
   s.pivot[0] = pivot_.x();
@@ -580,10 +630,14 @@ bool Plant::restore(const Snapshot& s) {
     return false;
   for (double x : s.y)
     if (!std::isfinite(x)) return false;
+  for (double x : s.impulse)
+    if (!std::isfinite(x)) return false;
   for (double x : s.inputs)
     if (!std::isfinite(x)) return false;
   t_ = s.t;
   std::memcpy(y_, s.y, sizeof y_);
+  std::memcpy(impulse_, s.impulse, sizeof impulse_);
+  step_started_ = false;
   mode_ = static_cast<ContactMode>(s.mode);
   fallen_ = s.fallen != 0;
   pivot_ = Vec2(s.pivot[0], s.pivot[1]);

@@ -325,7 +325,10 @@ static void test_contact_events() {
 }
 
 // Establishes: in the flat mode the ZMP computed from the two sole load cells equals the centre of
-// pressure of the constrained dynamics (also during motion); noise is deterministic per seed.
+// pressure of the constrained dynamics (also during motion); the force outputs are the mean of the
+// ground reaction over the communication step, impacts included (1 ms steps against the mean of 64
+// sub-steps of the same run, while the reaction ripples by up to 12 N m within a step: the servo's
+// set-point jumps every millisecond, and a landing's impulse); noise is deterministic per seed.
 static void test_sensors() {
   Params P = test_params();
   Plant p(P);
@@ -342,6 +345,51 @@ static void test_sensors() {
   CHECK(nflat == 1500, "left flat mode");
   CHECK(max_err < 1e-12, "sensor zmp vs constrained CoP: %g", max_err);
   std::printf("  flat mode, moving joints + push: max |zmp_sensor - CoP| = %.2e m\n", max_err);
+  // The force outputs are the mean over the communication step: a run with the same piecewise-
+  // constant set-points in 1 ms steps against the mean of the same run's reaction sampled at 64
+  // sub-steps (32 us steps, each output the mean over its own sub-step), with set-points that
+  // change every millisecond (a servo ripple within each step) and a push with a rocking landing.
+  {
+    auto inputs = [](double t, double& a, double& b, double& f) {
+      const double tk = std::floor(t * 1000.0 + 1e-6) / 1000.0;  // held over each millisecond
+      a = 0.02 * std::sin(4 * tk);
+      b = 0.1 * std::sin(5 * tk);
+      f = tk >= 0.5 && tk < 0.56 ? 20.0 : 0.0;
+    };
+    Plant coarse(P), fine(P);
+    coarse.initialize(0.0);
+    fine.initialize(0.0);
+    double worst_fz = 0, worst_m = 0, ripple = 0;
+    bool ok = true;
+    std::int64_t impacts = 0;
+    for (int k = 0; k < 1500 && ok; ++k) {
+      double a, b, f;
+      inputs(coarse.time(), a, b, f);
+      coarse.set_inputs(a, b, f);
+      fine.set_inputs(a, b, f);
+      ok = coarse.do_step(1e-3) == Plant::Result::Ok;
+      CHECK(ok, "%s", coarse.message().c_str());
+      double fz = 0, m = 0, lo = 1e9, hi = -1e9;
+      for (int j = 0; j < 64 && ok; ++j) {
+        ok = fine.do_step(1e-3 / 64) == Plant::Result::Ok;
+        CHECK(ok, "%s", fine.message().c_str());
+        fz += fine.outputs().fz_true / 64;
+        m += fine.outputs().moment_ankle / 64;
+        lo = std::min(lo, fine.outputs().moment_ankle);
+        hi = std::max(hi, fine.outputs().moment_ankle);
+      }
+      worst_fz = std::max(worst_fz, std::fabs(coarse.outputs().fz_true - fz));
+      worst_m = std::max(worst_m, std::fabs(coarse.outputs().moment_ankle - m));
+      ripple = std::max(ripple, hi - lo);
+    }
+    impacts = coarse.stats().impacts;
+    CHECK(impacts > 0, "no landing impact in the run");
+    CHECK(worst_fz < 1e-3 && worst_m < 5e-4, "1 ms mean vs mean of 64 sub-steps: fz %g N, moment %g N m", worst_fz,
+          worst_m);
+    CHECK(ripple > 1000 * worst_m, "no ripple to average (%g N m)", ripple);
+    std::printf("  mean over the step: 1 ms vs 64 sub-steps within %.1e N (fz), %.1e N m (moment); ripple within "
+                "a step up to %.3f N m\n", worst_fz, worst_m, ripple);
+  }
   auto noisy = [](std::uint64_t seed) {
     Params P = test_params();
     P.sensor_noise = 0.5;

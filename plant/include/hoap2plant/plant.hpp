@@ -40,9 +40,10 @@ struct Outputs {
 // Plain-old-data snapshot: everything that determines the future (bit for bit).
 struct Snapshot {
   std::uint32_t magic = 0x48325053u;  // "H2PS"
-  std::uint32_t version = 2;  // 2: h_next
+  std::uint32_t version = 3;  // 2: h_next; 3: impulse
   double t = 0;
   double y[10] = {};
+  double impulse[3] = {};     // ground impulse since the start: integrals of Fx, Fz, moment_ankle
   std::int32_t mode = 0;
   std::int32_t fallen = 0;
   double pivot[2] = {};
@@ -62,6 +63,7 @@ template <class S, class F>
 void visit_fields(S& s, F&& f) {
   f("t", s.t);
   for (auto& y : s.y) f("y", y);
+  for (auto& x : s.impulse) f("impulse", x);
   f("mode", s.mode);
   f("fallen", s.fallen);
   for (auto& x : s.pivot) f("pivot", x);
@@ -132,6 +134,7 @@ class Plant {
   void evaluate_outputs();
   void resolve_mode(const char* why);
   ContactMode land_flat();
+  void add_impulse(const Vec5& qd_before, const Vec5& qd_after);  // an impact's ground impulse
   void set_mode(ContactMode m, const char* why);
   bool handle_roots(double t, const int* found);
   bool solver_restart();
@@ -146,6 +149,12 @@ class Plant {
   Model model_;
   double t_ = 0;
   double y_[10] = {};
+  // The ground impulse since the start, (Fx, Fz, moment about the ankle) integrated with the state
+  // (three quadrature components of the integrator's vector, left out of its error test) plus the
+  // impacts' impulses. The force outputs are its mean over the communication step (evaluate_outputs).
+  double impulse_[3] = {};
+  double step_t0_ = 0, step_impulse0_[3] = {};  // at the start of the current do_step
+  bool step_started_ = false;
   ContactMode mode_ = ContactMode::Flat;
   Vec2 pivot_ = Vec2::Zero();
   bool fallen_ = false;
@@ -165,6 +174,7 @@ class Plant {
   void* sunctx_ = nullptr;
   void* solver_ = nullptr;  // CVODE (Integrator::Bdf) or ARKODE ERKStep (Integrator::Erk) memory
   void* nv_ = nullptr;
+  void* atol_ = nullptr;   // the integrator's absolute tolerances (N_Vector)
   void* mat_ = nullptr;
   void* ls_ = nullptr;
 };
