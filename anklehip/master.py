@@ -58,6 +58,7 @@ class RunResult:
     column_units: dict[str, str] = field(default_factory=dict)
     faults: dict[str, Any] = field(default_factory=dict)     # the injected faults (non-default keys)
     transition_pushes: list[float] = field(default_factory=list)   # start times of the transition pushes
+    erect: tuple[float, float] = (0.0, 0.0)   # the controller's erect posture (theta_ankle, theta_hip) [rad]
 
     @property
     def complete(self) -> bool:
@@ -257,8 +258,10 @@ def simulate(scenario: Scenario, models: Models | None = None, *, fmu_dir=None,
     j = 0
     bar = None
     native_end = None
+    erect = (0.0, 0.0)
     try:
         if engine == "native":
+            erect = _erect(models, c_over)
             from .native import run_loop
             native_end = run_loop(models, L, R, I, t0, h, T, N, c_over, p_over)
             c_init, failed_at = native_end.c_init, native_end.failed_at
@@ -270,6 +273,7 @@ def simulate(scenario: Scenario, models: Models | None = None, *, fmu_dir=None,
             ctrl.initialize(t0, T, c_over)
             plant.initialize(t0, T, p_over)
             c_init = ctrl.get_values([v.name for v in L.c_feed + L.c_other + L.c_int + L.c_bool])
+            erect = _erect(models, c_over, ctrl)
 
             pc, cc = plant.c, ctrl.c
             p_getR, p_getI, p_getB, p_setR, p_step = (plant.get_real, plant.get_integer, plant.get_boolean,
@@ -420,13 +424,37 @@ def simulate(scenario: Scenario, models: Models | None = None, *, fmu_dir=None,
                     plant_parameters={**models.plant.start_values(), **p_over},
                     controller_columns=L.controller_columns, column_units=L.units,
                     faults=faults.non_default(),
-                    transition_pushes=[t0 + j * h for j in extra_push.starts] if extra_push is not None else [])
+                    transition_pushes=[t0 + j * h for j in extra_push.starts] if extra_push is not None else [],
+                    erect=erect)
     # a plant that signals a fall only through its 'fallen' output
     if outcome == "completed" and "fallen" in data.dtype.names and data["fallen"].any():
         i = int(np.argmax(data["fallen"] != 0))
         res.outcome, res.fell_at = "fell", float(data["time"][i])
         res.message = f"fell at t={res.fell_at:.3f} s (fallen output; the plant did not discard)"
     return res
+
+
+ERECT = ("theta_ankle_erect", "theta_hip_erect")
+
+
+def _erect(models: Models, c_over: dict[str, Any], ctrl: "Slave | None" = None) -> tuple[float, float]:
+    """The controller's erect posture: its calculated parameters (docs/controller.md section 2.1),
+    read from the run's initialized instance or, for the native engine, from one of its own; (0, 0)
+    for a controller FMU without them or parameters it refuses (the run reports that)."""
+    if not all(n in models.controller.vars for n in ERECT):
+        return (0.0, 0.0)
+    own = ctrl is None
+    try:
+        if own:
+            ctrl = Slave(models.controller, "erect")
+            ctrl.initialize(0.0, 1.0, c_over)
+        v = ctrl.get_values(list(ERECT))
+        return (float(v[ERECT[0]]), float(v[ERECT[1]]))
+    except Exception:
+        return (0.0, 0.0)
+    finally:
+        if own and ctrl is not None:
+            ctrl.free()
 
 
 def _structured(L: _Layout, times, R, I, extra: dict[str, np.ndarray] | None = None) -> np.ndarray:

@@ -202,7 +202,7 @@ def summarize_pushes(res: RunResult, push: PushProfile, erect_tol: float = 0.02)
         imp = float(push.integral(b) - push.integral(a)) if math.isfinite(b) else float("nan")
         iz = np.argmax(np.abs(zmp[m]))
         ph = sorted(set(int(x) for x in np.unique(phase[m])))
-        ok = (phase == 0) & (np.abs(th1) <= erect_tol) & (np.abs(th2) <= erect_tol)
+        ok = (phase == 0) & (np.abs(th1 - res.erect[0]) <= erect_tol) & (np.abs(th2 - res.erect[1]) <= erect_tol)
         after = (t >= b) & (t <= w)
         rec = None
         if after.any() and not (res.fell and w >= res.end_time):
@@ -285,10 +285,13 @@ def check_expect(res: RunResult, e: Expect) -> list[Check]:
         if res.end_time < e.erect_by or not m.any():
             out.append(Check("erect_by", False, f"run ended at {res.end_time:.3f} s before {e.erect_by:g} s"))
         else:
-            ok = (np.abs(d["theta_ankle"][m]) <= e.erect_tol) & (np.abs(d["theta_hip"][m]) <= e.erect_tol)
+            e1, e2 = res.erect
+            ok = (np.abs(d["theta_ankle"][m] - e1) <= e.erect_tol) & (np.abs(d["theta_hip"][m] - e2) <= e.erect_tol)
             if phase is not None:
                 ok &= phase[m] == 0
-            det = f"phase 0 and |theta| <= {e.erect_tol:g} rad from {e.erect_by:g} s"
+            det = f"phase 0 and |theta - theta_erect| <= {e.erect_tol:g} rad from {e.erect_by:g} s"
+            if e1 or e2:
+                det += f" (erect posture {e1:+.4f}, {e2:+.4f} rad)"
             if not ok.all():
                 k = np.argmax(~ok)
                 det += (f": violated at t={t[m][k]:.3f} s (phase {int(phase[m][k]) if phase is not None else '?'}, "

@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <tuple>
 #include <limits>
 #include <string>
 
@@ -24,6 +25,7 @@ enum : fmi2ValueReference {
   theta_ankle = 0, theta_hip = 1, zmp_x = 2, fz = 3,
   theta_ankle_ref = 10, theta_hip_ref = 11, dtheta_ankle_ref = 12, dtheta_hip_ref = 13, phase = 14,
   com_x = 15, com_z = 16, disturbance_moment = 17, k_w = 18, com_x_desired = 19, fault = 20,
+  theta_ankle_erect = 30, theta_hip_erect = 31,  // calculated parameters
   first_param = 100  // parameter i of ahc_param_table() has value reference 100 + i
 };
 }
@@ -134,6 +136,17 @@ ModelInfo makeInfo() {
   out("k_w", vr::k_w, Type::Real, "1", "Reactionless weight of eq. 23 (0 ankle strategy, 1 hip strategy)");
   out("com_x_desired", vr::com_x_desired, Type::Real, "m", "Desired CoM projection r_x_d (= com_x in phase 0)", posture);
   out("fault", vr::fault, Type::Integer, "", "Fault bit mask (AHC_FAULT_*; 0 = healthy, docs/fmu.md)");
+  for (auto [n, r, d] : {std::tuple{"theta_ankle_erect", vr::theta_ankle_erect,
+                                    "Erect posture: ankle angle with the whole CoM above the ankle (0 with link1_com_x "
+                                    "= link2_com_x = 0; docs/controller.md section 2.1)"},
+                         std::tuple{"theta_hip_erect", vr::theta_hip_erect,
+                                    "Erect posture: hip angle with link 2's CoM above the hip (0 with the CoMs on "
+                                    "the joint lines)"}}) {
+    Variable v;
+    v.name = n; v.vr = r; v.type = Type::Real; v.causality = Causality::CalculatedParameter;
+    v.variability = Variability::Fixed; v.unit = "rad"; v.description = d;
+    m.variables.push_back(v);
+  }
 
   size_t count = 0;
   const ahc_param_info* table = ahc_param_table(&count);
@@ -367,6 +380,10 @@ class ControllerModel final : public Model {
     ctx.set_real(vr::k_w, 0.0);
     ctx.set_real(vr::com_x_desired, fin(rx));
     ctx.set_integer(vr::fault, 0);
+    double e1 = 0.0, e2 = 0.0;
+    ahc_erect_posture(&p, &e1, &e2);
+    ctx.set_real(vr::theta_ankle_erect, e1);
+    ctx.set_real(vr::theta_hip_erect, e2);
   }
 
   static void writeOutputs(Context& ctx, const ahc_outputs& o) {
