@@ -884,11 +884,16 @@ void Plant3D::weld_resting_feet() {
 }
 
 // A held foot is static: its ground reaction balances the ankle joint's and the ankle servos' forces
-// on it and its weight. Four equal corner springs under a rigid sole share that wrench as
+// on it and its weight. Four equal corner springs under a rigid sole share the normal force and the
+// tilting moments as
 //   f_i = Fz/4 + Mx y_i / (4 b^2) - My x_i / (4 a^2)   (corners at x_i = +-a, y_i = +-b from the
-// sole centre, moments about it, foot axes), and the sticking tangential rows, all of equal
-// compliance, by the least-norm split: (fx_i, fy_i) = (Fx, Fy)/4 + Mz (-y_i, x_i) / (4 (a^2 + b^2)).
-// Written as the foot's contacts (corner positions and forces) for the outputs and checks.
+// sole centre, moments about it, foot axes). The tangential force of a rigid sole sticking on four
+// corners is statically indeterminate; the foot sticks while some split lies inside every corner's
+// pyramid. The split in proportion to the corner loads, (fx_i, fy_i) = f_i ((Fx, Fy)/Fz +
+// lam (-y_i, x_i)) with lam = Mz / sum f_i (x_i^2 + y_i^2), is inside them exactly when
+// |Fx/Fz - lam y_i| and |Fy/Fz + lam x_i| are at most mu: the whole sole's friction, not one
+// lightly loaded corner's. Written as the foot's contacts (corner positions and forces) for the
+// outputs and checks.
 unsigned Plant3D::weld_reactions() {
   World& w = *w_;
   unsigned broken = 0;
@@ -910,24 +915,26 @@ unsigned Plant3D::weld_reactions() {
     double Fl[3], Ml[3];
     mat_t_vec(R, F, Fl);
     mat_t_vec(R, M, Ml);
-    const double lam = Ml[2] / (4 * (a * a + b * b));
-    const double t1[3] = {w.fdir[s][0], w.fdir[s][1], 0.0};
+    double fn[kCells], polar = 0;
+    for (int i = 0; i < kCells; ++i) {
+      fn[i] = Fl[2] / 4 + Ml[0] * ys[i] / (4 * b * b) - Ml[1] * xs[i] / (4 * a * a);
+      polar += fn[i] * (xs[i] * xs[i] + ys[i] * ys[i]);
+    }
+    const bool loaded = Fl[2] > 0 && polar > 0;
+    const double ux = loaded ? Fl[0] / Fl[2] : 0.0, uy = loaded ? Fl[1] / Fl[2] : 0.0;
+    const double lam = loaded ? Ml[2] / polar : 0.0;
     const double nz[3] = {R[2], R[6], R[10]};
-    double t2[3];
-    cross(nz, t1, t2);
     w.ncontact[s] = kCells;
     for (int i = 0; i < kCells; ++i) {
-      const double fl[3] = {Fl[0] / 4 - lam * ys[i], Fl[1] / 4 + lam * xs[i],
-                            Fl[2] / 4 + Ml[0] * ys[i] / (4 * b * b) - Ml[1] * xs[i] / (4 * a * a)};
+      const double cx = ux - lam * ys[i], cy = uy + lam * xs[i];  // tangential / normal at corner i
+      const double fl[3] = {fn[i] * cx, fn[i] * cy, fn[i]};
+      if (!loaded || !(fn[i] >= 0) || std::fabs(cx) > P_.mu || std::fabs(cy) > P_.mu) broken |= 1u << s;
       dContactGeom& g = w.cg[s][i];
       dBodyGetRelPointPos(foot, w.sole_corner[s][i][0], w.sole_corner[s][i][1], w.sole_corner[s][i][2], g.pos);
       std::copy(nz, nz + 3, g.normal);
       g.depth = std::max(0.0, -static_cast<double>(g.pos[2]));
       w.max_depth = std::max(w.max_depth, static_cast<double>(g.depth));
-      double* f = w.fb[s][i].f1;
-      mat_vec(R, fl, f);
-      const double fn = fl[2], f1 = std::fabs(dot(f, t1)), f2 = std::fabs(dot(f, t2));
-      if (!(fn >= 0) || f1 > P_.mu * fn || f2 > P_.mu * fn) broken |= 1u << s;
+      mat_vec(R, fl, w.fb[s][i].f1);
     }
   }
   return broken;

@@ -125,7 +125,9 @@ static void test_tipping_heel() { tipping(-1); }
 // The two time-step studies (docs/plant3d.md section 2, "Time step"). Reference: both ODE steps at
 // 1/32 ms. Errors relative to the reference's peak |signal|: the largest pointwise, the RMS over the
 // run, and the error of the peak. The rule that picks each default step: the largest whose RMS
-// error is below 1 % and whose peak is within 0.5 %.
+// error is below 1 % and whose peak is within 0.5 % (the previous release's bound), each with 10 %
+// to spare, so that the last bits of another compiler's arithmetic cannot flip the choice.
+constexpr double kRmsBound = 0.9 * 0.01, kPeakBound = 0.9 * 0.005;
 struct Trace {
   std::vector<double> pitch, hip, comx, zmp;
 };
@@ -194,11 +196,11 @@ static void test_convergence() {
                 100 * e.peak, max_diff(tr.hip, ref.hip), max_diff(tr.comx, ref.comx), 100 * a.rms);
     if (first == 0) first = a.rms;
     last = a.rms;
-    if (chosen == 0 && e.rms < 0.01 && e.peak < 0.005) chosen = s;
+    if (chosen == 0 && e.rms < kRmsBound && e.peak < kPeakBound) chosen = s;
   }
   CHECK(last < 0.25 * first, "rocking step alone: RMS error %g at the smallest step, %g at the largest", last, first);
   CHECK(chosen == def, "the study picks %g ms, the default rocking_step is %g ms", 1e3 * chosen, 1e3 * def);
-  std::printf("  default rocking_step %.4g ms: the largest with RMS error < 1 %% and peak error < 0.5 %%\n", 1e3 * def);
+  std::printf("  default rocking_step %.4g ms: the largest with RMS error < 0.9 %% and peak error < 0.45 %%\n", 1e3 * def);
 }
 
 // Establishes: with both feet held flat, the servo-driven motion converges as internal_step shrinks
@@ -234,10 +236,10 @@ static void test_flat_convergence() {
                 100 * z.peak, 100 * hp.max, 100 * hp.rms, 100 * hp.peak);
     if (prev > 0) CHECK(z.max < 0.75 * prev, "error did not shrink: %g after %g", z.max, prev);
     prev = z.max;
-    if (chosen == 0 && z.rms < 0.01 && z.peak < 0.005 && hp.rms < 0.01 && hp.peak < 0.005) chosen = s;
+    if (chosen == 0 && z.rms < kRmsBound && z.peak < kPeakBound && hp.rms < kRmsBound && hp.peak < kPeakBound) chosen = s;
   }
   CHECK(chosen == def, "the study picks %g ms, the default internal_step is %g ms", 1e3 * chosen, 1e3 * def);
-  std::printf("  default internal_step %.4g ms: the largest with RMS error < 1 %% and peak error < 0.5 %%\n", 1e3 * def);
+  std::printf("  default internal_step %.4g ms: the largest with RMS error < 0.9 %% and peak error < 0.45 %%\n", 1e3 * def);
 }
 
 // The contact study (docs/plant3d.md section 2, "Contact on evidence").
@@ -467,7 +469,7 @@ static void test_instances() {
   for (auto& t : threads) t.join();
   for (int i = 0; i < 4; ++i)
     CHECK(std::memcmp(&seq[i], &par[i], sizeof(Outputs)) == 0, "instance %d differs when run in a thread", i);
-  CHECK(seq[0].foot_pitch != seq[2].foot_pitch, "different pushes gave the same result");
+  CHECK(seq[0].theta_ankle != seq[2].theta_ankle, "different pushes gave the same result");
   std::printf("  4 instances in 4 threads = sequential, bit for bit\n");
 }
 
