@@ -6,7 +6,7 @@ import pytest
 from fmpy.util import read_csv, write_csv
 
 from anklehip.cli import main
-from anklehip.compare import CompareError, compare, comparison_figure
+from anklehip.analysis.compare import CompareError, compare, comparison_figure
 
 T = np.linspace(0.0, 10.0, 2001)
 
@@ -156,7 +156,7 @@ def test_plot_of_failed_signals(tmp_path):
 
 
 def test_csv_layout_round_trip(tmp_path):
-    from anklehip.results import atomic_write_csv
+    from anklehip.files.output import atomic_write_csv
     ref = ref_signals(T)
     atomic_write_csv(tmp_path / "a.csv", ref)
     back = read_csv(tmp_path / "a.csv")

@@ -24,13 +24,13 @@ from hypothesis import strategies as st
 
 from anklehip import cli
 from anklehip.cli import main
-from anklehip.compare import CompareError, CompareReport, compare, read_result_csv
-from anklehip.fmu import FMUError
-from anklehip.paths import MissingFileError, scenarios_dir
-from anklehip.results import output_lock
-from anklehip.scenario import (EXPECT_KEYS, MAX_STEPS, PUSH_KINDS, REF_KEYS, Scenario, ScenarioError,
+from anklehip.analysis.compare import CompareError, CompareReport, compare, read_result_csv
+from anklehip.running.fmu import FMUError
+from anklehip.files.paths import MissingFileError, scenarios_dir
+from anklehip.files.output import output_lock
+from anklehip.files.scenario import (EXPECT_KEYS, MAX_STEPS, PUSH_KINDS, REF_KEYS, Scenario, ScenarioError,
                                load_scenario, parse_scenario, time_grid_problem)
-from anklehip.steptest import StepTestError, StepTestResult, case_files, run_case
+from anklehip.running.steptest import StepTestError, StepTestResult, case_files, run_case
 
 REPO = Path(__file__).resolve().parent.parent
 STEPTESTS = Path(__file__).parent / "steptests"
@@ -227,7 +227,7 @@ def test_compare_library_refuses_bad_tolerances(two_csvs):
 
 HOLD_LOCK = textwrap.dedent("""
     import sys
-    from anklehip.results import output_lock
+    from anklehip.files.output import output_lock
     with output_lock(sys.argv[1]):
         print("locked", flush=True)
         sys.stdin.readline()
@@ -365,7 +365,7 @@ def test_property_scenario_bytes(work, head, raw):
 
 @pytest.fixture(scope="module")
 def models(fmu_dir):
-    from anklehip.master import Models
+    from anklehip.running.master import Models
     return {m: Models.load(plant_model=m) for m in ("sagittal", "3d")}
 
 
@@ -375,7 +375,7 @@ def test_property_scenario_structures(work, models, data):
     """Random TOML-typed structures with the schema's keys: a Scenario whose run is well defined
     (finite push, a bounded number of steps) or a ScenarioError naming the file; parameter tables
     that pass the schema pass the FMU check or raise FMUError."""
-    from anklehip.master import check_overrides
+    from anklehip.running.master import check_overrides
     try:
         sc = parse_scenario(data, "h.toml", work / "h.toml")
     except ScenarioError as e:

@@ -272,10 +272,10 @@ def test_paper_pushes_peaks_within_15_percent_of_the_sagittal_plants():
     both plants (`paper_five_pushes` and `paper_five_pushes_3d`): every push's peak hip angle and
     peak ZMP on the 3D plant is within 15 % of the sagittal plant's (the cycles and the absence of
     a fall are the scenarios' own expectations, checked in test_scenarios_closed_loop)."""
-    from anklehip.master import Models, simulate
-    from anklehip.paths import scenarios_dir
-    from anklehip.results import summarize_pushes
-    from anklehip.scenario import load_scenario
+    from anklehip.running.master import Models, simulate
+    from anklehip.files.paths import scenarios_dir
+    from anklehip.analysis.summary import summarize_pushes
+    from anklehip.files.scenario import load_scenario
 
     peaks = {}
     for name in ("paper_five_pushes", "paper_five_pushes_3d"):

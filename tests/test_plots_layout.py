@@ -10,9 +10,9 @@ import sys
 import numpy as np
 import pytest
 
-from anklehip import plots
-from anklehip.compare import read_result_csv
-from anklehip.paths import repo_root
+from anklehip.analysis import plots
+from anklehip.analysis.compare import read_result_csv
+from anklehip.files.paths import repo_root
 
 GOLDEN = repo_root() / "scenarios" / "reference" / "paper_five_pushes.csv"
 

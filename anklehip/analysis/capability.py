@@ -7,7 +7,7 @@ one row per variant. More keys: the first two, every other value pooled.
 
 A grid over push.force and push.duration (or push.height) also gives the capability map
 (`capability.png`): each variant's survive/fall boundary over the other key, with the analytic
-bounds of anklehip/bounds.py (docs/capability.md).
+bounds of anklehip/analysis/bounds.py (docs/capability.md).
 """
 from __future__ import annotations
 
@@ -127,7 +127,7 @@ def survive_boundary(rows: list[dict[str, Any]], variant: str, kx: str,
     robot stood with every smaller force at that x standing too (0 when the smallest one fell; an
     error counts as not standing), and whether every force tried there stood (the true boundary
     is then higher). Returns (x, force, all_stood) arrays. The row of a point that raised
-    (anklehip.points) carries only its id and outcome: it is not seen here."""
+    (anklehip.running.points) carries only its id and outcome: it is not seen here."""
     by_x: dict[float, list[tuple[float, bool]]] = {}
     for r in rows:
         if r.get("variant") == variant:

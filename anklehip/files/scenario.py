@@ -12,11 +12,12 @@ from typing import Any
 
 import numpy as np
 
-from .faults import Faults, parse_faults
-from .files import read_toml
+from ..running.faults import Faults, parse_faults
+from .text import read_toml
+from ..errors import InputError
 
 
-class ScenarioError(ValueError):
+class ScenarioError(InputError):
     """A scenario file is malformed; the message names file, key and problem."""
 
 
@@ -239,7 +240,7 @@ class Scenario:
     expect: Expect = field(default_factory=Expect)
     reference: Reference | None = None
     tags: list[str] = field(default_factory=list)
-    faults: Faults = field(default_factory=Faults)   # [faults]: anklehip.faults
+    faults: Faults = field(default_factory=Faults)   # [faults]: anklehip.running.faults
 
     @property
     def n_steps(self) -> int:

@@ -20,7 +20,7 @@ import zipfile
 from pathlib import Path
 from typing import Any
 
-from .fmu import FMUError
+from ..running.fmu import FMUError
 from .paths import MissingFileError, find_fmu, fmu_dirs
 
 # Every FMI causality, in the order of the tables; the default selection leaves out the

@@ -17,12 +17,13 @@ from typing import Any
 
 import numpy as np
 
-from . import __version__
+from .. import __version__
+from ..errors import InputError
 
 EXIT_OK, EXIT_FAIL, EXIT_ERROR = 0, 1, 2
 
 
-class UsageError(ValueError):
+class UsageError(InputError):
     """A command-line argument is wrong (the message names the option and the value)."""
 
 
@@ -58,7 +59,7 @@ def check_output_folder(path: str | Path, option: str) -> Path:
 def check_stop_time(sc, stop_time: float | None) -> None:
     """--stop-time: finite, after the start, a whole number of the scenario's steps, at most
     scenario.MAX_STEPS steps (scenario.time_grid_problem)."""
-    from .scenario import time_grid_problem
+    from ..files.scenario import time_grid_problem
     if stop_time is None:
         return
     problem = time_grid_problem(stop_time, sc.step)
@@ -85,13 +86,13 @@ def reference_columns(sc, data: np.ndarray) -> list[str]:
 
 def compare_with_reference(sc, res):
     """Compare a run with the scenario's reference; None when it has none or the file is missing."""
-    from .compare import compare
-    from .scenario import ScenarioError
+    from ..analysis.compare import compare
+    from ..files.scenario import ScenarioError
     r = sc.reference
     if r is None or not r.file.is_file():
         return None
     if r.signals:
-        from .compare import read_result_csv
+        from ..analysis.compare import read_result_csv
         cols = r.columns or list(read_result_csv(r.file, "reference").dtype.names[1:])
         for name in r.signals:
             if name not in cols:
@@ -113,7 +114,7 @@ def _rel(p: Path) -> str:
 
 
 def geometry_for(res=None, params: dict | None = None):
-    from .plots import Geometry
+    from ..analysis.plots import Geometry
     return Geometry.from_parameters(params if params is not None else (res.plant_parameters if res else None))
 
 
@@ -140,7 +141,7 @@ def make_figures(sc_name: str, data: np.ndarray, out: Path, res=None, animate: b
     file written; nothing with False (`--no-progress`) or when stderr is not a terminal."""
     import time
 
-    from . import plots
+    from ..analysis import plots
     jobs = []
     if figures:
         zl = zmp_limits(res.controller_parameters) if res else None
@@ -176,8 +177,8 @@ def make_figures(sc_name: str, data: np.ndarray, out: Path, res=None, animate: b
 # commands
 
 def cmd_list(a) -> int:
-    from .paths import scenarios_dir
-    from .scenario import ScenarioError, load_scenario
+    from ..files.paths import scenarios_dir
+    from ..files.scenario import ScenarioError, load_scenario
     rc = EXIT_OK
     files = sorted(scenarios_dir().glob("*.toml"))
     if not files:
@@ -206,9 +207,9 @@ def _scenario_and_models(a):
     """The scenario named on the command line with its --set overrides applied, and the FMUs, checked
     against each other. Raises ScenarioError, MissingFileError or FMUError with a message that names
     the file, key or variable."""
-    from .master import Models, check_overrides
-    from .paths import find_scenario
-    from .scenario import ScenarioError, load_scenario, parse_set
+    from ..running.master import Models, check_overrides
+    from ..files.paths import find_scenario
+    from ..files.scenario import ScenarioError, load_scenario, parse_set
     sc = load_scenario(find_scenario(a.scenario))
     c_set, p_set = parse_set(a.set or [])
     check_stop_time(sc, getattr(a, "stop_time", None))
@@ -231,16 +232,16 @@ def _scenario_and_models(a):
     sc.controller.update(c_set)
     sc.plant.update(p_set)
     if getattr(a, "fault", None):
-        from .scenario import parse_fault_options
+        from ..files.scenario import parse_fault_options
         sc.faults = parse_fault_options(a.fault, sc.faults)
     return sc, models
 
 
 def cmd_run(a) -> int:
-    from .fmu import FMUError
-    from .paths import MissingFileError
-    from .results import output_lock
-    from .scenario import ScenarioError
+    from ..running.fmu import FMUError
+    from ..files.paths import MissingFileError
+    from ..files.output import output_lock
+    from ..files.scenario import ScenarioError
     try:
         sc, models = _scenario_and_models(a)
     except (ScenarioError, MissingFileError, FMUError) as e:
@@ -254,9 +255,9 @@ def cmd_run(a) -> int:
 
 
 def _run(a, sc, models, out: Path) -> int:
-    from .master import simulate
-    from .results import (atomic_write_csv, check_expect, clear_previous, format_summary, result_paths,
-                          summarize_pushes, summary_dict, write_summary_json)
+    from ..running.master import simulate
+    from ..files.output import atomic_write_csv, clear_previous, result_paths, write_summary_json
+    from ..analysis.summary import check_expect, format_summary, summarize_pushes, summary_dict
     paths = result_paths(out, sc.name)
     res = simulate(sc, models, stop_time=a.stop_time, progress=_progress(a), engine=a.engine)
     csv = paths["csv"] if res.complete else paths["incomplete_csv"]
@@ -288,7 +289,7 @@ def _run(a, sc, models, out: Path) -> int:
         if rep is not None:
             cmp = rep.as_dict()
             if not rep.passed:
-                from .compare import plot_failed
+                from ..analysis.compare import plot_failed
                 p = plot_failed(rep, out / f"{sc.name}_reference_failed.png")
                 if p:
                     files["reference_failures_plot"] = str(p)
@@ -302,7 +303,7 @@ def _run(a, sc, models, out: Path) -> int:
         except Exception as e:
             warnings.append(f"figures failed: {type(e).__name__}: {e}")
     if a.record_steptest:
-        from .steptest import record_case
+        from ..running.steptest import record_case
         try:
             record_case(res, Path(a.record_steptest), res.controller_overrides, source=sc.name)
             files["steptest_case"] = a.record_steptest
@@ -332,7 +333,7 @@ def _run(a, sc, models, out: Path) -> int:
 
 
 def cmd_plot(a) -> int:
-    from .compare import CompareError, read_result_csv
+    from ..analysis.compare import CompareError, read_result_csv
     try:
         data = read_result_csv(a.csv, "result")
     except CompareError as e:
@@ -343,8 +344,8 @@ def cmd_plot(a) -> int:
     params = None
     if a.animate:
         try:
-            from .fmu import FMUInfo
-            from .paths import PLANT_FMU, find_fmu
+            from ..running.fmu import FMUInfo
+            from ..files.paths import PLANT_FMU, find_fmu
             params = FMUInfo.load(find_fmu(PLANT_FMU, a.fmu_dir)).start_values()
         except Exception:
             params = None
@@ -357,7 +358,7 @@ def cmd_plot(a) -> int:
         except ValueError as e:       # e.g. an animation window outside the result
             return _err(f"{csv}: {e}")
     else:
-        from . import plots
+        from ..analysis import plots
         files = [plots.overview(data, out / f"{name}_overview.png", title=name)]
     for f in files:
         print(f)
@@ -365,7 +366,7 @@ def cmd_plot(a) -> int:
 
 
 def cmd_compare(a) -> int:
-    from .compare import CompareError, compare, plot_comparison
+    from ..analysis.compare import CompareError, compare, plot_comparison
     cols = [c.strip() for c in a.columns.split(",")] if a.columns else None
     try:
         rep = compare(a.result, a.reference, columns=cols, num=a.num, dx=a.dx, dy=a.dy, abs_tol=a.abs_tol,
@@ -383,10 +384,10 @@ def cmd_compare(a) -> int:
 
 
 def cmd_steptest(a) -> int:
-    from .compare import CompareError, plot_failed
-    from .fmu import FMUError
-    from .paths import CONTROLLER_FMU, MissingFileError, find_fmu, find_rt_runner
-    from .steptest import StepTestError, failures, histogram_path, rt_histogram, run_case, run_native, summary
+    from ..analysis.compare import CompareError, plot_failed
+    from ..running.fmu import FMUError
+    from ..files.paths import CONTROLLER_FMU, MissingFileError, find_fmu, find_rt_runner
+    from ..running.steptest import StepTestError, failures, histogram_path, rt_histogram, run_case, run_native, summary
     if a.fail_on_miss and not a.realtime:
         return _err("--fail-on-miss needs --realtime (only a paced run has deadlines)")
     if a.histogram and not (a.realtime or a.native):
@@ -444,12 +445,12 @@ def cmd_steptest(a) -> int:
 
 
 def cmd_record(a) -> int:
-    from .fmu import FMUError
-    from .master import simulate
-    from .paths import MissingFileError
-    from .scenario import ScenarioError
-    from .steptest import record_case
-    from .results import output_lock
+    from ..running.fmu import FMUError
+    from ..running.master import simulate
+    from ..files.paths import MissingFileError
+    from ..files.scenario import ScenarioError
+    from ..running.steptest import record_case
+    from ..files.output import output_lock
     try:
         sc, models = _scenario_and_models(a)
     except (ScenarioError, MissingFileError, FMUError) as e:
@@ -467,7 +468,7 @@ def cmd_record(a) -> int:
 
 
 def _points_end(res, journal: Path, command: str) -> int:
-    """The end of a run of points (anklehip.points.Outcome): each failed point's error, the
+    """The end of a run of points (anklehip.running.points.Outcome): each failed point's error, the
     interruption message, and the exit status (130 interrupted, 1 a point failed, else 0)."""
     for r in res.rows:
         if r.get("outcome") == "error":
@@ -480,16 +481,16 @@ def _points_end(res, journal: Path, command: str) -> int:
 
 
 def cmd_sweep_file(a) -> int:
-    from .fmu import FMUError
-    from .master import Models, check_overrides
-    from .native import default_engine
-    from .paths import MissingFileError
-    from .points import JournalMismatch, run_points
-    from .results import output_lock
-    from .scenario import ScenarioError, faults_from, load_scenario
-    from .sweep import sweep_key, write_points_table
-    from .sweepfile import load_sweep_file, sweepfile_point
-    from .paths import find_sweep_file
+    from ..running.fmu import FMUError
+    from ..running.master import Models, check_overrides
+    from ..running.native import default_engine
+    from ..files.paths import MissingFileError
+    from ..running.points import JournalMismatch, run_points
+    from ..files.output import output_lock
+    from ..files.scenario import ScenarioError, faults_from, load_scenario
+    from ..running.sweep import sweep_key, write_points_table
+    from ..running.sweepfile import load_sweep_file, sweepfile_point
+    from ..files.paths import find_sweep_file
     try:
         path = find_sweep_file(a.scenario)
         sf = load_sweep_file(path)
@@ -526,7 +527,7 @@ def cmd_sweep_file(a) -> int:
         csv_path, pq_path = write_points_table(res.rows, out, "points", complete=res.complete)
         figs = []
         if res.complete:
-            from .capability import plot_capability, plot_points
+            from ..analysis.capability import plot_capability, plot_points
             figs = plot_points(sf, res.rows, out)
             cap = plot_capability(sf, res.rows, out, _sweep_plant_params(a.fmu_dir, sc, sf))
             figs += [cap] if cap else []
@@ -542,8 +543,8 @@ def cmd_sweep_file(a) -> int:
 def _sweep_plant_params(fmu_dir, sc, sf) -> dict:
     """The sagittal plant's parameters a sweep file's bounds use: the FMU's defaults with the
     scenario's and the first variant's plant overrides ({} without the sagittal plant FMU)."""
-    from .fmu import FMUError, FMUInfo
-    from .paths import PLANT_FMU, MissingFileError, find_fmu
+    from ..running.fmu import FMUError, FMUInfo
+    from ..files.paths import PLANT_FMU, MissingFileError, find_fmu
     try:
         params = FMUInfo.load(find_fmu(PLANT_FMU, fmu_dir)).start_values()
     except (MissingFileError, FMUError):
@@ -554,14 +555,14 @@ def _sweep_plant_params(fmu_dir, sc, sf) -> dict:
 def cmd_sweep(a) -> int:
     if a.forces is None:
         return cmd_sweep_file(a)
-    from .paths import MissingFileError, find_scenario
-    from .points import JournalMismatch
-    from .scenario import ScenarioError, load_scenario
-    from .fmu import FMUError
-    from .master import Models, check_overrides
-    from .native import default_engine
-    from .results import output_lock
-    from .sweep import parse_grid, parse_variant, plot_sweep, run_sweep, sweep_key, write_points_table
+    from ..files.paths import MissingFileError, find_scenario
+    from ..running.points import JournalMismatch
+    from ..files.scenario import ScenarioError, load_scenario
+    from ..running.fmu import FMUError
+    from ..running.master import Models, check_overrides
+    from ..running.native import default_engine
+    from ..files.output import output_lock
+    from ..running.sweep import parse_grid, parse_variant, plot_sweep, run_sweep, sweep_key, write_points_table
     try:
         path = find_scenario(a.scenario)
         sc = load_scenario(path)
@@ -601,11 +602,11 @@ def cmd_sweep(a) -> int:
 
 
 def cmd_robustness(a) -> int:
-    from .faults import KEY_BY_NAME
-    from .paths import MissingFileError, find_scenario
-    from .robustness import STUDIES, run_studies, study_by_label, summarize, table_markdown
-    from .scenario import ScenarioError, faults_from, load_scenario
-    from .sweep import parse_grid
+    from ..running.faults import KEY_BY_NAME
+    from ..files.paths import MissingFileError, find_scenario
+    from ..running.robustness import STUDIES, run_studies, study_by_label, summarize, table_markdown
+    from ..files.scenario import ScenarioError, faults_from, load_scenario
+    from ..running.sweep import parse_grid
     try:
         path = find_scenario(a.scenario)
         sc = load_scenario(path)
@@ -625,10 +626,10 @@ def cmd_robustness(a) -> int:
             plan.append((st, levels))
     except (ScenarioError, MissingFileError, ValueError) as e:
         return _err(str(e))
-    from .master import Models
-    from .points import JournalMismatch
-    from .results import atomic_write_text, output_lock
-    from .sweep import sweep_key, write_points_table
+    from ..running.master import Models
+    from ..running.points import JournalMismatch
+    from ..files.output import atomic_write_text, output_lock
+    from ..running.sweep import sweep_key, write_points_table
     out = check_output_folder(a.out if a.out else Path("results") / f"robustness_{sc.name}", "--out")
     with output_lock(out):
         try:
@@ -667,10 +668,10 @@ def cmd_robustness(a) -> int:
 
 def cmd_soak(a) -> int:
     import json
-    from .paths import MissingFileError
-    from .fmu import FMUError
-    from .results import atomic_write_csv, atomic_write_text
-    from .soak import soak
+    from ..files.paths import MissingFileError
+    from ..running.fmu import FMUError
+    from ..files.output import atomic_write_csv, atomic_write_text
+    from ..running.soak import soak
     try:
         out = check_output_folder(a.out if a.out else Path("results") / "soak", "--out")
         rep = soak(a.duration, a.seed, a.fmu_dir, progress=not a.no_progress)
@@ -694,9 +695,9 @@ def cmd_soak(a) -> int:
 
 
 def cmd_info(a) -> int:
-    from .fmu import FMUError
-    from .info import format_text, interface, resolve_fmu, select
-    from .paths import MissingFileError
+    from ..running.fmu import FMUError
+    from ..files.info import format_text, interface, resolve_fmu, select
+    from ..files.paths import MissingFileError
     try:
         info = select(interface(resolve_fmu(a.fmu, a.fmu_dir)), a.causality, a.name)
     except (MissingFileError, FMUError) as e:
@@ -710,16 +711,17 @@ CONTROLLER_CONFIG_HELP = ("a named controller configuration (default: the scenar
 
 
 def _variants_help() -> str:
-    from .sweep import VARIANTS_HELP
+    from ..running.sweep import VARIANTS_HELP
     return VARIANTS_HELP
 
 
 def cmd_regen(a) -> int:
-    from .fmu import FMUError
-    from .master import Models, simulate
-    from .paths import MissingFileError, scenarios_dir
-    from .results import atomic_write_csv, check_expect
-    from .scenario import ScenarioError, load_scenario
+    from ..running.fmu import FMUError
+    from ..running.master import Models, simulate
+    from ..files.paths import MissingFileError, scenarios_dir
+    from ..files.output import atomic_write_csv
+    from ..analysis.summary import check_expect
+    from ..files.scenario import ScenarioError, load_scenario
     try:
         files = sorted(scenarios_dir().glob("*.toml"))
         scs = [load_scenario(f) for f in files]
@@ -755,19 +757,15 @@ def cmd_regen(a) -> int:
     return rc
 
 
-def steptests_dir() -> Path:
-    from .paths import repo_root
-    return repo_root() / "tests" / "steptests"
-
-
 def regen_steptests(fmu_dir) -> int:
     """Re-record every committed step-test case from the scenario named in its steptest.toml."""
-    from .fmu import FMUError
-    from .master import Models, simulate
-    from .paths import MissingFileError, find_scenario
-    from .scenario import ScenarioError, load_scenario
-    from .steptest import StepTestError, read_meta, record_case
+    from ..running.fmu import FMUError
+    from ..running.master import Models, simulate
+    from ..files.paths import MissingFileError, find_scenario
+    from ..files.scenario import ScenarioError, load_scenario
+    from ..running.steptest import StepTestError, read_meta, record_case
     rc = EXIT_OK
+    from ..files.paths import steptests_dir
     for case in sorted(p for p in steptests_dir().glob("*") if p.is_dir()):
         try:
             src = read_meta(case / "steptest.toml").get("source", {})
@@ -791,10 +789,10 @@ def regen_steptests(fmu_dir) -> int:
 
 
 def cmd_export(a) -> int:
-    from .export import write_container_fmu, write_ssp
-    from .fmu import FMUError
-    from .paths import MissingFileError
-    from .scenario import ScenarioError
+    from ..files.export import write_container_fmu, write_ssp
+    from ..running.fmu import FMUError
+    from ..files.paths import MissingFileError
+    from ..files.scenario import ScenarioError
     try:
         sc, models = _scenario_and_models(a)
         if a.kind == "ssp":
@@ -840,8 +838,8 @@ FINITE, NON_NEGATIVE, POSITIVE = _number(), _number(ge=0.0), _number(gt=0.0)
 
 
 def build_parser() -> argparse.ArgumentParser:
-    from .info import CAUSALITIES
-    from .scenario import MAX_STEPS
+    from ..files.info import CAUSALITIES
+    from ..files.scenario import MAX_STEPS
     p = _Parser(prog="anklehip", description="Ankle/hip balance control FMUs: closed-loop "
                                 "scenarios, step tests, comparison, plots, sweeps, FMU interfaces.")
     p.add_argument("--fmu-dir", metavar="DIR",
@@ -1066,12 +1064,12 @@ def build_parser() -> argparse.ArgumentParser:
 
 def _input_errors() -> tuple[type[Exception], ...]:
     """Our exception classes for wrong input; each message names the file, key, cell or option."""
-    from .compare import CompareError
-    from .fmu import FMUError
-    from .paths import MissingFileError
-    from .results import OutputBusyError
-    from .scenario import ScenarioError
-    from .steptest import StepTestError
+    from ..analysis.compare import CompareError
+    from ..running.fmu import FMUError
+    from ..files.paths import MissingFileError
+    from ..files.output import OutputBusyError
+    from ..files.scenario import ScenarioError
+    from ..running.steptest import StepTestError
     return UsageError, ScenarioError, MissingFileError, FMUError, CompareError, StepTestError, OutputBusyError
 
 

@@ -26,8 +26,8 @@ import numpy as np
 
 from .faults import SENSED_PREFIX, Faults, SensorChannel, TransitionPush, parameter_faults
 from .fmu import DISCARD, STATUS_NAMES, FMUError, FMUInfo, Slave, vr_array
-from .paths import CONTROLLER_FMU, PLANT_FMUS, find_fmu
-from .scenario import PushProfile, PushSegment, Scenario, ScenarioError, time_grid_problem
+from ..files.paths import CONTROLLER_FMU, PLANT_FMUS, find_fmu
+from ..files.scenario import PushProfile, PushSegment, Scenario, ScenarioError, time_grid_problem
 
 CONTROLLER_INPUTS = ("theta_ankle", "theta_hip", "zmp_x", "fz")
 CONTROLLER_REFS = ("theta_ankle_ref", "theta_hip_ref")
@@ -197,7 +197,7 @@ def simulate(scenario: Scenario, models: Models | None = None, *, fmu_dir=None,
     do not fit together or a parameter they do not have. `faults` replaces the scenario's
     [faults]; `log_categories` switches those log categories of both FMUs on (for `logger`; by
     default only errors are logged). `engine`: "fmpy" (this module's loop on FMPy) or "native"
-    (the same loop in C++, anklehip.native: bit-identical rows; no sensor faults, transition
+    (the same loop in C++, anklehip.running.native: bit-identical rows; no sensor faults, transition
     pushes, log categories or progress bar)."""
     if engine not in ENGINES:
         raise ValueError(f"engine {engine!r}: one of {', '.join(ENGINES)}")

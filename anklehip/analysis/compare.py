@@ -30,10 +30,11 @@ from typing import Any
 
 import numpy as np
 
-from .files import read_text
+from ..files.text import read_text
+from ..errors import InputError
 
 
-class CompareError(ValueError):
+class CompareError(InputError):
     """The files cannot be compared (missing file or column, empty file, bad time column)."""
 
 

@@ -1,4 +1,4 @@
-"""Robustness study: each fault of anklehip.faults swept over its levels on one scenario (Dask).
+"""Robustness study: each fault of anklehip.running.faults swept over its levels on one scenario (Dask).
 
 For every fault the closed loop runs once per level (the other faults as the scenario sets
 them). A run *survives* when the robot stands to the end and completes the scenario's
@@ -36,7 +36,7 @@ class Study:
     key: str                                   # the swept fault key
     base: dict[str, Any] = field(default_factory=dict)   # other fault options of this study
     controller: dict[str, Any] = field(default_factory=dict)   # controller parameter overrides of this study
-    grid: str = ""          # levels (anklehip.sweep.parse_grid); "" = the fault key's default grid
+    grid: str = ""          # levels (anklehip.running.sweep.parse_grid); "" = the fault key's default grid
 
     @property
     def levels_spec(self) -> str:
@@ -77,8 +77,8 @@ def study_by_label(label: str) -> Study:
 def run_point(scenario_path: str, fmu_dir: str | None, study: Study, level: float) -> dict[str, Any]:
     """One closed-loop run of `study` at `level`: the row of points.csv."""
     from .master import Models, simulate
-    from .results import count_cycles
-    from .scenario import faults_from, load_scenario
+    from ..analysis.summary import count_cycles
+    from ..files.scenario import faults_from, load_scenario
     sc = load_scenario(scenario_path)
     key = KEY_BY_NAME[study.key]
     faults = faults_from({**study.base, study.key: int(level) if key.integer else float(level)}, sc.faults,
@@ -121,15 +121,15 @@ def run_point(scenario_path: str, fmu_dir: str | None, study: Study, level: floa
 
 
 def robustness_point(spec: dict) -> dict[str, Any]:
-    """One point of run_studies (anklehip.points runs it on the workers)."""
+    """One point of run_studies (anklehip.running.points runs it on the workers)."""
     return run_point(spec["scenario"], spec["fmu_dir"], study_by_label(spec["study"]), spec["level"])
 
 
 def run_studies(scenario_path: str, studies: list[tuple[Study, list[float]]], fmu_dir: str | None = None,
                 workers: int = 2, *, scheduler: str | None = None, journal: Path | None = None, key: str = "",
                 restart: bool = False):
-    """Every study at every level, on Dask (anklehip.points, like the sweeps: journal, resumption,
-    clean Ctrl-C). Returns an anklehip.points.Outcome."""
+    """Every study at every level, on Dask (anklehip.running.points, like the sweeps: journal, resumption,
+    clean Ctrl-C). Returns an anklehip.running.points.Outcome."""
     from .points import run_points
     specs = [{"id": f"{s.label}@{float(x)!r}", "scenario": str(scenario_path), "fmu_dir": fmu_dir,
               "study": s.label, "level": float(x)} for s, levels in studies for x in levels]

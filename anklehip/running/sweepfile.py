@@ -40,8 +40,8 @@ from typing import Any
 
 import numpy as np
 
-from .files import read_toml
-from .scenario import PushProfile, PushSegment, ScenarioError, _V
+from ..files.text import read_toml
+from ..files.scenario import PushProfile, PushSegment, ScenarioError, _V
 from .sweep import MAX_GRID, Variant, parse_grid
 
 TOP_KEYS = {"description", "scenario", "stop_time", "push", "variant", "grid", "random"}
@@ -91,7 +91,7 @@ class SweepFile:
 
 def load_sweep_file(path: str | Path) -> SweepFile:
     path = Path(path)
-    from .paths import repo_root
+    from ..files.paths import repo_root
     try:
         where = str(path.resolve().relative_to(repo_root()))
     except ValueError:
@@ -99,7 +99,7 @@ def load_sweep_file(path: str | Path) -> SweepFile:
     data = read_toml(path, where, ScenarioError)
     v = _V(where)
     v.keys(data, TOP_KEYS, "", {"scenario"})
-    from .paths import find_scenario
+    from ..files.paths import find_scenario
     sc_name = v.str_(data["scenario"], "scenario")
     try:
         scenario = find_scenario(sc_name) if "/" not in sc_name else (path.parent / sc_name).resolve()
@@ -209,10 +209,10 @@ def point_setup(sf: SweepFile, vals: dict[str, float], scenario) -> tuple[PushPr
 
 
 def sweepfile_point(spec: dict) -> dict[str, Any]:
-    """One point of a sweep file (anklehip.points runs it on the workers): the row of the table."""
+    """One point of a sweep file (anklehip.running.points runs it on the workers): the row of the table."""
     from .master import simulate
-    from .results import summarize_pushes
-    from .scenario import faults_from, load_scenario
+    from ..analysis.summary import summarize_pushes
+    from ..files.scenario import faults_from, load_scenario
     from .sweep import cached_models
     sf = load_sweep_file(spec["sweep"])
     sc = load_scenario(sf.scenario)

@@ -1,13 +1,14 @@
 """The native closed-loop engine: libanklehip_closed_loop (fmu/closed_loop/closed_loop.cpp) through
 ctypes.
 
-`anklehip.master.simulate(..., engine="native")` prepares the run exactly as for FMPy (layout,
+`anklehip.running.master.simulate(..., engine="native")` prepares the run exactly as for FMPy (layout,
 result arrays, push columns, parameters) and hands the loop to the library, which loads both FMUs'
 binaries with dlopen and makes the same FMI calls in the same order: the result rows are
 bit-identical (tests/test_native_engine.py). `write_csv` writes a result table in FMPy's
 write_csv layout, byte for byte, about 50 times faster.
 
-The library is looked up as $ANKLEHIP_NATIVE_LIB, else <build>/fmu/closed_loop/.
+The library is looked up as $ANKLEHIP_NATIVE_LIB, else in the checkout's <build>/fmu/closed_loop/,
+else in the installed package's data/lib/ (anklehip.files.paths.native_library).
 """
 from __future__ import annotations
 
@@ -20,9 +21,7 @@ from typing import Any
 
 import numpy as np
 
-from .paths import MissingFileError, build_dir
-
-LIBRARY = "libanklehip_closed_loop.so"
+from ..files.paths import NATIVE_LIBRARY as LIBRARY, MissingFileError, native_library
 
 _u32p = ctypes.POINTER(ctypes.c_uint32)
 _i32p = ctypes.POINTER(ctypes.c_int32)
@@ -59,13 +58,13 @@ class _Run(ctypes.Structure):
 _lib = None
 
 
-def library_path() -> Path:
-    env = os.environ.get("ANKLEHIP_NATIVE_LIB")
-    return Path(env) if env else build_dir() / "fmu" / "closed_loop" / LIBRARY
+def library_path() -> Path | None:
+    return native_library()
 
 
 def available() -> bool:
-    return sys.platform.startswith("linux") and library_path().is_file()
+    p = library_path()
+    return sys.platform.startswith("linux") and p is not None and p.is_file()
 
 
 def default_engine() -> str:
@@ -77,9 +76,10 @@ def _load():
     global _lib
     if _lib is None:
         p = library_path()
-        if not p.is_file():
-            raise MissingFileError(f"{p} not found: the native engine is built by `bash scripts/setup.sh` "
-                                   "(or point ANKLEHIP_NATIVE_LIB at libanklehip_closed_loop.so)")
+        if p is None or not p.is_file():
+            raise MissingFileError(f"{p or LIBRARY} not found: the native engine is built by `bash scripts/setup.sh` "
+                                   "and shipped in the Linux wheel (or point ANKLEHIP_NATIVE_LIB at "
+                                   "libanklehip_closed_loop.so)")
         lib = ctypes.CDLL(str(p))
         lib.ahn_run_closed_loop.argtypes = [ctypes.POINTER(_Run)]
         lib.ahn_run_closed_loop.restype = ctypes.c_int
@@ -111,7 +111,7 @@ def _vrs(vars_) -> ctypes.Array:
 
 def _fmu(info, instance_name: str, parameters: dict[str, Any], keep: list) -> _Fmu:
     """The C description of one FMU and its parameter values (in the caller's order, as
-    anklehip.fmu.Slave.set_values sets them); `keep` holds the buffers alive."""
+    anklehip.running.fmu.Slave.set_values sets them); `keep` holds the buffers alive."""
     n = len(parameters)
     vr = (ctypes.c_uint32 * max(1, n))()
     kind = bytearray()

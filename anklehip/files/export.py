@@ -22,8 +22,8 @@ from pathlib import Path
 from typing import Any
 from xml.sax.saxutils import quoteattr
 
-from .fmu import FMUError, FMUInfo, Var
-from .master import CLASH_PREFIX, PUSH, PUSH_Y, Models, scenario_parameters
+from ..running.fmu import FMUError, FMUInfo, Var
+from ..running.master import CLASH_PREFIX, PUSH, PUSH_Y, Models, scenario_parameters
 from .scenario import Scenario
 
 SSD_NS = ('xmlns:ssc="http://ssp-standard.org/SSP1/SystemStructureCommon" '

@@ -24,11 +24,12 @@ import time
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable
+from ..errors import InputError
 
 JOURNAL_FORMAT = "anklehip-points"
 
 
-class JournalMismatch(ValueError):
+class JournalMismatch(InputError):
     """The journal in the output folder belongs to other points (another definition or other FMUs)."""
 
 

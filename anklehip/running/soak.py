@@ -28,7 +28,7 @@ from typing import Any
 import numpy as np
 
 from .fmu import vr_array
-from .scenario import PushProfile, PushSegment
+from ..files.scenario import PushProfile, PushSegment
 
 WARMUP = 60.0          # [s] simulated; memory growth is measured from here
 PRE_PUSH = 0.5         # [s] the posture window before each push

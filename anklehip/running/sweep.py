@@ -49,7 +49,7 @@ def parse_grid(spec: str, what: str = "grid") -> list[float]:
 
 
 def parse_variant(spec: str) -> Variant:
-    from .scenario import ScenarioError, parse_set
+    from ..files.scenario import ScenarioError, parse_set
     name, _, rest = spec.partition(":")
     items = [s.strip() for s in rest.split(",") if s.strip()]
     configs = [s.split("=", 1)[1].strip() for s in items if s.startswith("config=")]
@@ -68,7 +68,7 @@ def cached_models(fmu_dir: str | None, plant_model: str):
 
 def _one(scenario_path: str, fmu_dir: str | None, peak: float, variant: Variant, engine: str = "fmpy") -> dict[str, Any]:
     from .master import simulate
-    from .scenario import load_scenario
+    from ..files.scenario import load_scenario
     sc = load_scenario(scenario_path)
     if variant.config:
         sc.controller_config = variant.config
@@ -99,7 +99,7 @@ def _variant_hash(v: Variant) -> str:
 
 
 def sweep_point(spec: dict) -> dict[str, Any]:
-    """One point of run_sweep (anklehip.points runs it on the workers)."""
+    """One point of run_sweep (anklehip.running.points runs it on the workers)."""
     v = spec["variant"]
     return _one(spec["scenario"], spec["fmu_dir"], spec["peak_force"],
                 Variant(v["name"], v["controller"], v["plant"], v["config"]), spec["engine"])
@@ -108,9 +108,9 @@ def sweep_point(spec: dict) -> dict[str, Any]:
 def run_sweep(scenario_path: str, forces: list[float], variants: list[Variant], fmu_dir: str | None = None,
               workers: int = 2, engine: str = "fmpy", *, scheduler: str | None = None,
               journal: Path | None = None, key: str = "", restart: bool = False):
-    """Every variant at every peak force, on Dask (anklehip.points: a local cluster, or the
+    """Every variant at every peak force, on Dask (anklehip.running.points: a local cluster, or the
     scheduler at `scheduler` / $DASK_SCHEDULER_ADDRESS); finished points go to `journal` and a
-    rerun with the same `key` skips them. Returns an anklehip.points.Outcome."""
+    rerun with the same `key` skips them. Returns an anklehip.running.points.Outcome."""
     from .points import run_points
     specs = [{"id": f"{v.name}@{float(f)!r}#{_variant_hash(v)}", "scenario": str(scenario_path), "fmu_dir": fmu_dir,
               "peak_force": float(f), "engine": engine,
@@ -138,7 +138,7 @@ def write_points_table(rows: list[dict[str, Any]], out: Path, name: str, complet
     <name>.incomplete.* otherwise (never named like a finished sweep); the other pair is removed."""
     import pyarrow as pa
     import pyarrow.parquet as pq
-    from .results import _atomic
+    from ..files.output import _atomic
     stem, other = (name, f"{name}.incomplete") if complete else (f"{name}.incomplete", name)
     for suffix in (".csv", ".parquet"):
         (out / f"{other}{suffix}").unlink(missing_ok=True)

@@ -24,18 +24,19 @@ from typing import Any
 
 import numpy as np
 
-from .compare import CompareReport, compare, read_result_csv
-from .files import read_text, read_toml
+from ..analysis.compare import CompareReport, compare, read_result_csv
+from ..files.text import read_text, read_toml
 from .fmu import FMUError, FMUInfo, Slave, vr_array
 from .master import RunResult
-from .results import atomic_write_csv, atomic_write_text
-from .scenario import REF_SIGNAL_KEYS, _parse_overrides, _V, time_grid_problem
+from ..files.output import atomic_write_csv, atomic_write_text
+from ..files.scenario import REF_SIGNAL_KEYS, _parse_overrides, _V, time_grid_problem
+from ..errors import InputError
 
 MODEL = "AnkleHipController"
 DEFAULT_TOL = {"abs_tol": 1e-9, "rel_tol": 1e-6}     # our FMU against its own recording: tight
 
 
-class StepTestError(ValueError):
+class StepTestError(InputError):
     pass
 
 
@@ -536,7 +537,7 @@ def _us(x: float) -> str:
 
 def rt_histogram(rt: RTStats, out: Path, title: str = "") -> Path:
     """rt_histogram_figure as a PNG."""
-    from .plots import _save
+    from ..analysis.plots import _save
     return _save(rt_histogram_figure(rt, title), out)
 
 

@@ -11,7 +11,7 @@ x is measured from the ankle axis (forward +), heights above the sole. Pure nump
 * lip_force_limit / lip_impulse_limit: the linear inverted pendulum bound of the ankle strategy
   (the body rigid, no angular momentum about its CoM, the ZMP at the edge from the push onset).
 
-    python -m anklehip.bounds       # the nominal numbers (docs/capability.md)
+    python -m anklehip.analysis.bounds       # the nominal numbers (docs/capability.md)
 """
 from __future__ import annotations
 
@@ -129,7 +129,7 @@ def sustained_push_limit(r: Robot, direction: float = +1) -> float:
 def laplace_pwl(times, values, omega: float):
     """Integral of f(t) e^(-omega t) dt from times[..., 0] to infinity, exact for the piecewise-linear
     f through the break points (times, values) along the last axis (a repeated time is a jump),
-    constant at the last value after the last break point (as anklehip.scenario.PushProfile)."""
+    constant at the last value after the last break point (as anklehip.files.scenario.PushProfile)."""
     t = np.asarray(times, float)
     v = np.asarray(values, float)
     t0, t1, v0, v1 = t[..., :-1], t[..., 1:], v[..., :-1], v[..., 1:]
@@ -210,8 +210,8 @@ def nominal_table(params: dict, durations=NOMINAL_DURATIONS, rise: float = 0.05)
 
 if __name__ == "__main__":      # pragma: no cover - prints the doc's table
     import argparse
-    from .fmu import FMUInfo
-    from .paths import PLANT_FMU, find_fmu
+    from ..running.fmu import FMUInfo
+    from ..files.paths import PLANT_FMU, find_fmu
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--fmu-dir")
     print(nominal_table(FMUInfo.load(find_fmu(PLANT_FMU, ap.parse_args().fmu_dir)).start_values()))

@@ -14,6 +14,8 @@ from typing import Any
 from fmpy import extract, read_model_description
 from fmpy.fmi2 import FMU2Slave
 
+from ..errors import InputError
+
 # FMI 2.0 status codes and status kinds
 OK, WARNING, DISCARD, ERROR, FATAL, PENDING = range(6)
 STATUS_NAMES = ["OK", "Warning", "Discard", "Error", "Fatal", "Pending"]
@@ -21,8 +23,8 @@ FMI2_LAST_SUCCESSFUL_TIME = 2
 FMI2_TERMINATED = 3
 
 
-class FMUError(RuntimeError):
-    pass
+class FMUError(InputError, RuntimeError):
+    """An FMU that does not load, does not fit, or refuses a value; the message names the FMU and why."""
 
 
 @dataclass(frozen=True)
