@@ -150,9 +150,9 @@ def test_every_option_of_every_command_has_help():
 
 
 def test_plot_no_progress_reaches_the_figures(tmp_path, monkeypatch):
-    import anklehip.cli as cli
+    import anklehip.running.run as run
     seen = []
-    monkeypatch.setattr(cli, "make_figures", lambda *a, **k: seen.append(k.get("progress")) or [])
+    monkeypatch.setattr(run, "make_figures", lambda *a, **k: seen.append(k.get("progress")) or [])
     csv = tmp_path / "syn.csv"
     write_csv(csv, synthetic_result(t_end=0.5))
     assert main(["plot", str(csv), "--no-progress"]) == 0

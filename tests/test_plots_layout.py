@@ -135,7 +135,7 @@ def test_gif_frames_and_exact_colours(tmp_path):
 
 
 def test_make_figures_progress_bar_and_lines(tmp_path, monkeypatch):
-    from anklehip.cli import make_figures
+    from anklehip.running.run import make_figures
     err = _Terminal()
     monkeypatch.setattr(sys, "stderr", err)
     files = make_figures("syn", synthetic(), tmp_path)

@@ -7,7 +7,8 @@ import json
 import numpy as np
 import pytest
 
-from anklehip.cli import compare_with_reference, main
+from anklehip.cli import main
+from anklehip.running.run import compare_with_reference
 from anklehip.running.master import Models, simulate
 from anklehip.files.paths import scenarios_dir
 from anklehip.analysis.summary import check_expect

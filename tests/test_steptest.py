@@ -35,7 +35,7 @@ def test_committed_case_passes(controller_fmu, case, tmp_path):
     assert (tmp_path / "AnkleHipController_out.csv").is_file()
 
 
-def test_record_then_steptest_round_trip(controller_fmu, tmp_path, capsys):
+def test_record_then_steptest_round_trip(controller_fmu, tmp_path, capsys, monkeypatch):
     case = tmp_path / "case"
     assert main(["record", "ankle_small_push", str(case), "--stop-time", "1.5"]) == 0
     f = case_files(case)
@@ -47,10 +47,16 @@ def test_record_then_steptest_round_trip(controller_fmu, tmp_path, capsys):
     # a tampered reference fails, with the signal and the time named, and a non-zero exit
     ref["theta_ankle_ref"][1000:] += 0.01
     write_csv(f["ref"], ref)
+    # the plot goes to a results folder (--out, default results/steptest/<case>), never into the case
+    before = sorted(p.name for p in case.iterdir())
+    monkeypatch.chdir(tmp_path)
     assert main(["steptest", str(case), "--failed-only", "--plot"]) == 1
     out = capsys.readouterr().out
     assert "[FAIL] theta_ankle_ref" in out and "first at t=1.0000" in out
-    assert (case / "failed_signals.png").is_file()
+    assert (tmp_path / "results" / "steptest" / "case" / "failed_signals.png").is_file()
+    assert main(["steptest", str(case), "--plot", "--out", str(tmp_path / "o")]) == 1
+    assert (tmp_path / "o" / "case" / "failed_signals.png").is_file()
+    assert sorted(p.name for p in case.iterdir()) == before
 
 
 def test_realtime_pacing_reports_percentiles(controller_fmu, tmp_path):

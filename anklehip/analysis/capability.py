@@ -154,7 +154,19 @@ def _axis_ends(xs: np.ndarray, log: bool) -> tuple[float, float]:
 
 
 def plot_capability(sf, rows: list[dict[str, Any]], out: Path, plant_params: dict) -> Path | None:
-    """capability.png: one axes, x = push.duration (log) or push.height, y = peak push force; each
+    """capability_figure as <out>/capability.png; None when there is none."""
+    fig = capability_figure(sf, rows, plant_params)
+    if fig is None:
+        return None
+    import matplotlib.pyplot as plt
+    p = Path(out) / "capability.png"
+    fig.savefig(p, dpi=120, bbox_inches="tight")
+    plt.close(fig)
+    return p
+
+
+def capability_figure(sf, rows: list[dict[str, Any]], plant_params: dict):
+    """The capability map: one axes, x = push.duration (log) or push.height, y = peak push force; each
     variant's survive/fall boundary (survive_boundary) as a step line, each value held back to the
     previous x (a longer or higher push is harder), the best variant's region shaded, and the
     analytic bounds: static tipping, sustained-push limit and the LIP bound of the ankle strategy.
@@ -232,7 +244,4 @@ def plot_capability(sf, rows: list[dict[str, Any]], out: Path, plant_params: dic
         note += f"; bounds for the plant of variant {sf.variants[0].name}"
     ax.set_title(f"{sf.name}: capability map, {shape}\n{note}", fontsize=9)
     ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.12), ncol=2, fontsize=8, frameon=False)
-    p = Path(out) / "capability.png"
-    fig.savefig(p, dpi=120, bbox_inches="tight")
-    plt.close(fig)
-    return p
+    return fig

@@ -75,6 +75,7 @@ class CompareReport:
     signals: list[SignalResult]
     extra_columns: list[str] = field(default_factory=list)
     notes: list[str] = field(default_factory=list)
+    units: dict[str, str] = field(default_factory=dict)     # a signal's unit ('' unknown or none)
     t_res: np.ndarray | None = field(default=None, repr=False)
     t_ref: np.ndarray | None = field(default=None, repr=False)
     res: np.ndarray | None = field(default=None, repr=False)
@@ -131,8 +132,18 @@ def read_result_csv(path: str | Path, what: str = "file") -> np.ndarray:
     if dup or "" in names:
         raise CompareError(f"{what} {path}: line 1: " + (f"column name(s) {', '.join(map(repr, dup))} appear more "
                                                           "than once" if dup else "a column without a name"))
+    body = lines[1:]
+    n = len(names)
+    if all(line.count(",") == n - 1 and line.strip() for line in body):
+        try:    # every line has its cells: parse them all at once (numpy, in C)
+            flat = np.array(",".join(body).split(","), dtype=np.float64)
+            out = np.empty(len(body), dtype=[(nm, np.float64) for nm in names])
+            out.view(np.float64).reshape(len(body), n)[...] = flat.reshape(len(body), n)
+            return out
+        except ValueError:
+            pass    # a cell that is not a number: the loop below names it
     rows = []
-    for i, line in enumerate(lines[1:], 2):
+    for i, line in enumerate(body, 2):
         cells = line.split(",")
         if not line.strip():
             raise CompareError(f"{what} {path}: not a valid result CSV: line {i}: empty line")
@@ -166,6 +177,33 @@ def _time(data: np.ndarray, label: str) -> np.ndarray:
     return t
 
 
+MAX_REPEATS = 1000      # rows at one time stamp a reference may have (events repeat a time once or twice)
+
+
+def band_times(t_ref: np.ndarray, label: str = "reference") -> tuple[np.ndarray, int]:
+    """The reference's time stamps made strictly increasing for FMPy's validate_signal, and how
+    many were repeated. validate_signal adds 1e-13 to a repeated time until it is larger, which
+    never happens where 1e-13 is below one ULP (t >= 1024 s) and takes forever for a long run of
+    repeats: we move each repeat one ULP after the one before instead, so FMPy's loop has nothing to
+    do. A time column that does not advance, or a time repeated more than MAX_REPEATS times, is a
+    CompareError."""
+    t = np.array(t_ref, dtype=float)
+    if len(t) > 1 and t[-1] == t[0]:
+        raise CompareError(f"{label}: the time column does not advance (t = {t[0]:g} s in all {len(t)} rows): "
+                           "nothing to compare over")
+    bad = np.diff(t) <= 0
+    repeats = int(bad.sum())
+    for _ in range(MAX_REPEATS + 1):
+        if not bad.any():
+            return t, repeats
+        i = np.flatnonzero(bad) + 1
+        t[i] = np.nextafter(t[i - 1], np.inf)
+        bad = np.diff(t) <= 0
+    k = int(np.argmax(np.diff(np.asarray(t_ref, float)) <= 0))
+    raise CompareError(f"{label}: more than {MAX_REPEATS} rows at one time stamp (from row {k + 2}, "
+                       f"t = {t_ref[k]:g} s): not a time series FMPy's band can be built on")
+
+
 def _is_discrete(*arrays: np.ndarray) -> bool:
     """All finite values are integers of an fmi2Integer's (32-bit) range, e.g. phase or fault; 1e20
     is an integral float, not a discrete signal."""
@@ -189,7 +227,9 @@ def _discrete_deviation(t: np.ndarray, y: np.ndarray, t_ref: np.ndarray, y_ref: 
 def compare_signal(name: str, t: np.ndarray, y: np.ndarray, t_ref: np.ndarray, y_ref: np.ndarray, *,
                    num: int | None = None, dx: int = 20, dy: float = 0.1, abs_tol: float | None = None,
                    rel_tol: float | None = None, band_floor: float | None = None,
-                   require_coverage: bool = True) -> SignalResult:
+                   require_coverage: bool = True, t_band_ref: np.ndarray | None = None) -> SignalResult:
+    """One signal against its reference (the module's docstring says how). `t_band_ref`: the
+    reference's times as band_times(t_ref) made them (computed here when not given)."""
     from fmpy.util import validate_signal
     try:
         import scipy.ndimage  # noqa: F401  (validate_signal needs scipy)
@@ -229,7 +269,9 @@ def compare_signal(name: str, t: np.ndarray, y: np.ndarray, t_ref: np.ndarray, y
             num = max(1000, len(t_ref))
         # the FMI cross-check band (FMPy's implementation)
         yv = np.where(np.isfinite(y), y, 0.0)
-        t_band, y_min, y_max, i_out = validate_signal(t=np.asarray(t, float), y=yv, t_ref=t_ref.copy(),
+        if t_band_ref is None:
+            t_band_ref, _ = band_times(t_ref)
+        t_band, y_min, y_max, i_out = validate_signal(t=np.asarray(t, float), y=yv, t_ref=t_band_ref.copy(),
                                                       y_ref=y_ref, num=num, dx=dx, dy=dy)
         i_out = np.asarray(i_out, bool)
         if band_floor:
@@ -295,12 +337,17 @@ def compare(result: np.ndarray | str | Path, reference: np.ndarray | str | Path,
             tolerances: dict[str, dict[str, float]] | None = None,
             t_start: float | None = None, t_stop: float | None = None,
             require_coverage: bool = True, result_label: str | None = None,
-            reference_label: str | None = None) -> CompareReport:
+            reference_label: str | None = None, units: dict[str, str] | None = None,
+            progress: bool | None = False) -> CompareReport:
     """Compare every reference column (or ``columns``) of ``result`` with ``reference``.
 
-    Raises CompareError when a compared column is missing in either file, or when a file is
-    empty or has a bad time column. ``tolerances`` may override abs_tol/rel_tol/dy/band_floor per
-    signal. ``band_floor`` widens the band to at least +-band_floor around the reference.
+    ``result`` and ``reference``: CSV files (FMPy's layout, time first), structured arrays, or a
+    result of anklehip.run. Raises CompareError when a compared column is missing in either file,
+    or when a file is empty or has a bad time column. ``tolerances`` may override
+    abs_tol/rel_tol/dy/band_floor per signal. ``band_floor`` widens the band to at least
+    +-band_floor around the reference. ``units``: the signals' units for the report's figure
+    (default: those of the package's FMUs' variables of the same names, and the result's own).
+    ``progress``: a bar on stderr over reading and the signals (None: on a terminal).
     """
     _check_options(dict(dy=dy, abs_tol=abs_tol, rel_tol=rel_tol, band_floor=band_floor))
     for name, tol in (tolerances or {}).items():
@@ -312,10 +359,47 @@ def compare(result: np.ndarray | str | Path, reference: np.ndarray | str | Path,
     for k, v in (("t_start", t_start), ("t_stop", t_stop)):
         if v is not None and not math.isfinite(v):
             raise CompareError(f"{k}: must be finite, got {v!r}")
+    if hasattr(result, "signals") and isinstance(getattr(result, "signals"), np.ndarray):   # anklehip.run's result
+        units = {**getattr(result, "units", {}), **(units or {})}
+        result_label = result_label or f"{result.scenario.name} (this run)"
+        result = result.signals
     res_label = result_label or (str(result) if not isinstance(result, np.ndarray) else "result")
     ref_label = reference_label or (str(reference) if not isinstance(reference, np.ndarray) else "reference")
+    bar = _bar(progress, "compare")
+    try:
+        return _compare(result, reference, res_label, ref_label, bar, columns=columns, num=num, dx=dx, dy=dy,
+                        abs_tol=abs_tol, rel_tol=rel_tol, band_floor=band_floor, tolerances=tolerances,
+                        t_start=t_start, t_stop=t_stop, require_coverage=require_coverage, units=units)
+    finally:
+        if bar is not None:
+            bar.close()
+
+
+def _bar(progress: bool | None, desc: str):
+    """A tqdm bar on stderr (None: only on a terminal), or None."""
+    if progress is False:
+        return None
+    from tqdm import tqdm
+    return tqdm(total=2, desc=desc, unit="step", leave=False, disable=None if progress is None else False,
+                bar_format="{desc}: {n}/{total} {postfix} [{elapsed}]")
+
+
+def _step(bar, what: str, add_total: int = 0) -> None:
+    if bar is not None:
+        if add_total:
+            bar.total += add_total
+        bar.set_postfix_str(what, refresh=False)
+        bar.update(1)
+
+
+def _compare(result, reference, res_label: str, ref_label: str, bar, *, columns, num, dx, dy, abs_tol, rel_tol,
+             band_floor, tolerances, t_start, t_stop, require_coverage, units) -> CompareReport:
+    if bar is not None:
+        bar.set_postfix_str(f"reading {res_label}")
     res = read_result_csv(result, "result") if not isinstance(result, np.ndarray) else result
+    _step(bar, f"reading {ref_label}")
     ref = read_result_csv(reference, "reference") if not isinstance(reference, np.ndarray) else reference
+    _step(bar, "")
     if len(res) == 0:
         raise CompareError(f"result {res_label}: no data rows")
     if len(ref) == 0:
@@ -352,8 +436,16 @@ def compare(result: np.ndarray | str | Path, reference: np.ndarray | str | Path,
         if len(t_ref) < 2:
             raise CompareError(f"reference {ref_label}: fewer than 2 samples in the window t_start..t_stop = "
                                f"{a:g}..{b:g}")
+    t_band_ref, repeats = band_times(t_ref, f"reference {ref_label}")
+    if repeats:
+        notes.append(f"the reference repeats {repeats} time stamp(s) (events); for the band each repeat is "
+                     "taken one ULP after the row before")
+    if bar is not None:
+        bar.total += len(columns)
     signals = []
     for c in columns:
+        if bar is not None:
+            bar.set_postfix_str(c)
         tol = (tolerances or {}).get(c, {})
         if res[c].ndim > 1 or ref[c].ndim > 1:
             raise CompareError(f"column {c}: array-valued columns are not supported")
@@ -362,9 +454,15 @@ def compare(result: np.ndarray | str | Path, reference: np.ndarray | str | Path,
                                           dy=tol.get("dy", dy), abs_tol=tol.get("abs_tol", abs_tol),
                                           rel_tol=tol.get("rel_tol", rel_tol),
                                           band_floor=tol.get("band_floor", band_floor),
-                                          require_coverage=require_coverage))
+                                          require_coverage=require_coverage, t_band_ref=t_band_ref))
+        if bar is not None:
+            bar.update(1)
+    if units is None or any(c not in units for c in columns):
+        from ..files.info import signal_units
+        units = {**signal_units(), **(units or {})}
     return CompareReport(result=res_label, reference=ref_label, signals=signals, extra_columns=extra,
-                         notes=notes, t_res=t_res, t_ref=t_ref, res=res, ref=ref)
+                         notes=notes, t_res=t_res, t_ref=t_ref, res=res, ref=ref,
+                         units={c: units.get(c, "") for c in columns})
 
 
 def _check_options(opts: dict[str, Any], prefix: str = "") -> None:
@@ -381,11 +479,14 @@ def _check_options(opts: dict[str, Any], prefix: str = "") -> None:
 def comparison_figure(report: CompareReport, signals: list[str] | None = None):
     """A matplotlib Figure, one panel per signal (default: the failed signals, or every compared
     signal when all passed): reference, the band and the tube that the verdict used, the result,
-    and in red exactly the result samples that the verdict counts as failing."""
+    and in red exactly the result samples that the verdict counts as failing. Each panel's header
+    is the signal's verdict line (wrapped to the panel's width), its y axis the signal's unit."""
+    import textwrap
+
     from matplotlib.figure import Figure
     sig = {s.name: s for s in report.signals}
     names = signals or [s.name for s in (report.failed or report.signals)]
-    fig = Figure(figsize=(9, 2.4 * len(names) + 0.8))
+    fig = Figure(figsize=(9, 2.6 * len(names) + 1.0), layout="constrained")
     axes = fig.subplots(len(names), 1, sharex=True, squeeze=False)[:, 0]
     for ax, name in zip(axes, names):
         s = sig[name]
@@ -404,14 +505,15 @@ def comparison_figure(report: CompareReport, signals: list[str] | None = None):
                     label=f"failing samples ({s.n_outside})")
         if s.first_outside is not None:
             ax.axvline(s.first_outside, color="tab:red", lw=0.8, ls=":", label=f"first failure t={s.first_outside:.4g}")
-        ax.set_ylabel(name)
-        ax.set_title(s.line(), fontsize=8, loc="left")
+        unit = report.units.get(name, "")
+        ax.set_ylabel(f"{name} [{unit}]" if unit else name, fontsize=8)
+        ax.set_title("\n".join(textwrap.wrap(s.line(), 115)), fontsize=8, loc="left")
         ax.grid(alpha=0.3)
         ax.legend(fontsize=7, loc="best")
     axes[-1].set_xlabel("time [s]")
-    fig.suptitle(f"{'PASS' if report.passed else 'FAIL'}: {report.result} vs {report.reference} "
-                 f"({len(report.failed)} of {len(report.signals)} signals failed)", fontsize=9)
-    fig.tight_layout()
+    head = (f"{'PASS' if report.passed else 'FAIL'}: {report.result} vs {report.reference} "
+            f"({len(report.failed)} of {len(report.signals)} signals failed)")
+    fig.suptitle("\n".join(textwrap.wrap(head, 110)), fontsize=9)
     return fig
 
 

@@ -273,6 +273,11 @@ def overview(d: np.ndarray, out: Path, title: str = "") -> Path:
 
 
 def frontal(d: np.ndarray, out: Path, title: str = "") -> Path:
+    """frontal_figure as a PNG."""
+    return _save(frontal_figure(d, title), out)
+
+
+def frontal_figure(d: np.ndarray, title: str = ""):
     """Results of the 3D plant: the frontal plane and the feet over time -- lateral ZMP and CoM,
     sole and trunk roll, both pushes, and where the feet are (sliding) with their slip speed."""
     t = d["time"]
@@ -309,7 +314,7 @@ def frontal(d: np.ndarray, out: Path, title: str = "") -> Path:
     for x in ax:
         x.grid(alpha=0.3)
     fig.tight_layout()
-    return _save(fig, out)
+    return fig
 
 
 # ----------------------------------------------------------------------------------------------

@@ -359,3 +359,30 @@ def format_text(info: dict[str, Any]) -> str:
                                                 for c, k in hidden.items())
                   + " (choose with --causality)"]
     return "\n".join(lines)
+
+
+def signal_units(fmu_dir: str | os.PathLike | None = None) -> dict[str, str]:
+    """The unit of every Real variable of the package's FMUs, by name as a result's column is named
+    (a controller output also as ``controller.<name>``): what a figure labels its axes with when it
+    has only a CSV. Best effort: {} for FMUs that are not found."""
+    from .paths import FMUS, MissingFileError
+    key = str(fmu_dir) if fmu_dir else ""
+    if key in _UNITS:
+        return _UNITS[key]
+    units: dict[str, str] = {}
+    for f in FMUS:
+        try:
+            md, _ = _read(find_fmu(f, fmu_dir))
+        except (MissingFileError, FMUError):
+            continue
+        for v in md.modelVariables:
+            u = getattr(v, "unit", None) or (getattr(v.declaredType, "unit", None) if v.declaredType else None)
+            if v.type in _REAL and u:
+                units.setdefault(v.name, u)
+                if f.startswith("AnkleHip"):
+                    units.setdefault("controller." + v.name, u)
+    _UNITS[key] = units
+    return units
+
+
+_UNITS: dict[str, dict[str, str]] = {}

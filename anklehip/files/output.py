@@ -77,6 +77,21 @@ def atomic_write_text(path: Path, text: str) -> None:
             f.write(text)
 
 
+def check_output_folder(path: str | os.PathLike, option: str) -> Path:
+    """An output folder that exists or can be created: the nearest existing ancestor is a
+    writable folder; else an InputError naming `option`. Checked before anything runs, so a bad
+    output folder costs no run, and it creates nothing."""
+    p = Path(path)
+    for q in [p, *p.parents]:
+        if q.exists():
+            if not q.is_dir():
+                raise InputError(f"{option} {path}: {q} exists and is not a folder")
+            if not os.access(q, os.W_OK | os.X_OK):
+                raise InputError(f"{option} {path}: cannot write into {q}")
+            break
+    return p
+
+
 def result_paths(out_dir: Path, name: str) -> dict[str, Path]:
     out_dir = Path(out_dir)
     return {"csv": out_dir / f"{name}.csv",

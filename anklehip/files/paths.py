@@ -162,6 +162,16 @@ def find_scenario(name_or_path: str) -> Path:
     return _find_toml(name_or_path, scenarios_dir(), "scenario")
 
 
+def scenarios() -> list[str]:
+    """The names of the scenarios (scenarios_dir()), e.g. for anklehip.run(name)."""
+    return sorted(p.stem for p in scenarios_dir().glob("*.toml"))
+
+
+def fmu_path(model: str, fmu_dir: str | os.PathLike | None = None) -> Path:
+    """The packed FMU of a model, e.g. fmu_path("AnkleHipController") for your own tool."""
+    return find_fmu(model if model.endswith(".fmu") else f"{model}.fmu", fmu_dir)
+
+
 def find_sweep_file(name_or_path: str) -> Path:
     """A sweep file given by name (scenarios/sweeps/<name>.toml) or by path."""
     return _find_toml(name_or_path, scenarios_dir() / "sweeps", "sweep file", "; a scenario needs --forces")

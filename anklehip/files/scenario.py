@@ -77,7 +77,7 @@ class PushSegment:
     rise: float = 0.0
 
 
-@dataclass
+@dataclass(slots=True)
 class PushProfile:
     """Piecewise-linear force f(t) [N] on the robot's back (+ = forward), built from segments.
 
@@ -188,13 +188,21 @@ class PushProfile:
         return float(self.values[i])
 
     def scaled(self, factor: float) -> "PushProfile":
+        """Every force times `factor`."""
         return PushProfile(self.times.copy(), self.values * factor, self.segments)
+
+    def scaled_to(self, peak: float) -> "PushProfile":
+        """The same shape with its peak() equal to `peak` [N] (a negative peak mirrors it)."""
+        base = self.peak()
+        if base == 0:
+            raise ValueError("scaled_to: the profile has no force to scale (peak 0 N)")
+        return self.scaled(peak / base)
 
 
 # ----------------------------------------------------------------------------------------------
 # expectations, reference
 
-@dataclass
+@dataclass(slots=True)
 class Expect:
     must_fall: bool | None = None
     fall_after: float | None = None          # with must_fall: not before this time
@@ -210,7 +218,7 @@ class Expect:
     min_range: dict[str, float] = field(default_factory=dict)  # result column -> least max - min (e.g. a slide)
 
 
-@dataclass
+@dataclass(slots=True)
 class Reference:
     file: Path
     columns: list[str] | None = None
@@ -224,7 +232,7 @@ class Reference:
     signals: dict[str, dict[str, float]] = field(default_factory=dict)   # per-signal overrides
 
 
-@dataclass
+@dataclass(slots=True)
 class Scenario:
     name: str
     path: Path | None
@@ -515,7 +523,12 @@ def parse_scenario(data: dict, where: str = "<scenario>", path: Path | None = No
 
 
 def load_scenario(path: str | Path) -> Scenario:
+    """A scenario from its TOML file, or by name (a file of the scenarios folder: a checkout's
+    scenarios/ or the package's); a ScenarioError naming the file, key and problem."""
     path = Path(path)
+    if path.suffix != ".toml" and path.parent == Path(".") and not path.is_file():
+        from .paths import find_scenario
+        path = find_scenario(str(path))
     where = _display(path)
     return parse_scenario(read_toml(path, where, ScenarioError), where, path)
 
@@ -527,8 +540,9 @@ def _display(path: Path) -> str:
         return str(path)
 
 
-def parse_fault_options(items: list[str], base: Faults | None = None, where: str = "--fault") -> Faults:
-    """``--fault zmp_noise=0.002 --fault drop_mode=repeat`` on top of `base` (a scenario's faults)."""
+def fault_options(items: list[str], where: str = "--fault") -> dict[str, Any]:
+    """``["zmp_noise=0.002", "drop_mode=repeat"]`` -> {"zmp_noise": 0.002, "drop_mode": "repeat"}
+    (numbers where they are numbers; stuck_at a list)."""
     d: dict[str, Any] = {}
     for it in items:
         name, eq, val = it.partition("=")
@@ -541,7 +555,12 @@ def parse_fault_options(items: list[str], base: Faults | None = None, where: str
             value = _int_or_float(val)
             value = val if value is None else value
         d[name.strip()] = value
-    return faults_from(d, base, where)
+    return d
+
+
+def parse_fault_options(items: list[str], base: Faults | None = None, where: str = "--fault") -> Faults:
+    """``--fault zmp_noise=0.002 --fault drop_mode=repeat`` on top of `base` (a scenario's faults)."""
+    return faults_from(fault_options(items, where), base, where)
 
 
 def faults_from(d: dict[str, Any], base: Faults | None = None, where: str = "fault options") -> Faults:

@@ -3,6 +3,7 @@ slaves, apply parameter overrides, and fast (allocation-free) ctypes access for 
 from __future__ import annotations
 
 import atexit
+import collections
 import ctypes
 import math
 import os
@@ -159,7 +160,8 @@ class FMUInfo:
                 lo = max(lo, INT32_MIN) if lo is not None else INT32_MIN
                 hi = min(hi, INT32_MAX) if hi is not None else INT32_MAX
             if (lo is not None and val < lo) or (hi is not None and val > hi):
-                rng = f"[{'-inf' if lo is None else f'{lo:g}'}, {'inf' if hi is None else f'{hi:g}'}]"
+                unit = f" {v.unit}" if v.unit else ""
+                rng = f"[{'-inf' if lo is None else f'{lo:g}'}, {'inf' if hi is None else f'{hi:g}'}]{unit}"
                 raise FMUError(f"{self.name}: parameter {k!r} = {val!r} is outside its range {rng}{src}")
 
 
@@ -187,24 +189,40 @@ class Slave:
 
     ``get_real(vr_ptr, n, dst_addr)`` etc. take plain integer addresses (of ctypes arrays or numpy
     buffers), so that an inner loop can read outputs straight into preallocated result arrays.
+
+    The FMU's log messages go to `logger` (FMI's signature: env, instance, status, category,
+    message) when given, else to stdout as FMPy prints them (``[WARNING] ...``). Those of the set-up
+    (instantiation, parameters, initialization) are held back until it succeeds: when it fails, the
+    FMUError names the FMU and carries its own reason instead.
     """
 
     def __init__(self, info: FMUInfo, instance_name: str | None = None, logging: bool = False,
                  logger=None, log_categories: list[str] | None = None):
+        from fmpy import calloc, free
+        from fmpy.fmi2 import (fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE,
+                               fmi2CallbackFunctions, fmi2CallbackLoggerTYPE)
         self.info = info
-        self.fmu = FMU2Slave(guid=info.md.guid, unzipDirectory=info.unzipdir,
-                             modelIdentifier=info.model_identifier,
-                             instanceName=instance_name or info.model_identifier)
-        callbacks = None
-        if logger is not None:
-            from fmpy.fmi2 import fmi2CallbackFunctions, fmi2CallbackLoggerTYPE, \
-                fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE
-            from fmpy import calloc, free
-            callbacks = fmi2CallbackFunctions()
-            callbacks.logger = fmi2CallbackLoggerTYPE(logger)
-            callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
-            callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
-        self.fmu.instantiate(loggingOn=logging, callbacks=callbacks)
+        self._freed = True
+        self._logger = logger
+        self._held: list[tuple[int, str]] | None = []     # the set-up's messages, until it succeeds
+        # the latest warnings and errors (status, category, message), for the reason of a failure
+        self.messages: collections.deque[tuple[int, str, str]] = collections.deque(maxlen=20)
+        self._callbacks = fmi2CallbackFunctions()
+        self._callbacks.logger = fmi2CallbackLoggerTYPE(self._log)
+        self._callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
+        self._callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
+        try:
+            self.fmu = FMU2Slave(guid=info.md.guid, unzipDirectory=info.unzipdir,
+                                 modelIdentifier=info.model_identifier,
+                                 instanceName=instance_name or info.model_identifier)
+        except Exception as e:     # no binary for this platform, a corrupt or unloadable library
+            raise FMUError(f"{info.path}: its binary cannot be loaded: {_reason(e)}") from None
+        try:
+            self.fmu.instantiate(loggingOn=logging, callbacks=self._callbacks)
+        except Exception as e:
+            self.fmu.freeLibrary()
+            raise FMUError(f"{info.path}: fmi2Instantiate failed{self._why(e)}") from None
+        self._freed = False
         if log_categories:     # only these categories (e.g. logEvents, logStatusWarning), not logCalls
             self.fmu.setDebugLogging(True, list(log_categories))
         self.c = self.fmu.component
@@ -215,7 +233,36 @@ class Slave:
         self.set_integer = _proto(("fmi2SetInteger", dll))
         self.get_boolean = _proto(("fmi2GetBoolean", dll))
         self.do_step = _proto_dostep(("fmi2DoStep", dll))
-        self._freed = False
+
+    def _log(self, env, instance, status, category, message) -> None:
+        """The FMI logger callback: never raises (it runs inside the FMU's call)."""
+        try:
+            if status >= WARNING:
+                text = message.decode("utf-8", "replace").replace("%%", "%")
+                self.messages.append((status, category.decode("utf-8", "replace") if category else "", text))
+            if self._logger is not None:
+                self._logger(env, instance, status, category, message)
+            elif self._held is not None:
+                self._held.append((status, message.decode("utf-8", "replace").replace("%%", "%")))
+            else:
+                print(f"[{STATUS_NAMES[status].upper() if 0 <= status < 6 else status}] "
+                      f"{message.decode('utf-8', 'replace').replace('%%', '%')}")
+        except Exception:
+            pass
+
+    def _why(self, e: Exception | None = None) -> str:
+        """': <the FMU's error messages>' (else the exception's text) for an FMUError."""
+        # the FMU's own reasons; not the glue's follow-up that points at them ("see the messages above")
+        msgs = [(s, m) for s, _, m in self.messages if "see the messages above" not in m]
+        errors = [m for s, m in msgs if s >= ERROR] or [m for _, m in msgs]
+        if errors:
+            return ": " + "; ".join(dict.fromkeys(errors))
+        return f" ({_reason(e)})" if e is not None else ""
+
+    def _release_held(self) -> None:
+        held, self._held = self._held or [], None
+        for status, text in held:
+            print(f"[{STATUS_NAMES[status].upper() if 0 <= status < 6 else status}] {text}")
 
     def set_values(self, values: dict[str, Any]) -> None:
         for name, val in values.items():
@@ -230,7 +277,7 @@ class Slave:
                 else:
                     self.fmu.setString([v.vr], [str(val)])
             except Exception as e:    # FMPy's FMICallException: the FMU refused the value (it logs why)
-                raise FMUError(f"{self.info.name} refused {name} = {val!r}: {e}") from None
+                raise FMUError(f"{self.info.name} refused {name} = {val!r}{self._why(e)}") from None
 
     def get_values(self, names: list[str]) -> dict[str, Any]:
         out = {}
@@ -247,11 +294,28 @@ class Slave:
     def initialize(self, start_time: float, stop_time: float, parameters: dict[str, Any],
                    tolerance: float | None = None) -> None:
         """setupExperiment, parameters (before initialization, as FMI 2.0 allows for
-        variables with initial exact/approx), enter/exit initialization mode."""
-        self.fmu.setupExperiment(tolerance=tolerance, startTime=start_time, stopTime=stop_time)
-        self.set_values(parameters)
-        self.fmu.enterInitializationMode()
-        self.fmu.exitInitializationMode()
+        variables with initial exact/approx), enter/exit initialization mode. An FMUError naming
+        the FMU and its own reason (its log) when it refuses a value or the initialization, e.g.
+        parameters that are each in range but inconsistent together."""
+        for call, args in (("fmi2SetupExperiment", dict(tolerance=tolerance, startTime=start_time, stopTime=stop_time)),
+                           ("parameters", None), ("fmi2EnterInitializationMode", None),
+                           ("fmi2ExitInitializationMode", None)):
+            try:
+                if call == "parameters":
+                    self.set_values(parameters)
+                elif call == "fmi2SetupExperiment":
+                    self.fmu.setupExperiment(**args)
+                elif call == "fmi2EnterInitializationMode":
+                    self.fmu.enterInitializationMode()
+                else:
+                    self.fmu.exitInitializationMode()
+            except FMUError:
+                raise
+            except Exception as e:
+                what = "refused its parameters at initialization" if call == "fmi2ExitInitializationMode" \
+                    else f"{call} failed"
+                raise FMUError(f"{self.info.name} {what}{self._why(e)}") from None
+        self._release_held()
 
     def terminated_status(self) -> tuple[bool, float | None]:
         """After a Discard: (terminated?, last successful time)."""
@@ -279,6 +343,10 @@ class Slave:
             self.fmu.freeInstance()
         except Exception:
             pass
+
+
+def _reason(e: Exception) -> str:
+    return f"{type(e).__name__}: {e}" if str(e) else type(e).__name__
 
 
 def vr_array(vrs: list[int]) -> ctypes.Array:

@@ -241,6 +241,7 @@ class StepTestResult:
     report: CompareReport | None
     rt: RTStats | None = None
     runner_error: str | None = None     # why the native runner failed (its exit status)
+    plot: Path | None = None            # failed_signals.png, when asked for and a signal failed
 
     @property
     def passed(self) -> bool:
@@ -598,3 +599,61 @@ def rt_histogram_figure(rt: RTStats, title: str = ""):
             else "not paced (fast)")
     fig.suptitle(f"{title}: {rt.runner} runner, {len(rt.exec_us)} steps, {mode}", fontsize=10)
     return fig
+
+
+# ----------------------------------------------------------------------------------------------
+# the API: anklehip.steptest(...)
+
+def steptest(case: str | Path, *, fmu: str | Path | None = None, out: str | Path | None = None,
+             realtime: bool = False, native: bool = False, native_args: list[str] | None = None,
+             spin_us: float = 0.0, abs_tol: float | None = None, rel_tol: float | None = None,
+             dx: int | None = None, dy: float | None = None, compare: bool = True, plot: bool = False,
+             fmu_dir: str | Path | None = None) -> StepTestResult:
+    """Step the controller FMU on a recorded case and compare its outputs with the case's
+    reference (HIL style; docs/step-tests.md); `anklehip steptest` for one case.
+
+    case        a case folder (<Model>_in.csv, _ref.csv, _ref.opt, steptest.toml), or the name of a
+                shipped case (anklehip.steptest_cases())
+    fmu         the controller FMU (default: AnkleHipController.fmu where the package finds FMUs)
+    out         a folder for <Model>_out.csv, realtime.json (paced or native runs) and, with `plot`,
+                failed_signals.png (a failing comparison's signals); None: nothing written
+    realtime    pace the steps in wall-clock time (absolute deadlines); `spin_us`: busy-wait the
+                last microseconds before each (Python runner)
+    native      the native runner anklehip_rt_step (a checkout's build) instead of Python
+    abs_tol ... the comparison's tolerances (default: the case's steptest.toml [compare])
+
+    Raises an InputError for a malformed case or a missing file.
+    """
+    import json
+
+    from ..files.paths import CONTROLLER_FMU, find_fmu, find_rt_runner, find_steptest_case
+    from ..files.output import atomic_write_text, check_output_folder
+    from ..errors import InputError
+    case = find_steptest_case(case)
+    fmu = Path(fmu) if fmu else find_fmu(CONTROLLER_FMU, fmu_dir)
+    if plot and out is None:
+        raise InputError("plot: the plot is a file, give out=<folder>")
+    if out is not None:
+        out = check_output_folder(out, "out")
+    tol = dict(abs_tol=abs_tol, rel_tol=rel_tol, dx=dx, dy=dy, compare_ref=compare)
+    if native:
+        exe = find_rt_runner()
+        if exe is None:
+            raise InputError("the native real-time runner anklehip_rt_step is not built (fmu/rt_runner in a "
+                             "checkout: `bash scripts/setup.sh`), or set ANKLEHIP_RT_STEP")
+        r = run_native(exe, fmu, case, out, native_args, realtime=realtime, **tol)
+    else:
+        r = run_case(case, fmu, out, realtime=realtime, spin_us=spin_us, **tol)
+    if out is not None and r.rt is not None:
+        atomic_write_text(Path(out) / "realtime.json", json.dumps(r.rt.as_dict(), indent=2) + "\n")
+    if plot and r.report is not None and not r.report.passed:
+        from ..analysis.compare import plot_failed
+        r.plot = plot_failed(r.report, Path(out) / "failed_signals.png")
+    return r
+
+
+def steptest_cases() -> list[str]:
+    """The names of the step-test cases that come with the package (or the checkout)."""
+    from ..files.paths import steptests_dir
+    d = steptests_dir()
+    return sorted(p.name for p in d.glob("*") if p.is_dir() and (p / "steptest.toml").is_file())

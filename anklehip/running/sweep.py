@@ -8,7 +8,7 @@ from __future__ import annotations
 import functools
 import os
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -76,7 +76,7 @@ def _one(scenario_path: str, fmu_dir: str | None, peak: float, variant: Variant,
     if base == 0:
         raise ValueError(f"{scenario_path}: the scenario has no push to scale")
     res = simulate(sc, cached_models(fmu_dir, sc.plant_model), controller_overrides=variant.controller,
-                   plant_overrides=variant.plant, push=sc.push.scaled(peak / base), progress=False, engine=engine)
+                   plant_overrides=variant.plant, push=sc.push.scaled(peak / base), progress=False, engine=engine, check_load=False)
     d = res.data
     return {"variant": variant.name, "peak_force": peak, "outcome": res.outcome,
             "fell_at": res.fell_at if res.fell_at is not None else float("nan"),
@@ -164,11 +164,24 @@ def sweep_key(scenario_path: Path, models) -> str:
 
 
 def plot_sweep(rows: list[dict[str, Any]], path: Path, title: str = "") -> Path:
+    """sweep_figure as a PNG."""
+    import matplotlib.pyplot as plt
+    fig = sweep_figure(rows, title)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return path
+
+
+def sweep_figure(rows: list[dict[str, Any]], title: str = ""):
+    """Outcome over peak push force, a row per variant: o stood (green: the ankle strategy alone,
+    blue: the hip strategy too, the highest phase reached written above), x fell; a legend says so."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+    from matplotlib.lines import Line2D
     variants = list(dict.fromkeys(r["variant"] for r in rows))
-    fig, ax = plt.subplots(figsize=(8, 1.2 + 0.7 * len(variants)))
+    fig, ax = plt.subplots(figsize=(8, 2.0 + 0.7 * len(variants)), layout="constrained")
     for i, v in enumerate(variants):
         rr = [r for r in rows if r["variant"] == v]
         for r in rr:
@@ -181,10 +194,237 @@ def plot_sweep(rows: list[dict[str, Any]], path: Path, title: str = "") -> Path:
     ax.set_yticks(range(len(variants)), variants)
     ax.set_ylim(-0.7, len(variants) - 0.3)
     ax.set_xlabel("peak push force [N]")
-    ax.set_title(title or "outcome (o stood, number = highest phase; x fell)", fontsize=9)
+    ax.set_title(title or "outcome vs peak push force", fontsize=9)
     ax.grid(alpha=0.3)
-    fig.tight_layout()
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-    return path
+    handles = [Line2D([], [], ls="", marker="o", color="tab:green", label="stood, ankle strategy only (phase 0)"),
+               Line2D([], [], ls="", marker="o", color="tab:blue", label="stood, hip strategy (n: highest phase)"),
+               Line2D([], [], ls="", marker="x", color="tab:red", label="fell")]
+    ax.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, -0.25 - 0.1 / max(1, len(variants))),
+              ncol=3, fontsize=8, frameon=False)
+    return fig
+
+
+# ----------------------------------------------------------------------------------------------
+# the API: anklehip.sweep(...)
+
+@dataclass
+class SweepResult:
+    """The result of anklehip.sweep: one row per point (variant x push), the files written.
+
+    ``points`` is the table as a NumPy structured array (text columns as str, numbers as float or
+    int; a point that raised has outcome "error" and its message in ``error``), ``rows`` the same
+    as dicts."""
+    name: str
+    rows: list[dict[str, Any]]
+    total: int                          # points asked for
+    resumed: int = 0                    # points taken over from an earlier run's journal (out)
+    interrupted: bool = False
+    wall: float = 0.0
+    files: dict[str, Path] = field(default_factory=dict)
+    sweep_file: Any = None              # the SweepFile of a sweep file, None for a force sweep
+    scenario: Any = None                # the base Scenario
+    plant_parameters: dict[str, Any] = field(default_factory=dict, repr=False)   # for the bounds
+
+    @property
+    def complete(self) -> bool:
+        return not self.interrupted and len(self.rows) == self.total
+
+    @property
+    def errors(self) -> list[dict[str, Any]]:
+        return [r for r in self.rows if r.get("outcome") == "error"]
+
+    @property
+    def points(self) -> np.ndarray:
+        return rows_to_array(self.rows)
+
+    def variants(self) -> list[str]:
+        return list(dict.fromkeys(r["variant"] for r in self.rows if "variant" in r))
+
+    def largest_survived(self, variant: str) -> float | None:
+        """The largest |peak push force| [N] the variant survived (a force sweep), None if none."""
+        ok = [r["peak_force"] for r in self.rows if r.get("variant") == variant
+              and r.get("outcome") not in ("fell", "error")]
+        return max(ok, key=abs) if ok else None
+
+
+def rows_to_array(rows: list[dict[str, Any]]) -> np.ndarray:
+    """Dict rows (the union of their keys, in order of appearance) as a structured array: a column of
+    bools -> bool, of ints -> int64, of numbers -> float64 (missing: NaN), otherwise str."""
+    keys = list(dict.fromkeys(k for r in rows for k in r))
+    cols, dtype = {}, []
+    for k in keys:
+        vals = [r.get(k) for r in rows]
+        present = [v for v in vals if v is not None]
+        if present and all(isinstance(v, bool) for v in present) and len(present) == len(vals):
+            cols[k], dt = vals, np.bool_
+        elif present and all(isinstance(v, int) and not isinstance(v, bool) for v in present) \
+                and len(present) == len(vals):
+            cols[k], dt = vals, np.int64
+        elif all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in present):
+            cols[k], dt = [np.nan if v is None else float(v) for v in vals], np.float64
+        else:
+            cols[k] = ["" if v is None else str(v) for v in vals]
+            dt = f"U{max([1] + [len(s) for s in cols[k]])}"
+        dtype.append((k, dt))
+    out = np.zeros(len(rows), dtype=dtype)
+    for k in keys:
+        out[k] = cols[k]
+    return out
+
+
+def _check_pushes(models, sc, peaks, where: str) -> None:
+    """The largest pushes of the sweep inside the plant's declared push range (before anything runs)."""
+    from .master import PUSH, check_push_range
+    base = sc.push.peak()
+    for f in (min(peaks), max(peaks)):
+        check_push_range(models.plant, sc.push.scaled(f / base), PUSH, f"{where} {f:g} N")
+
+
+def _force_sweep(scenario, forces, variants, fmu_dir, name):
+    from ..files.paths import find_scenario
+    from ..files.scenario import Scenario
+    from .master import Models, check_overrides
+    from .run import scenario_of
+    from ..errors import InputError
+    if isinstance(scenario, Scenario):
+        if scenario.path is None:
+            raise InputError("sweep: a scenario object needs its file (path); give a name or a path")
+        path = Path(scenario.path)
+    else:
+        path = find_scenario(str(scenario))
+    sc = scenario_of(path)
+    forces = parse_grid(forces, name["forces"]) if isinstance(forces, str) else [float(f) for f in forces]
+    if not forces or not all(np.isfinite(forces)):
+        raise InputError(f"{name['forces']}: finite numbers, got {forces!r}")
+    variants = [v if isinstance(v, Variant) else parse_variant(v) for v in (variants or ["default"])]
+    models = Models.load(fmu_dir, plant_model=sc.plant_model)
+    for v in variants:    # a bad variant is an error here, not a traceback in every worker
+        models.controller.configuration(v.config or sc.controller_config, f"{name['variants']} {v.name}")
+        check_overrides(models, v.controller, v.plant, f"{name['variants']} {v.name}")
+    if sc.push.peak() == 0:
+        raise InputError(f"{path}: the scenario has no push to scale")
+    _check_pushes(models, sc, forces, f"{name['forces']}: a peak push of")
+    return path, sc, forces, variants, models
+
+
+def _sweep_file(name_or_path, fmu_dir):
+    from ..files.paths import find_sweep_file
+    from ..files.scenario import faults_from, load_scenario
+    from .master import PUSH, Models, check_overrides, check_push_range
+    from .sweepfile import load_sweep_file, point_setup
+    path = find_sweep_file(str(name_or_path))
+    sf = load_sweep_file(path)
+    sc = load_scenario(sf.scenario)
+    models = Models.load(fmu_dir, plant_model=sc.plant_model)
+    where = str(path)
+    for k, vals in list(sf.axes.items()) + [(k, list(r)) for k, r in sf.ranges.items()]:
+        group, _, name = k.partition(".")
+        for x in (min(vals), max(vals)):    # names and ranges checked here, not in every worker
+            if group in ("controller", "plant"):
+                check_overrides(models, {name: x} if group == "controller" else {},
+                                {name: x} if group == "plant" else {}, f"{where}: {k}")
+            elif group == "faults":
+                faults_from({name: x}, sc.faults, f"{where}: {k}")
+            elif name == "height":
+                check_overrides(models, {}, {"h_push": x}, f"{where}: {k}")
+    # the strongest push of the sweep within the plant's push range
+    forces = sf.axes.get("push.force") or list(sf.ranges.get("push.force", ())) or [sf.push["force"]]
+    for f in (min(forces), max(forces)):
+        for sign in (1, -1):
+            push, *_ = point_setup(sf, {"push.force": f, "push.direction": sign}, sc)
+            check_push_range(models.plant, push, PUSH, f"{where}: push.force {f:g} N")
+    for v in sf.variants:
+        models.controller.configuration(v.config or sc.controller_config, f"{where}: variant {v.name}")
+        check_overrides(models, v.controller, v.plant, f"{where}: variant {v.name}")
+    return path, sf, sc, models
+
+
+def sweep(scenario, *, forces=None, variants=None, workers: int = 2, engine: str | None = None,
+          scheduler: str | None = None, out=None, restart: bool = False, figures: bool = True,
+          fmu_dir=None, origins: dict[str, str] | None = None) -> SweepResult:
+    """Many closed-loop runs on Dask, one per point; `anklehip sweep` as a function.
+
+    With `forces`, `scenario` is a scenario (name, path or Scenario with a file) whose push is
+    scaled to each peak force [N] (a list, or "start:stop:step" / "a,b,c"), for each of
+    `variants` (Variant objects or specs "NAME:config=C,controller.P=V,plant.Q=W"; default one,
+    the scenario as it is). Without `forces`, `scenario` is a sweep file (a name in
+    scenarios/sweeps/ or a path), which says what is swept (docs/scenarios.md, "Sweep files").
+
+    workers    processes of a local Dask cluster (1: in this process), unless `scheduler`
+               (an address, else $DASK_SCHEDULER_ADDRESS) names a running one
+    engine     "native" (default when built) or "fmpy"
+    out        a folder: the journal (a rerun resumes, `restart` discards it), the table as CSV and
+               Parquet, and with `figures` the sweep's figures; None: nothing written
+
+    Raises an InputError for a wrong input before anything runs; failed points are rows with
+    outcome "error"; Ctrl-C returns the points done with interrupted=True. `origins` names the
+    arguments as the caller calls them in messages (the CLI's {"variants": "--variant"}).
+    """
+    import time
+    from ..files.output import check_output_folder, output_lock
+    from ..errors import InputError
+    from .native import default_engine
+    from .points import run_points
+    engine = engine or default_engine()
+    name = {"variants": "variants", "forces": "forces", "out": "out", **(origins or {})}
+    if forces is None:
+        if variants:
+            raise InputError(f"{name['variants']}: a sweep file names its own variants ([[variant]]); they go with "
+                             f"{name['forces']}")
+        path, sf, sc, models = _sweep_file(scenario, fmu_dir)
+        from .sweepfile import sweepfile_point
+        specs, fn, title = sf.specs(str(fmu_dir) if fmu_dir else None, engine), sweepfile_point, sf.name
+        key = sweep_key(path, models) + sweep_key(sf.scenario, models)
+        stem, journal_name, what = "points", "points.jsonl", f"sweep file {path.name}"
+    else:
+        path, sc, forces, variants, models = _force_sweep(scenario, forces, variants, fmu_dir, name)
+        sf = None
+        fd = str(fmu_dir) if fmu_dir else None
+        specs = [{"id": f"{v.name}@{float(f)!r}#{_variant_hash(v)}", "scenario": str(path), "fmu_dir": fd,
+                  "peak_force": float(f), "engine": engine,
+                  "variant": {"name": v.name, "controller": v.controller, "plant": v.plant, "config": v.config}}
+                 for v in variants for f in forces]
+        fn, title, key = sweep_point, sc.name, sweep_key(path, models)
+        stem, journal_name, what = "sweep", "sweep.points.jsonl", f"sweep of {path.name}"
+    result = SweepResult(name=title, rows=[], total=len(specs), sweep_file=sf, scenario=sc,
+                         plant_parameters=_plant_parameters(fmu_dir, sc, sf))
+    if out is None:
+        t0 = time.perf_counter()
+        o = run_points(fn, specs, workers=workers, scheduler=scheduler, journal=None, key=key, what=what,
+                       label=f"sweep {title}")
+        result.rows, result.interrupted, result.wall = o.rows, o.interrupted, time.perf_counter() - t0
+        return result
+    out = check_output_folder(out, name["out"])
+    with output_lock(out):
+        o = run_points(fn, specs, workers=workers, scheduler=scheduler, journal=out / journal_name, key=key,
+                       what=what, label=f"sweep {title}", restart=restart)
+        result.rows, result.resumed, result.interrupted, result.wall = o.rows, o.resumed, o.interrupted, o.wall
+        result.files["journal"] = out / journal_name
+        if not o.rows:
+            return result
+        csv_path, pq_path = write_points_table(o.rows, out, stem, complete=o.complete)
+        result.files.update(table=csv_path, parquet=pq_path)
+        if figures and sf is None:
+            ok = [r for r in o.rows if r.get("outcome") != "error"]
+            if ok:
+                result.files["figure"] = plot_sweep(ok, out / "sweep.png", title=f"{sc.name}: outcome vs peak push force")
+        elif figures and o.complete:
+            from ..analysis.capability import plot_capability, plot_points
+            for i, f in enumerate(plot_points(sf, o.rows, out)):
+                result.files[f"figure{i + 1}"] = f
+            cap = plot_capability(sf, o.rows, out, result.plant_parameters)
+            if cap:
+                result.files["capability"] = cap
+    return result
+
+
+def _plant_parameters(fmu_dir, sc, sf) -> dict:
+    """The sagittal plant's parameters a sweep's bounds use: the FMU's defaults with the scenario's
+    and the first variant's plant overrides ({} without the sagittal plant FMU)."""
+    from .fmu import FMUError, FMUInfo
+    from ..files.paths import PLANT_FMU, MissingFileError, find_fmu
+    try:
+        params = FMUInfo.load(find_fmu(PLANT_FMU, fmu_dir)).start_values()
+    except (MissingFileError, FMUError):
+        return {}
+    return {**params, **sc.plant, **(sf.variants[0].plant if sf is not None else {})}

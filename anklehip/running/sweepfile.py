@@ -226,7 +226,7 @@ def sweepfile_point(spec: dict) -> dict[str, Any]:
     stop = sf.stop_time or sc.stop_time
     res = simulate(sc, cached_models(spec["fmu_dir"], sc.plant_model), controller_overrides={**var["controller"], **c},
                    plant_overrides={**var["plant"], **p}, push=push, faults=faults, stop_time=stop,
-                   progress=False, engine=engine)
+                   progress=False, engine=engine, check_load=False)
     d = res.data
     ps = summarize_pushes(res, push, sc.expect.erect_tol)
     s = ps[0] if ps else None
