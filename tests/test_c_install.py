@@ -25,11 +25,21 @@ def _run(cmd, **kw):
     return r
 
 
-@pytest.fixture(scope="module")
-def prefix(build_dir, tmp_path_factory):
-    """The build's `cmake --install` into a fresh prefix (nothing but the C library)."""
+@pytest.fixture(scope="module", params=["controller_c alone", "the whole build"])
+def prefix(request, build_dir, tmp_path_factory):
+    """`cmake --install` into a fresh prefix (nothing but the C library): of controller_c configured
+    on its own with a C compiler only (the one-line build of docs/controller.md), and of the whole
+    build (scripts/setup.sh's)."""
+    cmake = shutil.which("cmake")
     p = tmp_path_factory.mktemp("ahc") / "prefix"
-    _run([shutil.which("cmake"), "--install", build_dir, "--prefix", p])
+    if request.param == "controller_c alone":
+        b = p.parent / "build-ahc"
+        _run([cmake, "-S", REPO_ROOT / "controller_c", "-B", b], env=_clean_env())
+        _run([cmake, "--build", b, "-j2"], env=_clean_env())
+        _run(["ctest", "--test-dir", b, "--output-on-failure"], env=_clean_env())
+        _run([cmake, "--install", b, "--prefix", p])
+    else:
+        _run([cmake, "--install", build_dir, "--prefix", p])
     files = {q.relative_to(p).as_posix() for q in p.rglob("*") if q.is_file()}
     files = {f.replace("lib64/", "lib/") for f in files if not f.startswith("lib/cmake/ahc/ahcTargets-")}
     assert files == INSTALLED, f"installed: {sorted(files)}"
@@ -82,4 +92,13 @@ def test_consumer_with_pkg_config(prefix, tmp_path):
     assert "-lahc" in flags and "-lm" in flags
     exe = tmp_path / "ahc_consumer"
     _run([shutil.which("cc"), "-std=c99", CONSUMER / "main.c", "-o", exe, *flags], env=env)
+    _check_consumer(exe)
+
+
+def test_consumer_from_the_sources(tmp_path):
+    """The line without an install: the sources and both include folders, and -lm."""
+    exe = tmp_path / "ahc_consumer"
+    srcs = sorted((REPO_ROOT / "controller_c" / "src").glob("*.c"))
+    _run([shutil.which("cc"), "-std=c99", "-I", REPO_ROOT / "controller_c" / "include", "-I",
+          REPO_ROOT / "hoap2" / "include", CONSUMER / "main.c", *srcs, "-lm", "-o", exe], env=_clean_env())
     _check_consumer(exe)

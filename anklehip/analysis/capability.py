@@ -30,8 +30,6 @@ def swept_keys(sf) -> list[str]:
 
 
 def plot_points(sf, rows: list[dict[str, Any]], out: Path) -> list[Path]:
-    import matplotlib
-    matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     keys = swept_keys(sf)
     variants = [v.name for v in sf.variants]
@@ -184,8 +182,6 @@ def capability_figure(sf, rows: list[dict[str, Any]], plant_params: dict):
         robot = robot_from_plant_params(plant_params)
     except KeyError:
         return None
-    import matplotlib
-    matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     direction = 1 if sf.push["direction"] >= 0 else -1
     side = "back" if direction > 0 else "chest"

@@ -9,11 +9,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-import matplotlib
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
+import matplotlib.pyplot as plt
+import numpy as np
 
 PHASE_COLORS = {1: "#f6d55c", 2: "#ed553b", 3: "#3caea3"}
 PHASE_LABELS = {0: "0 ankle", 1: "1 ankle→hip", 2: "2 hip", 3: "3 hip→ankle"}

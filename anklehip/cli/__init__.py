@@ -29,6 +29,8 @@ def _err(msg: str) -> int:
 
 
 def main(argv=None) -> int:
+    import matplotlib
+    matplotlib.use("Agg")          # the command line only writes figures (the API leaves the backend alone)
     from . import commands
     p = build_parser()
     a = p.parse_args(argv)

@@ -123,16 +123,20 @@ class _Journal:
 # progress
 
 class _Progress:
-    """A bar on a terminal; otherwise a line on stderr per tenth of the points or per 30 s."""
+    """A bar on a terminal; otherwise a line on stderr per tenth of the points or per 30 s; nothing
+    with show=False."""
 
-    def __init__(self, total: int, done: int, label: str, stream=None):
+    def __init__(self, total: int, done: int, label: str, stream=None, show: bool = True):
         self.total, self.done, self.label = total, done, label
         self.stream = stream or sys.stderr
+        self.show = show
         self.t0 = self.t_last = time.perf_counter()
         self.start_done = done
         self.bar = None
         self.next_line = done + max(1, total // 10)
-        if self.stream.isatty():
+        if not show:
+            pass
+        elif self.stream.isatty():
             from tqdm import tqdm
             self.bar = tqdm(total=total, initial=done, unit="pt", desc=label, leave=False, file=self.stream)
         elif total:
@@ -143,6 +147,8 @@ class _Progress:
         self.done += 1
         if self.bar is not None:
             self.bar.update(1)
+            return
+        if not self.show:
             return
         now = time.perf_counter()
         if self.done >= self.next_line or now - self.t_last >= 30.0 or self.done == self.total:
@@ -215,12 +221,13 @@ def dask_client(workers: int, scheduler: str | None):
 
 def run_points(fn: Callable[[dict], dict], specs: list[dict], *, workers: int = 2, scheduler: str | None = None,
                journal: Path | None = None, key: str = "", what: str = "", label: str = "points",
-               restart: bool = False) -> Outcome:
+               restart: bool = False, progress: bool = True) -> Outcome:
     """Run fn(spec) for every spec (each with a unique str "id") and collect the rows.
 
     workers <= 1 and no scheduler: in this process, one after the other (no Dask cluster).
     `journal`: where finished rows are appended (and read back on a rerun with the same `key`;
-    `restart` discards it first). Ctrl-C returns what is done with interrupted=True."""
+    `restart` discards it first). Ctrl-C returns what is done with interrupted=True. `progress`:
+    the bar or lines on stderr (False: none)."""
     ids = [s["id"] for s in specs]
     if len(set(ids)) != len(ids):
         raise ValueError("run_points: point ids are not unique")
@@ -231,7 +238,7 @@ def run_points(fn: Callable[[dict], dict], specs: list[dict], *, workers: int = 
     todo = [s for s in specs if s["id"] not in done]
     out = Outcome(rows=[], total=len(specs), resumed=len(done))
     j = _Journal(journal, key, what)
-    prog = _Progress(len(specs), len(done), label)
+    prog = _Progress(len(specs), len(done), label, show=progress)
     t0 = time.perf_counter()
     try:
         with _quiet_dask():

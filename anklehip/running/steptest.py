@@ -546,8 +546,6 @@ def rt_histogram_figure(rt: RTStats, title: str = ""):
     """Histograms of the execution time and the wake-up lateness on log-log axes in µs (20 bins a
     decade), the period as a red line, median/p99/max as labelled lines (one row of labels each,
     above the bars), the legend below the panels."""
-    import matplotlib
-    matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     from matplotlib.ticker import FuncFormatter
 

@@ -176,8 +176,6 @@ def plot_sweep(rows: list[dict[str, Any]], path: Path, title: str = "") -> Path:
 def sweep_figure(rows: list[dict[str, Any]], title: str = ""):
     """Outcome over peak push force, a row per variant: o stood (green: the ankle strategy alone,
     blue: the hip strategy too, the highest phase reached written above), x fell; a legend says so."""
-    import matplotlib
-    matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     from matplotlib.lines import Line2D
     variants = list(dict.fromkeys(r["variant"] for r in rows))
@@ -341,7 +339,7 @@ def _sweep_file(name_or_path, fmu_dir):
 
 def sweep(scenario, *, forces=None, variants=None, workers: int = 2, engine: str | None = None,
           scheduler: str | None = None, out=None, restart: bool = False, figures: bool = True,
-          fmu_dir=None, origins: dict[str, str] | None = None) -> SweepResult:
+          fmu_dir=None, progress: bool = True, origins: dict[str, str] | None = None) -> SweepResult:
     """Many closed-loop runs on Dask, one per point; `anklehip sweep` as a function.
 
     With `forces`, `scenario` is a scenario (name, path or Scenario with a file) whose push is
@@ -355,6 +353,7 @@ def sweep(scenario, *, forces=None, variants=None, workers: int = 2, engine: str
     engine     "native" (default when built) or "fmpy"
     out        a folder: the journal (a rerun resumes, `restart` discards it), the table as CSV and
                Parquet, and with `figures` the sweep's figures; None: nothing written
+    progress   a bar on a terminal, else a line per tenth of the points, on stderr (False: none)
 
     Raises an InputError for a wrong input before anything runs; failed points are rows with
     outcome "error"; Ctrl-C returns the points done with interrupted=True. `origins` names the
@@ -391,13 +390,13 @@ def sweep(scenario, *, forces=None, variants=None, workers: int = 2, engine: str
     if out is None:
         t0 = time.perf_counter()
         o = run_points(fn, specs, workers=workers, scheduler=scheduler, journal=None, key=key, what=what,
-                       label=f"sweep {title}")
+                       label=f"sweep {title}", progress=progress)
         result.rows, result.interrupted, result.wall = o.rows, o.interrupted, time.perf_counter() - t0
         return result
     out = check_output_folder(out, name["out"])
     with output_lock(out):
         o = run_points(fn, specs, workers=workers, scheduler=scheduler, journal=out / journal_name, key=key,
-                       what=what, label=f"sweep {title}", restart=restart)
+                       what=what, label=f"sweep {title}", restart=restart, progress=progress)
         result.rows, result.resumed, result.interrupted, result.wall = o.rows, o.resumed, o.interrupted, o.wall
         result.files["journal"] = out / journal_name
         if not o.rows:
