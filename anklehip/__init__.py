@@ -26,6 +26,8 @@ __version__ = "0.1.0"
 _API = {
     "run": ("running.run", "run"),
     "ScenarioResult": ("running.run", "ScenarioResult"),
+    "PushSummary": ("analysis.summary", "PushSummary"),
+    "Check": ("analysis.summary", "Check"),
     "sweep": ("running.sweep", "sweep"),
     "SweepResult": ("running.sweep", "SweepResult"),
     "Variant": ("running.sweep", "Variant"),
@@ -50,6 +52,7 @@ __all__ = ["__version__", *_API]
 if TYPE_CHECKING:   # what a type checker and an IDE see
     from .analysis import figures
     from .analysis.compare import CompareReport, compare
+    from .analysis.summary import Check, PushSummary
     from .errors import InputError
     from .files.info import interface as fmu_info
     from .files.paths import fmu_path, locations, scenarios

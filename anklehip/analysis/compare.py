@@ -70,6 +70,9 @@ class SignalResult:
 
 @dataclass
 class CompareReport:
+    """The result of anklehip.compare: a SignalResult per compared signal (verdict, largest
+    deviation, failing samples, the band and tube used), notes, the signals' units, and both
+    tables (for the figure). ``passed`` when every signal passed."""
     result: str
     reference: str
     signals: list[SignalResult]

@@ -18,6 +18,9 @@ PHASE_NAMES = {0: "ankle", 1: "ankle->hip", 2: "hip", 3: "hip->ankle"}
 
 @dataclass
 class PushSummary:
+    """One push of a run: when, how strong (peak force [N], impulse [N s]), the peak ZMP [m] and
+    when, the controller phases it caused, the peak joint angles [rad], and when the robot was
+    back in phase 0 and erect (None: it was not, before the next push or the end)."""
     index: int
     start: float
     end: float
@@ -109,6 +112,7 @@ def count_cycles(phase: np.ndarray) -> int:
 
 @dataclass
 class Check:
+    """One expectation of the scenario's [expect] table and whether the run met it."""
     name: str
     ok: bool
     detail: str

@@ -234,6 +234,10 @@ class Reference:
 
 @dataclass(slots=True)
 class Scenario:
+    """A scenario (docs/scenarios.md): how long, the pushes, the plant model, the controller
+    configuration, parameter overrides ([controller], [plant]), faults, what is expected and the
+    reference. load_scenario reads one from its file; change it in memory and pass it to
+    anklehip.run (which copies it). Its fields are fixed: setting an unknown one is an error."""
     name: str
     path: Path | None
     description: str = ""

@@ -235,6 +235,9 @@ class RTStats:
 
 @dataclass
 class StepTestResult:
+    """The result of anklehip.steptest: the controller's outputs (``data``, a structured array),
+    the comparison with the case's reference (``report``), the timing of a paced or native run
+    (``rt``), the files written. ``passed`` is the verdict of `anklehip steptest`."""
     case: Path
     out_csv: Path | None
     data: np.ndarray | None             # the outputs; None when the native runner failed

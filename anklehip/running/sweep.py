@@ -20,6 +20,8 @@ VARIANTS_HELP = ("NAME or NAME:config=C,controller.P=V,plant.Q=W with C a named 
 
 @dataclass
 class Variant:
+    """A controller variant of a sweep: its name, controller and plant overrides and a named
+    configuration (None: the scenario's). parse_variant reads "NAME:config=C,controller.P=V"."""
     name: str
     controller: dict[str, Any]
     plant: dict[str, Any]
