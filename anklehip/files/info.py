@@ -61,6 +61,7 @@ def resolve_fmu(name_or_path: str, fmu_dir: str | os.PathLike | None = None) -> 
     if p.parent != Path(".") or not name_or_path:
         raise MissingFileError(f"{name_or_path}: no such file")
     filename = name_or_path if name_or_path.endswith(".fmu") else f"{name_or_path}.fmu"
+    fmu_dirs(fmu_dir)      # a --fmu-dir that does not exist is an error of its own
     try:
         return find_fmu(filename, fmu_dir)
     except MissingFileError:

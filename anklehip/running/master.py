@@ -221,6 +221,10 @@ class ClosedLoop:
         N = int(round(T / h))
         t0 = 0.0
         push = push if push is not None else scenario.push
+        # every force inside the plant's declared range, before any array holds one
+        check_push_range(models.plant, push, PUSH, f"{scenario.path or scenario.name}: push")
+        if PUSH_Y in L.push_cols:
+            check_push_range(models.plant, scenario.push_y, PUSH_Y, f"{scenario.path or scenario.name}: push_y")
 
         R = np.zeros((N + 1, max(1, L.n_real)), dtype=np.float64)
         I = np.zeros((N + 1, max(1, L.n_int)), dtype=np.int32)
@@ -248,9 +252,6 @@ class ClosedLoop:
             what = "log categories" if log_categories else "the sensor faults and transition pushes of [faults]"
             raise ScenarioError(f"{scenario.path or scenario.name}: the native engine does not support {what}; "
                                 "run it with the FMPy engine (--engine fmpy)")
-        check_push_range(models.plant, push, PUSH, f"{scenario.path or scenario.name}: push")
-        if PUSH_Y in L.push_cols:
-            check_push_range(models.plant, scenario.push_y, PUSH_Y, f"{scenario.path or scenario.name}: push_y")
         if extra_push is not None:
             check_push_range(models.plant, pulse, PUSH, f"{scenario.path or scenario.name}: faults.transition_push")
         self.scenario, self.models, self.engine, self.faults = scenario, models, engine, faults

@@ -199,8 +199,7 @@ def sweep_figure(rows: list[dict[str, Any]], title: str = ""):
     handles = [Line2D([], [], ls="", marker="o", color="tab:green", label="stood, ankle strategy only (phase 0)"),
                Line2D([], [], ls="", marker="o", color="tab:blue", label="stood, hip strategy (n: highest phase)"),
                Line2D([], [], ls="", marker="x", color="tab:red", label="fell")]
-    ax.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, -0.25 - 0.1 / max(1, len(variants))),
-              ncol=3, fontsize=8, frameon=False)
+    fig.legend(handles=handles, loc="outside lower center", ncol=3, fontsize=8, frameon=False)
     return fig
 
 
