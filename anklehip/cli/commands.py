@@ -282,11 +282,13 @@ def cmd_sweep(a) -> int:
     if a.out:
         check_output_folder(a.out, "--out")
     if a.forces is not None:
+        from ..files.scenario import load_scenario
         from ..files.paths import find_scenario
-        name = Path(find_scenario(a.scenario)).stem
+        name = load_scenario(find_scenario(a.scenario)).name
     else:
         from ..files.paths import find_sweep_file
-        name = Path(find_sweep_file(a.scenario)).stem
+        from ..running.sweepfile import load_sweep_file
+        name = load_sweep_file(find_sweep_file(a.scenario)).name
     out = Path(a.out) if a.out else Path("results") / f"sweep_{name}"
     try:
         forces = parse_grid(a.forces, "--forces") if a.forces is not None else None
