@@ -138,6 +138,10 @@ def test_installed_wheel_runs_the_main_job(bare, venv):
         line = next(x for x in where.splitlines() if x.startswith(name))
         assert str(data) in line, line
 
+    listed = run("anklehip", "list").stdout.splitlines()
+    assert listed[0].startswith("scenario") and any(ln.startswith("paper_five_pushes ") for ln in listed)
+    assert str(data / "scenarios") in listed[-1] and "(package)" in listed[-1], listed[-1]
+
     r = run("anklehip", "run", "paper_five_pushes")
     assert "[FAIL]" not in r.stdout and "0 of 9 signals outside the band" in r.stdout, r.stdout
     s = json.loads((run.work / "results" / "paper_five_pushes" / "paper_five_pushes.summary.json").read_text())
