@@ -2,6 +2,7 @@
 
     bash scripts/setup.sh --win64                       # the native build, FMUs with win64 binaries
     .venv/bin/python -m build --wheel --no-isolation    # -> dist/anklehip-<version>-py3-none-manylinux...whl
+    ANKLEHIP_BUILD_DIR=$PWD/build .venv/bin/python -m build --no-isolation   # the sdist too, and the wheel from it
 
 The wheel holds the package and, as package data (anklehip/data/, found by anklehip.files.paths
 when there is no checkout), what the native build made and the repository's data:
@@ -47,7 +48,8 @@ def build_dir() -> Path:
 def package_data_sources() -> dict[str, Path]:
     """Destination in anklehip/data -> source; a SystemExit naming what is missing and the fix."""
     b = build_dir()
-    hint = "build it first: `bash scripts/setup.sh --win64` (or set ANKLEHIP_BUILD_DIR to your build)"
+    hint = ("build it first: `bash scripts/setup.sh --win64`, then `python -m build --wheel` in the checkout (to build "
+            "from an sdist, set ANKLEHIP_BUILD_DIR to the checkout's build folder)")
     src: dict[str, Path] = {}
     for name in FMUS:
         fmu = b / "fmus" / f"{name}.fmu"
