@@ -88,7 +88,7 @@ def build_parser() -> argparse.ArgumentParser:
                                     "parameters, inputs and outputs with units, start values and ranges")
     s.add_argument("fmu", metavar="FMU",
                    help="a .fmu file or extracted FMU folder, or a model name (e.g. AnkleHipController) looked "
-                        "up in --fmu-dir / $ANKLEHIP_FMU_DIR / <repo>/build/fmus")
+                        "up like every FMU (--fmu-dir, $ANKLEHIP_FMU_DIR, the checkout, the package; `anklehip where`)")
     s.add_argument("--json", action="store_true",
                    help="print the same content as JSON on stdout instead of the tables")
     s.add_argument("--causality", action="append", choices=CAUSALITIES, metavar="CAUSALITY",

@@ -53,7 +53,8 @@ _CAPABILITIES = {
 def resolve_fmu(name_or_path: str, fmu_dir: str | os.PathLike | None = None) -> Path:
     """An FMU given by path (a .fmu file or an extracted FMU folder), or by model name
     (``AnkleHipController`` or ``AnkleHipController.fmu``), looked up like the package's own FMUs
-    (--fmu-dir, else $ANKLEHIP_FMU_DIR, else <repo>/build/fmus). A MissingFileError names what
+    (--fmu-dir, else $ANKLEHIP_FMU_DIR, else the checkout's build/fmus and the package's data;
+    anklehip.files.paths.fmu_dirs). A MissingFileError names what
     was tried and the FMUs that are there."""
     p = Path(name_or_path)
     if p.exists():
