@@ -193,14 +193,16 @@ class PreparedRun:
             compare_reference: bool = True, progress: bool | None = False) -> ScenarioResult:
         from ..files.output import check_output_folder, output_lock
         try:
+            if record_steptest is not None:
+                check_output_folder(record_steptest, "record_steptest")
             if out is None:
                 if figures or animate:
                     raise InputError("figures and animations are files: give out=<folder>")
                 res = self.loop.run(progress)
-                return self._result(res, compare_reference, None)
+                result = self._result(res, compare_reference, None)
+                self._record(result, res, record_steptest)
+                return result
             out = check_output_folder(out, "out")
-            if record_steptest is not None:
-                check_output_folder(record_steptest, "record_steptest")
             with output_lock(out):     # a second run into the same folder fails here, at once
                 return self._write(Path(out), figures, animate, animation, record_steptest, compare_reference,
                                    progress)
@@ -259,15 +261,21 @@ class PreparedRun:
                     result.files[p.stem] = p
             except Exception as e:
                 result.warnings.append(f"figures failed: {type(e).__name__}: {e}")
-        if record_steptest is not None:
-            from .steptest import record_case
-            try:
-                record_case(res, Path(record_steptest), res.controller_overrides, source=sc.name)
-                result.files["steptest_case"] = Path(record_steptest)
-            except Exception as e:
-                result.warnings.append(f"record_steptest {record_steptest}: {type(e).__name__}: {e}")
+        self._record(result, res, record_steptest)
         write_summary_json(paths["summary"], result.summary())
         return result
+
+    def _record(self, result: ScenarioResult, res: RunResult, folder) -> None:
+        """The controller's step-test case of the run into `folder` (a failure is a warning: the
+        run's result is not lost)."""
+        if folder is None:
+            return
+        from .steptest import record_case
+        try:
+            record_case(res, Path(folder), res.controller_overrides, source=self.scenario.name)
+            result.files["steptest_case"] = Path(folder)
+        except Exception as e:
+            result.warnings.append(f"record_steptest {folder}: {type(e).__name__}: {e}")
 
 
 def prepare(scenario: str | os.PathLike | Scenario, *, plant: str | None = None, engine: str = "fmpy",
