@@ -18,10 +18,10 @@ import time
 
 import numpy as np
 
-from anklehip.fmu import Slave, vr_array
-from anklehip.master import Models, _Layout, simulate
-from anklehip.paths import find_scenario
-from anklehip.scenario import load_scenario
+from anklehip.running.fmu import Slave, vr_array
+from anklehip.running.master import Models, _Layout, simulate
+from anklehip.files.paths import find_scenario
+from anklehip.files.scenario import load_scenario
 
 
 def instrumented(models: Models, sc, T: float):

@@ -24,9 +24,9 @@ import numpy as np
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
-from anklehip.master import Models, simulate  # noqa: E402
-from anklehip.paths import find_scenario  # noqa: E402
-from anklehip.scenario import load_scenario  # noqa: E402
+from anklehip.running.master import Models, simulate  # noqa: E402
+from anklehip.files.paths import find_scenario  # noqa: E402
+from anklehip.files.scenario import load_scenario  # noqa: E402
 
 
 def main() -> int:

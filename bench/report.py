@@ -35,10 +35,10 @@ import numpy as np
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
-from anklehip import native  # noqa: E402
-from anklehip.master import Models, simulate  # noqa: E402
-from anklehip.paths import build_dir, find_scenario  # noqa: E402
-from anklehip.scenario import load_scenario  # noqa: E402
+from anklehip.running import native  # noqa: E402
+from anklehip.running.master import Models, simulate  # noqa: E402
+from anklehip.files.paths import build_dir, find_scenario  # noqa: E402
+from anklehip.files.scenario import load_scenario  # noqa: E402
 
 SCENARIO = "paper_five_pushes"
 PLANT_INPUTS = ("theta_ankle_ref", "theta_hip_ref", "push_force")
@@ -124,7 +124,7 @@ def find_fmi_sim(explicit: str | None) -> str | None:
 
 def peers(models, sc, nat_result, tmp: Path, fmi_sim: str | None, repeat: int) -> dict:
     from fmpy import simulate_fmu
-    from anklehip.export import write_container_fmu
+    from anklehip.files.export import write_container_fmu
     d = nat_result.data
     T, h = nat_result.end_time, nat_result.step
     out: dict = {}
@@ -171,10 +171,10 @@ def peers(models, sc, nat_result, tmp: Path, fmi_sim: str | None, repeat: int) -
 SCALING_SCRIPT = r"""
 import json, sys, time
 sys.path.insert(0, sys.argv[1])
-from anklehip.master import Models, simulate
-from anklehip.paths import find_scenario
-from anklehip.results import atomic_write_csv
-from anklehip.scenario import load_scenario
+from anklehip.running.master import Models, simulate
+from anklehip.files.paths import find_scenario
+from anklehip.files.output import atomic_write_csv
+from anklehip.files.scenario import load_scenario
 def status(key):   # kB
     return int(next(l.split()[1] for l in open("/proc/self/status") if l.startswith(key)))
 T, engine, out = float(sys.argv[2]), sys.argv[3], sys.argv[4]
@@ -208,7 +208,7 @@ def scaling(tmp: Path, quick: bool) -> dict:
 
 
 def sweep_throughput(quick: bool) -> dict:
-    from anklehip.sweep import Variant, run_sweep
+    from anklehip.running.sweep import Variant, run_sweep
     path = str(find_scenario(SCENARIO))
     n = 8 if quick else 16
     forces = list(np.linspace(5.0, 7.0, n))
@@ -227,8 +227,8 @@ def capability_map_throughput(tmp: Path) -> dict:
     """The committed example sweep (scenarios/sweeps/force_duration.toml, 960 runs of up to 8 s) as
     `anklehip sweep force_duration` runs it, on 1 and 2 local Dask workers."""
     from anklehip.cli import main as cli
-    from anklehip.sweepfile import load_sweep_file
-    from anklehip.paths import find_sweep_file
+    from anklehip.running.sweepfile import load_sweep_file
+    from anklehip.files.paths import find_sweep_file
     sf = load_sweep_file(find_sweep_file("force_duration"))
     n = len(sf.values()) * len(sf.variants)
     out = {"sweep": "force_duration", "runs": n}

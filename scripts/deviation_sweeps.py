@@ -3,7 +3,7 @@
 
 For each controller configuration and each push shape (a trapezoid on the back or the chest, onset at 1 s) the
 closed loop (Hoap2Plant.fmu + AnkleHipController.fmu, 1 ms) is run over a grid of peak forces on
-Dask (anklehip.sweep). The figure of merit is the *largest force survived with every weaker push
+Dask (anklehip.running.sweep). The figure of merit is the *largest force survived with every weaker push
 of the grid also survived* (a configuration that survives 9 N but falls at 6 N is credited the grid point below 6 N).
 
     .venv/bin/python scripts/deviation_sweeps.py --round 1      # table 1 of docs/controller.md section 4.5
@@ -25,7 +25,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from anklehip.sweep import Variant, parse_grid, parse_variant, run_sweep, write_table  # noqa: E402
+from anklehip.running.sweep import Variant, parse_grid, parse_variant, run_sweep, write_table  # noqa: E402
 
 # Push shapes: (rise, total duration, direction) in s; direction +1 = on the back, -1 = on the chest.
 # short/medium/slow as in docs/controller.md section 4.5; "main" is the first push of the main job

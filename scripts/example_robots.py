@@ -76,12 +76,12 @@ def path_of(name: str) -> Path:
 
 def run(name: str, models=None, engine: str | None = None) -> dict:
     """paper_five_pushes on robots/<name>.toml: the summary of the run (anklehip.results)."""
-    from anklehip.master import Models, simulate
-    from anklehip.native import default_engine
-    from anklehip.paths import find_scenario
-    from anklehip.results import check_expect, robot_summary, summarize_pushes
+    from anklehip.running.master import Models, simulate
+    from anklehip.running.native import default_engine
+    from anklehip.files.paths import find_scenario
+    from anklehip.analysis.summary import check_expect, robot_summary, summarize_pushes
     from anklehip.robot.experiment import apply_robot
-    from anklehip.scenario import load_scenario
+    from anklehip.files.scenario import load_scenario
     models = models or Models.load()
     sc = apply_robot(load_scenario(find_scenario(SCENARIO)), models, path_of(name))
     res = simulate(sc, models, engine=engine or default_engine(), progress=False)
@@ -102,7 +102,7 @@ def table(runs: dict[str, dict]) -> str:
         c, p = s["parameters"]["controller"], s["parameters"]["plant"]
         pu = s["pushes"]
         res = r["result"]
-        from anklehip.results import count_cycles
+        from anklehip.analysis.summary import count_cycles
         hip = [math.degrees(abs(x["peak_hip_rad"])) for x in pu]
         zmp = [x["peak_zmp_fraction"] for x in pu]
         rec = [x["recovery_T_p"] for x in pu]

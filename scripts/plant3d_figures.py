@@ -23,10 +23,10 @@ import numpy as np  # noqa: E402
 from fmpy import extract, read_model_description  # noqa: E402
 from fmpy.fmi2 import FMU2Slave, fmi2LastSuccessfulTime  # noqa: E402
 
-from anklehip.master import Models, simulate  # noqa: E402
-from anklehip.paths import PLANT_FMUS, find_fmu, scenarios_dir  # noqa: E402
-from anklehip.results import summarize_pushes  # noqa: E402
-from anklehip.scenario import load_scenario  # noqa: E402
+from anklehip.running.master import Models, simulate  # noqa: E402
+from anklehip.files.paths import PLANT_FMUS, find_fmu, scenarios_dir  # noqa: E402
+from anklehip.analysis.summary import summarize_pushes  # noqa: E402
+from anklehip.files.scenario import load_scenario  # noqa: E402
 
 REPO = Path(__file__).resolve().parent.parent
 

@@ -64,8 +64,9 @@ elif ! compgen -G '/var/lib/apt/lists/deb.debian.org_debian_dists_*_main_source_
 fi
 
 # --- Debian packages the build needs ---------------------------------------------------------
-# dpkg-dev: dpkg-source, to unpack Debian's ODE source package.
-debs=(build-essential cmake dpkg-dev libeigen3-dev libsundials-dev libode-dev python3 python3-venv python3-dev)
+# dpkg-dev: dpkg-source, to unpack Debian's ODE source package. pkgconf: pkg-config, for the test that
+# builds a program against the installed C library (tests/test_c_install.py).
+debs=(build-essential cmake dpkg-dev libeigen3-dev libsundials-dev libode-dev pkgconf python3 python3-venv python3-dev)
 # --win64: the posix-thread mingw-w64 C/C++ cross compilers (with binutils, objdump) and Wine.
 [ "$win64" -eq 1 ] && debs+=(gcc-mingw-w64-x86-64-posix g++-mingw-w64-x86-64-posix wine64)
 # --sanitize: clang with its sanitizer and libFuzzer runtimes, the OpenMP runtime SUNDIALS' CMake

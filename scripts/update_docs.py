@@ -8,8 +8,9 @@ A generated section is everything between a marker pair
     <!-- END GENERATED -->
 
 The BEGIN marker names the command: an executable found under the build folder
-($ANKLEHIP_BUILD_DIR, default <repo>/build; relative paths are taken from the repo root) and its
-arguments. Its standard output replaces the section's content.
+($ANKLEHIP_BUILD_DIR, default <repo>/build; relative paths are taken from the repo root), or a
+Python script of scripts/ (a name ending in .py, run with this Python), and its arguments. Its
+standard output replaces the section's content.
 
     update_docs.py           rewrite every stale section
     update_docs.py --check   write nothing; exit 1 naming each stale file/section
@@ -35,6 +36,7 @@ SETUP_HINT = "run `bash scripts/setup.sh` first (or point ANKLEHIP_BUILD_DIR at 
 REQUIRED = {
     "docs/fmu.md": ["AnkleHipController_gen --markdown"],
     "docs/plant.md": ["Hoap2Plant_gen --markdown"],
+    "docs/python-api.md": ["api_reference.py"],
 }
 
 BEGIN_RE = re.compile(r"^<!-- BEGIN GENERATED: (?P<cmd>.+?) -->[ \t]*$", re.M)
@@ -70,8 +72,15 @@ def run_generator(cmd: str, bdir: Path, cache: dict[str, str]) -> str:
     argv = shlex.split(cmd)
     if not argv:
         raise DocsError("empty generator command in a BEGIN GENERATED marker")
-    exe = find_tool(argv[0], bdir)
-    r = subprocess.run([str(exe), *argv[1:]], capture_output=True, text=True)
+    if argv[0].endswith(".py"):
+        script = REPO_ROOT / "scripts" / argv[0]
+        if "/" in argv[0] or not script.is_file():
+            raise DocsError(f"generator script {argv[0]} is not a script of scripts/")
+        exe, prefix = script, [sys.executable, str(script)]
+    else:
+        exe = find_tool(argv[0], bdir)
+        prefix = [str(exe)]
+    r = subprocess.run([*prefix, *argv[1:]], capture_output=True, text=True)
     if r.returncode != 0:
         raise DocsError(f"`{exe} {' '.join(argv[1:])}` failed (exit {r.returncode}):\n{r.stderr.strip()}")
     if not r.stdout.strip():

@@ -1,4 +1,4 @@
-"""Analytic push-recovery bounds (anklehip/bounds.py, docs/capability.md): the nominal numbers, the
+"""Analytic push-recovery bounds (anklehip/analysis/bounds.py, docs/capability.md): the nominal numbers, the
 limits each bound must reach, the exact exponential integral of the trapezoid push, and the LIP
 bound against a direct integration of the pendulum it is derived from. Pure numpy, except one test
 that reads the plant FMU's defaults.
@@ -11,9 +11,9 @@ import math
 import numpy as np
 import pytest
 
-from anklehip.bounds import (laplace_pwl, lip_force_limit, lip_impulse_limit, robot_from_plant_params,
+from anklehip.analysis.bounds import (laplace_pwl, lip_force_limit, lip_impulse_limit, robot_from_plant_params,
                              static_tipping_force, sustained_push_limit, trapezoid_integral)
-from anklehip.scenario import PushProfile, PushSegment
+from anklehip.files.scenario import PushProfile, PushSegment
 from conftest import NOMINAL
 
 PARAMS = {"g": NOMINAL["G"], "m1": NOMINAL["M1"], "l1": NOMINAL["L1"], "lg1": NOMINAL["LG1"], "I1": NOMINAL["I1"],
@@ -37,7 +37,7 @@ def test_nominal_numbers():
 def test_plant_fmu_defaults_give_the_nominal_robot(fmu_path):
     """Establishes: robot_from_plant_params on the plant FMU's start values gives the robot built
     from hoap2/nominal.h (the FMU is where the sweeps take their numbers from)."""
-    from anklehip.fmu import FMUInfo
+    from anklehip.running.fmu import FMUInfo
     assert robot_from_plant_params(FMUInfo.load(fmu_path("Hoap2Plant")).start_values()) == R
 
 

@@ -96,7 +96,7 @@ def test_plot_generic_csv(tmp_path):
 
 
 def test_summary_helpers():
-    from anklehip.results import count_cycles
+    from anklehip.analysis.summary import count_cycles
     assert count_cycles(np.array([0, 0, 1, 2, 3, 0, 0, 1, 2, 3, 0])) == 2
     assert count_cycles(np.array([0, 1, 2, 3])) == 0
     assert count_cycles(np.array([0, 1, 0, 1, 2, 3, 0])) == 1
@@ -150,9 +150,9 @@ def test_every_option_of_every_command_has_help():
 
 
 def test_plot_no_progress_reaches_the_figures(tmp_path, monkeypatch):
-    import anklehip.cli as cli
+    import anklehip.running.run as run
     seen = []
-    monkeypatch.setattr(cli, "make_figures", lambda *a, **k: seen.append(k.get("progress")) or [])
+    monkeypatch.setattr(run, "make_figures", lambda *a, **k: seen.append(k.get("progress")) or [])
     csv = tmp_path / "syn.csv"
     write_csv(csv, synthetic_result(t_end=0.5))
     assert main(["plot", str(csv), "--no-progress"]) == 0
@@ -192,7 +192,7 @@ def test_info_controller_parameters_with_unit_default_and_range(controller_fmu, 
 
     from fmpy import read_model_description
 
-    from anklehip.fmu import FMUInfo
+    from anklehip.running.fmu import FMUInfo
     md = read_model_description(str(controller_fmu))
     params = FMUInfo.load(controller_fmu).parameters()
     assert main(["--fmu-dir", str(controller_fmu.parent), "info", "AnkleHipController"]) == 0

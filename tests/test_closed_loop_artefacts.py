@@ -26,19 +26,19 @@ STOP = 7.0     # the first push (t = 2 s) through all four phases and back to th
 
 @pytest.fixture(scope="module")
 def scenario():
-    from anklehip.scenario import load_scenario
+    from anklehip.files.scenario import load_scenario
     return load_scenario(REPO_ROOT / "scenarios" / "paper_configuration.toml")
 
 
 @pytest.fixture(scope="module")
 def models(fmu_dir):
-    from anklehip.master import Models
+    from anklehip.running.master import Models
     return Models.load(fmu_dir)
 
 
 @pytest.fixture(scope="module")
 def master_run(scenario, models):
-    from anklehip.master import simulate
+    from anklehip.running.master import simulate
     res = simulate(scenario, models, stop_time=STOP)
     assert res.outcome == "completed"
     return res.data
@@ -65,7 +65,7 @@ def _compare(t, theta_ankle, theta_hip, phase, ref):
 
 def test_ssp_is_valid_and_complete(scenario, models, tmp_path):
     from fmpy.ssp.ssd import read_ssd
-    from anklehip.export import write_ssp
+    from anklehip.files.export import write_ssp
 
     ssp = write_ssp(tmp_path / "loop.ssp", scenario, models)
     with zipfile.ZipFile(ssp) as z:
@@ -84,7 +84,7 @@ def test_ssp_is_valid_and_complete(scenario, models, tmp_path):
 def test_ssp_runs_in_fmpy_like_our_master(scenario, models, master_run, tmp_path):
     from fmpy.ssp.simulation import simulate_ssp
     from fmpy.ssp.ssd import read_ssv
-    from anklehip.export import write_ssp
+    from anklehip.files.export import write_ssp
 
     ssp = write_ssp(tmp_path / "loop.ssp", scenario, models)
     params = read_ssv(str(ssp), resource="resources/parameters.ssv")
@@ -111,7 +111,7 @@ def test_ssp_runs_in_fmpy_like_our_master(scenario, models, master_run, tmp_path
 def test_container_fmu_runs_the_loop_like_our_master(scenario, models, master_run, tmp_path):
     import fmpy
     from fmpy.validation import validate_fmu
-    from anklehip.export import write_container_fmu
+    from anklehip.files.export import write_container_fmu
 
     fmu = write_container_fmu(tmp_path / "AnkleHipBalance.fmu", scenario, models)
     assert validate_fmu(str(fmu)) == []

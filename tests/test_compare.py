@@ -6,7 +6,7 @@ import pytest
 from fmpy.util import read_csv, write_csv
 
 from anklehip.cli import main
-from anklehip.compare import CompareError, compare, comparison_figure
+from anklehip.analysis.compare import CompareError, compare, comparison_figure
 
 T = np.linspace(0.0, 10.0, 2001)
 
@@ -156,7 +156,7 @@ def test_plot_of_failed_signals(tmp_path):
 
 
 def test_csv_layout_round_trip(tmp_path):
-    from anklehip.results import atomic_write_csv
+    from anklehip.files.output import atomic_write_csv
     ref = ref_signals(T)
     atomic_write_csv(tmp_path / "a.csv", ref)
     back = read_csv(tmp_path / "a.csv")
@@ -320,3 +320,87 @@ def test_integer_signal_on_another_time_grid():
     res["phase"][4996] = 0
     res["phase"][5000] = 0                              # t = 5.000 is a reference sample: 3 exactly
     assert compare(res, ref).signals[1].first_outside == pytest.approx(5.0)
+
+
+# --- references FMPy's band would loop on (the reliability issue, item 5), progress, units and layout
+
+def _cli(args, timeout=60):
+    """`anklehip ARGS` in a subprocess with a time limit: a hang fails the test instead of the suite."""
+    import subprocess
+    import sys
+    return subprocess.run([sys.executable, "-m", "anklehip.cli", *map(str, args)], capture_output=True, text=True,
+                          timeout=timeout)
+
+
+@pytest.mark.parametrize("t0", [1024.0, 4096.0, 1e5])
+def test_repeated_reference_time_stamps_late_in_a_run_are_compared(tmp_path, t0):
+    """validate_signal adds 1e-13 to a repeated time until it is larger: below one ULP (t >= 1024 s)
+    that never ends. The comparison moves each repeat one ULP on instead, and says so."""
+    t = t0 + np.linspace(0.0, 10.0, 1001)
+    t = np.insert(t, 500, t[500])                 # an event: two rows at one time
+    y = np.sin(t - t0)
+    write_csv(tmp_path / "ref.csv", make(t, y=y))
+    write_csv(tmp_path / "res.csv", make(t, y=y))
+    r = _cli(["compare", tmp_path / "res.csv", tmp_path / "ref.csv", "--no-progress"])
+    assert r.returncode == 0, r.stderr
+    assert "the reference repeats 1 time stamp(s)" in r.stdout and "PASS: 0 of 1 signals failed" in r.stdout
+
+
+@pytest.mark.parametrize("t0", [0.0, 1e5])
+def test_a_reference_whose_time_does_not_advance_is_refused(tmp_path, t0):
+    t = np.full(50, t0)
+    write_csv(tmp_path / "ref.csv", make(t, y=np.arange(50.0)))
+    write_csv(tmp_path / "res.csv", make(np.linspace(t0, t0 + 1, 50), y=np.arange(50.0)))
+    r = _cli(["compare", tmp_path / "res.csv", tmp_path / "ref.csv"])
+    assert r.returncode == 2 and "the time column does not advance" in r.stderr and f"t = {t0:g} s in all 50" \
+        in r.stderr, r.stderr
+
+
+def test_too_many_rows_at_one_time_are_refused(tmp_path):
+    t = np.concatenate([np.full(1500, 2000.0), np.linspace(2001.0, 2010.0, 100)])
+    write_csv(tmp_path / "ref.csv", make(t, y=np.zeros(len(t))))
+    r = _cli(["compare", tmp_path / "ref.csv", tmp_path / "ref.csv"])
+    assert r.returncode == 2 and "more than 1000 rows at one time stamp (from row 2, t = 2000 s)" in r.stderr, r.stderr
+
+
+def test_compare_shows_progress(tmp_path, capsys):
+    ref = ref_signals(T)
+    rep = compare(ref, ref, progress=True)
+    err = capsys.readouterr().err
+    # reading both files, then each signal by name
+    assert rep.passed and "compare:" in err and "reading result" in err, err
+    assert all(f", {name} " in err for name in ("y", "ramp", "phase")), err
+    compare(ref, ref, progress=False)
+    assert capsys.readouterr().err == ""
+    write_csv(tmp_path / "ref.csv", ref)
+    assert main(["compare", str(tmp_path / "ref.csv"), str(tmp_path / "ref.csv"), "--no-progress"]) == 0
+    assert capsys.readouterr().err == ""
+
+
+def _bbox(artist, fig):
+    return artist.get_window_extent(fig.canvas.get_renderer())
+
+
+def test_comparison_figure_units_title_and_headers(fmu_dir):
+    """The y axes carry the signals' units (from the FMUs' variables), the figure's title does not
+    overprint the first panel, and every panel's header (the verdict line, wrapped) lies inside the
+    figure."""
+    t = np.linspace(0, 5, 501)
+    ref = make(t, theta_hip=0.3 * np.sin(t), zmp_x=0.01 * np.cos(t), phase=(t > 2).astype(np.int32))
+    res = ref.copy()
+    res["theta_hip"] = res["theta_hip"] + np.where(t > 3, 0.2, 0.0)
+    res["zmp_x"] = res["zmp_x"] + np.where(t > 1, 0.01, 0.0)
+    rep = compare(res, ref, result_label="a result with a rather long name/" * 4,
+                  reference_label="the reference/" * 6)
+    assert rep.units == {"theta_hip": "rad", "zmp_x": "m", "phase": ""}
+    fig = comparison_figure(rep)
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    FigureCanvasAgg(fig).draw()
+    axes = fig.axes
+    assert [ax.get_ylabel() for ax in axes] == ["theta_hip [rad]", "zmp_x [m]"]
+    box = fig.bbox
+    sup = _bbox(fig._suptitle, fig)
+    for ax in axes:
+        title = _bbox(ax.title, fig)
+        assert title.x0 >= box.x0 - 1 and title.x1 <= box.x1 + 1 and title.y1 <= box.y1 + 1, ax.title.get_text()
+        assert not sup.overlaps(title) and not sup.overlaps(_bbox(ax, fig))

@@ -35,7 +35,7 @@ def test_limits_need_every_weaker_push():
 
 
 def test_configurations_are_full_and_paper_matches_the_fmu(fmu_path):
-    from anklehip.fmu import FMUInfo
+    from anklehip.running.fmu import FMUInfo
     info = FMUInfo.load(fmu_path("AnkleHipController"))
     params = info.parameters()
     for rnd in ds.ROUNDS.values():

@@ -32,7 +32,7 @@ def test_controller_parameter_table_defaults_are_the_fmus(fmu_path):
     HOAP-2 numbers, cannot leave the table behind)."""
     import re
 
-    from anklehip.fmu import FMUInfo
+    from anklehip.running.fmu import FMUInfo
 
     params = FMUInfo.load(fmu_path("AnkleHipController")).parameters()
     text = (REPO_ROOT / "docs" / "controller.md").read_text()

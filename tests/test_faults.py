@@ -1,4 +1,4 @@
-"""Fault injection (anklehip.faults, the scenario table [faults]) and the robustness study.
+"""Fault injection (anklehip.running.faults, the scenario table [faults]) and the robustness study.
 
 What these tests establish:
 * the faulty sensor channel does exactly what docs/scenarios.md says (delay in whole steps, exact
@@ -16,8 +16,8 @@ import math
 import numpy as np
 import pytest
 
-from anklehip.faults import KEYS, Faults, SensorChannel, TransitionPush, parameter_faults
-from anklehip.scenario import ScenarioError, faults_from, parse_fault_options
+from anklehip.running.faults import KEYS, Faults, SensorChannel, TransitionPush, parameter_faults
+from anklehip.files.scenario import ScenarioError, faults_from, parse_fault_options
 
 INPUTS = ["theta_ankle", "theta_hip", "zmp_x", "fz"]
 
@@ -131,7 +131,7 @@ def test_bad_fault_options_name_the_key(opts, needle):
 
 
 def test_scenario_faults_table_and_overrides(tmp_path):
-    from anklehip.scenario import load_scenario
+    from anklehip.files.scenario import load_scenario
     p = tmp_path / "s.toml"
     p.write_text('stop_time = 1.0\n[faults]\nzmp_noise = 0.001\nstuck_at = [0.5, 0.2]\n')
     sc = load_scenario(p)
@@ -172,9 +172,9 @@ def test_fault_keys_documented():
 
 @pytest.fixture(scope="module")
 def hip_run(fmu_dir):
-    from anklehip.master import Models, simulate
-    from anklehip.paths import find_scenario
-    from anklehip.scenario import load_scenario
+    from anklehip.running.master import Models, simulate
+    from anklehip.files.paths import find_scenario
+    from anklehip.files.scenario import load_scenario
     sc = load_scenario(find_scenario("hip_saves_push"))
     models = Models.load(fmu_dir)
 
@@ -208,8 +208,8 @@ def test_closed_loop_transition_push_starts_when_the_phase_is_entered(hip_run):
     ("push entering phase 3 (hip->ankle)", 25.0, False),
 ])
 def test_closed_loop_invariants_hold(fmu_dir, study, level, survives):
-    from anklehip.paths import find_scenario
-    from anklehip.robustness import run_point, study_by_label
+    from anklehip.files.paths import find_scenario
+    from anklehip.running.robustness import run_point, study_by_label
     r = run_point(str(find_scenario("hip_saves_push")), str(fmu_dir), study_by_label(study), level)
     assert r["invariants_ok"], r
     assert r["survived"] == survives, r
@@ -224,7 +224,7 @@ def test_closed_loop_invariants_hold(fmu_dir, study, level, survives):
 
 
 def test_robustness_summary_interval_and_first_failures():
-    from anklehip.robustness import summarize, table_markdown
+    from anklehip.running.robustness import summarize, table_markdown
 
     def row(level, ok, outcome="completed", cycles=5):
         return {"study": "ZMP bias", "key": "zmp_bias", "level": level, "survived": ok, "outcome": outcome,

@@ -19,7 +19,7 @@ import numpy as np
 import pytest
 
 from conftest import NOMINAL, REPO_ROOT, import_file
-from anklehip.fmu import FMUInfo
+from anklehip.running.fmu import FMUInfo
 
 lump = import_file(REPO_ROOT / "hoap2" / "lump.py", "hoap2_lump")
 

@@ -23,14 +23,16 @@ from hypothesis import HealthCheck, event, given, settings
 from hypothesis import strategies as st
 
 from anklehip import cli
+from anklehip.running import run as run_module
+from anklehip.errors import InputError
 from anklehip.cli import main
-from anklehip.compare import CompareError, CompareReport, compare, read_result_csv
-from anklehip.fmu import FMUError
-from anklehip.paths import MissingFileError, scenarios_dir
-from anklehip.results import output_lock
-from anklehip.scenario import (EXPECT_KEYS, MAX_STEPS, PUSH_KINDS, REF_KEYS, Scenario, ScenarioError,
+from anklehip.analysis.compare import CompareError, CompareReport, compare, read_result_csv
+from anklehip.running.fmu import FMUError
+from anklehip.files.paths import MissingFileError, scenarios_dir
+from anklehip.files.output import output_lock
+from anklehip.files.scenario import (EXPECT_KEYS, MAX_STEPS, PUSH_KINDS, REF_KEYS, Scenario, ScenarioError,
                                load_scenario, parse_scenario, time_grid_problem)
-from anklehip.steptest import StepTestError, StepTestResult, case_files, run_case
+from anklehip.running.steptest import StepTestError, StepTestResult, case_files, run_case
 
 REPO = Path(__file__).resolve().parent.parent
 STEPTESTS = Path(__file__).parent / "steptests"
@@ -227,7 +229,7 @@ def test_compare_library_refuses_bad_tolerances(two_csvs):
 
 HOLD_LOCK = textwrap.dedent("""
     import sys
-    from anklehip.results import output_lock
+    from anklehip.files.output import output_lock
     with output_lock(sys.argv[1]):
         print("locked", flush=True)
         sys.stdin.readline()
@@ -281,7 +283,7 @@ def test_failed_figures_do_not_lose_the_summary(tmp_path, fmu_dir, monkeypatch, 
 
     def broken(*a, **k):
         raise RuntimeError("no display")
-    monkeypatch.setattr(cli, "make_figures", broken)
+    monkeypatch.setattr(run_module, "make_figures", broken)
     out = tmp_path / "o"
     assert main(["run", "ankle_small_push", "--out", str(out), "--stop-time", "0.2", "--plots",
                  "--no-progress"]) == 1
@@ -365,7 +367,7 @@ def test_property_scenario_bytes(work, head, raw):
 
 @pytest.fixture(scope="module")
 def models(fmu_dir):
-    from anklehip.master import Models
+    from anklehip.running.master import Models
     return {m: Models.load(plant_model=m) for m in ("sagittal", "3d")}
 
 
@@ -375,7 +377,7 @@ def test_property_scenario_structures(work, models, data):
     """Random TOML-typed structures with the schema's keys: a Scenario whose run is well defined
     (finite push, a bounded number of steps) or a ScenarioError naming the file; parameter tables
     that pass the schema pass the FMU check or raise FMUError."""
-    from anklehip.master import check_overrides
+    from anklehip.running.master import check_overrides
     try:
         sc = parse_scenario(data, "h.toml", work / "h.toml")
     except ScenarioError as e:
@@ -426,7 +428,8 @@ COMMITTED = sorted(scenarios_dir().glob("*.toml"))
 @given(src=st.sampled_from(COMMITTED), data=st.data())
 def test_property_mutated_committed_scenarios(work, models, src, data):
     """Mutations of the committed scenarios through the CLI's whole pre-run validation
-    (cli._scenario_and_models: file, FMUs, configuration, parameter ranges, --stop-time)."""
+    (anklehip.running.run.resolve with the CLI's option names: file, FMUs, configuration, parameter
+    ranges, --stop-time)."""
     text = src.read_text()
     for _ in range(data.draw(st.integers(1, 3))):
         text = _mutate_lines(text, data)
@@ -436,8 +439,9 @@ def test_property_mutated_committed_scenarios(work, models, src, data):
     a = argparse.Namespace(scenario=str(f), set=None, plant=None, fmu_dir=None, controller_config=None,
                            stop_time=stop)
     try:
-        sc, _ = cli._scenario_and_models(a)
-    except (ScenarioError, FMUError, MissingFileError, cli.UsageError) as e:
+        sc, _ = run_module.resolve(a.scenario, plant=a.plant, controller_config=a.controller_config,
+                                   stop_time=a.stop_time, fmu_dir=a.fmu_dir, origins={"stop_time": "--stop-time"})
+    except InputError as e:
         assert src.name in str(e) or str(e).startswith("--stop-time"), str(e)
         event(type(e).__name__)
         return

@@ -98,9 +98,9 @@ def test_libcosim_and_the_ssp_export(fmu_dir, tmp_path):
     from libcosimpy.CosimExecution import CosimExecution
     from libcosimpy.CosimManipulator import CosimManipulator
     from libcosimpy.CosimObserver import CosimObserver
-    from anklehip.export import write_ssp
-    from anklehip.master import Models, simulate
-    from anklehip.scenario import load_scenario
+    from anklehip.files.export import write_ssp
+    from anklehip.running.master import Models, simulate
+    from anklehip.files.scenario import load_scenario
 
     scenario = load_scenario(REPO_ROOT / "scenarios" / "hip_saves_push.toml")
     models = Models.load(fmu_dir)

@@ -9,10 +9,10 @@ import tomllib
 import pytest
 
 from anklehip.cli import main
-from anklehip.fmu import FMUError, FMUInfo
-from anklehip.master import Models, simulate
-from anklehip.scenario import ScenarioError, parse_scenario
-from anklehip.sweep import parse_variant
+from anklehip.running.fmu import FMUError, FMUInfo
+from anklehip.running.master import Models, simulate
+from anklehip.files.scenario import ScenarioError, parse_scenario
+from anklehip.running.sweep import parse_variant
 
 
 def test_fmu_ships_the_c_librarys_configurations(controller_unzipped, controller_fmu):

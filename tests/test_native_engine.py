@@ -1,4 +1,4 @@
-"""The native closed-loop engine (fmu/closed_loop, anklehip/native.py) against the FMPy master.
+"""The native closed-loop engine (fmu/closed_loop, anklehip/running/native.py) against the FMPy master.
 
 Establishes: on every committed scenario (sagittal and 3D plants) the native engine gives the FMPy
 master's result bit for bit (every row, every column, outcome, message, controller start values),
@@ -15,12 +15,12 @@ import numpy as np
 import pytest
 from fmpy.util import write_csv as fmpy_write_csv
 
-from anklehip import native
+from anklehip.running import native
 from anklehip.cli import main
-from anklehip.faults import Faults
-from anklehip.master import Models, simulate
-from anklehip.paths import scenarios_dir
-from anklehip.scenario import ScenarioError, load_scenario
+from anklehip.running.faults import Faults
+from anklehip.running.master import Models, simulate
+from anklehip.files.paths import scenarios_dir
+from anklehip.files.scenario import ScenarioError, load_scenario
 
 pytestmark = pytest.mark.skipif(not native.available(), reason="libanklehip_closed_loop not built")
 

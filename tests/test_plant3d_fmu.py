@@ -276,10 +276,10 @@ def test_paper_pushes_on_the_3d_plant_match_the_sagittal_plants():
     recovery time within 25 % of the sagittal plant's."""
     import dataclasses
 
-    from anklehip.master import Models, simulate
-    from anklehip.paths import scenarios_dir
-    from anklehip.results import count_cycles, summarize_pushes
-    from anklehip.scenario import load_scenario
+    from anklehip.running.master import Models, simulate
+    from anklehip.files.paths import scenarios_dir
+    from anklehip.analysis.summary import count_cycles, summarize_pushes
+    from anklehip.files.scenario import load_scenario
 
     base = load_scenario(scenarios_dir() / "paper_five_pushes.toml")
     runs = {}

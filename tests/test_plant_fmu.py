@@ -217,9 +217,9 @@ def test_integrators_agree_in_the_closed_loop():
     rocking, micro-rocking at the toe edge) within 1e-6 rad, the same phase sequence and contact
     events to the millisecond, and both stay within 1e-6 rad of a tight-tolerance reference
     (BDF, rtol 1e-11)."""
-    from anklehip.master import simulate
-    from anklehip.paths import find_scenario
-    from anklehip.scenario import load_scenario
+    from anklehip.running.master import simulate
+    from anklehip.files.paths import find_scenario
+    from anklehip.files.scenario import load_scenario
     sc = load_scenario(find_scenario("paper_configuration"))
     runs = {k: simulate(sc, plant_overrides=o, stop_time=18.0, progress=False).data
             for k, o in {"erk": {"integrator": 0}, "bdf": {"integrator": 1},

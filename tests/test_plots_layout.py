@@ -7,12 +7,13 @@ import io
 import itertools
 import sys
 
+import matplotlib.colors
 import numpy as np
 import pytest
 
-from anklehip import plots
-from anklehip.compare import read_result_csv
-from anklehip.paths import repo_root
+from anklehip.analysis import plots
+from anklehip.analysis.compare import read_result_csv
+from anklehip.files.paths import repo_root
 
 GOLDEN = repo_root() / "scenarios" / "reference" / "paper_five_pushes.csv"
 
@@ -65,7 +66,7 @@ def test_one_phase_legend_below_the_panels_with_every_phase(drawn):
     labels = [t.get_text() for t in leg.get_texts()]
     assert labels == ["phase 0 ankle (unshaded)", "phase 1 ankle→hip", "phase 2 hip", "phase 3 hip→ankle"]
     cyan = leg.legend_handles[3].get_facecolor()
-    assert np.allclose(cyan[:3], plots.matplotlib.colors.to_rgb(plots.PHASE_COLORS[3]))
+    assert np.allclose(cyan[:3], matplotlib.colors.to_rgb(plots.PHASE_COLORS[3]))
     lb = leg.get_window_extent(r)
     for ax in fig.axes:          # outside every panel, including its tick labels
         assert not _intersect(lb, ax.get_tightbbox(r)), ax.get_ylabel()
@@ -130,12 +131,12 @@ def test_gif_frames_and_exact_colours(tmp_path):
         assert im.n_frames == 31
         frames = [f.convert("RGB") for f in ImageSequence.Iterator(im)]
     assert frames[0].getpixel((1, 1)) == (255, 255, 255)
-    orange = tuple(round(255 * c) for c in plots.matplotlib.colors.to_rgb("tab:orange"))
+    orange = tuple(round(255 * c) for c in matplotlib.colors.to_rgb("tab:orange"))
     assert any(orange in {c for _, c in f.getcolors(1 << 16)} for f in frames[5:25])   # the push arrow
 
 
 def test_make_figures_progress_bar_and_lines(tmp_path, monkeypatch):
-    from anklehip.cli import make_figures
+    from anklehip.running.run import make_figures
     err = _Terminal()
     monkeypatch.setattr(sys, "stderr", err)
     files = make_figures("syn", synthetic(), tmp_path)
@@ -148,3 +149,23 @@ def test_make_figures_progress_bar_and_lines(tmp_path, monkeypatch):
     monkeypatch.setattr(sys, "stderr", err2)
     make_figures("syn", synthetic(), tmp_path, progress=False)
     assert err2.getvalue() == ""
+
+
+def test_sweep_figure_has_a_legend_inside_the_figure():
+    """sweep.png says what its markers mean (it had no legend): a legend with the three kinds of
+    point, inside the figure and clear of the axes."""
+    from anklehip.running.sweep import sweep_figure
+    rows = [{"variant": v, "peak_force": f, "outcome": "fell" if f > lim else "completed",
+             "max_phase": 0 if f < 8 else 3} for v, lim in (("full", 11.0), ("ankle_only", 8.0))
+            for f in np.arange(7.0, 12.5, 0.5)]
+    fig = sweep_figure(rows, "hip_saves_push: outcome vs peak push force")
+    fig.canvas.draw()
+    r = fig.canvas.get_renderer()
+    (ax,) = fig.axes
+    (leg,) = fig.legends
+    assert leg is not None and [t.get_text() for t in leg.get_texts()] == [
+        "stood, ankle strategy only (phase 0)", "stood, hip strategy (n: highest phase)", "fell"]
+    lb, fb = leg.get_window_extent(r), fig.bbox
+    assert fb.x0 <= lb.x0 and lb.x1 <= fb.x1 and fb.y0 <= lb.y0 and lb.y1 <= fb.y1
+    assert not _intersect(lb, ax.get_window_extent(r))
+    plots.plt.close(fig)

@@ -72,7 +72,7 @@ def test_hoap2_round_trip(kind):
 
 def test_hoap2_robot_file_holds_the_fmu_defaults(fmu_path):
     """robots/hoap2.toml = nominal.h = both FMUs' start values, bit for bit."""
-    from anklehip.fmu import FMUInfo
+    from anklehip.running.fmu import FMUInfo
     robot = load_robot(REPO_ROOT / "robots" / "hoap2.toml")
     header = {key: macro for macro, key, _ in lump_py.MACROS}
     for k, q in robot.model.items():

@@ -17,12 +17,12 @@ import numpy as np
 import pytest
 
 from conftest import REPO_ROOT, import_file
-from anklehip.master import Models, simulate
+from anklehip.running.master import Models, simulate
 from anklehip.robot import load_robot
 from anklehip.robot.experiment import apply_robot, find_robot, pendulum_time, tipping_forces
 from anklehip.robot.robotfile import Quantity
 from anklehip.robot.scaling import RULES, Scales, scale
-from anklehip.scenario import load_scenario
+from anklehip.files.scenario import load_scenario
 
 examples = import_file(REPO_ROOT / "scripts" / "example_robots.py", "example_robots")
 ROBOTS = [ex.name for ex in examples.EXAMPLES]
@@ -107,7 +107,7 @@ def test_fmus_accept_a_95_kg_robot(models):
 
 
 def _run(models, sc, engine="native"):
-    from anklehip.native import default_engine
+    from anklehip.running.native import default_engine
     return simulate(sc, models, engine=default_engine() if engine == "native" else engine, progress=False)
 
 

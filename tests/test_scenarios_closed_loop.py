@@ -7,11 +7,12 @@ import json
 import numpy as np
 import pytest
 
-from anklehip.cli import compare_with_reference, main
-from anklehip.master import Models, simulate
-from anklehip.paths import scenarios_dir
-from anklehip.results import check_expect
-from anklehip.scenario import load_scenario
+from anklehip.cli import main
+from anklehip.running.run import compare_with_reference
+from anklehip.running.master import Models, simulate
+from anklehip.files.paths import scenarios_dir
+from anklehip.analysis.summary import check_expect
+from anklehip.files.scenario import load_scenario
 
 SCENARIOS = sorted(p.stem for p in scenarios_dir().glob("*.toml"))
 
@@ -90,8 +91,8 @@ def test_run_plots(models, tmp_path):
 
 
 def test_override_types_are_checked(models):
-    from anklehip.fmu import FMUError
-    from anklehip.master import check_overrides
+    from anklehip.running.fmu import FMUError
+    from anklehip.running.master import check_overrides
     with pytest.raises(FMUError, match="parameter 'hip_strategy_enabled' is Integer, got 0.5"):
         check_overrides(models, {"hip_strategy_enabled": 0.5}, {})
     with pytest.raises(FMUError, match="Hoap2Plant.fmu has no parameter 'Ka'"):
@@ -103,8 +104,8 @@ def test_override_types_are_checked(models):
 
 def _plant_step_that_raises(monkeypatch, exc, at_step):
     """Make the plant's fmi2DoStep raise `exc` at its `at_step`-th call (a Ctrl-C or a crash mid-run)."""
-    from anklehip import master
-    from anklehip.fmu import Slave
+    from anklehip.running import master
+    from anklehip.running.fmu import Slave
 
     class S(Slave):
         def __init__(self, info, *a, **k):

@@ -4,8 +4,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from anklehip.paths import scenarios_dir
-from anklehip.scenario import (PushProfile, PushSegment, ScenarioError, load_scenario, parse_scenario,
+from anklehip.files.paths import scenarios_dir
+from anklehip.files.scenario import (PushProfile, PushSegment, ScenarioError, load_scenario, parse_scenario,
                                parse_set)
 
 
@@ -116,8 +116,8 @@ def test_generic_expectations_check_named_columns():
     """max_abs and min_range check any result column; a column the run does not have fails the
     check with a message naming the key and the column."""
     import numpy as np
-    from anklehip.results import check_expect
-    from anklehip.scenario import Expect
+    from anklehip.analysis.summary import check_expect
+    from anklehip.files.scenario import Expect
 
     class Res:
         outcome, fell, message = "completed", False, ""

@@ -1,4 +1,4 @@
-"""Soak (anklehip.soak): the CI version of the one-hour run of docs/reliability.md.
+"""Soak (anklehip.running.soak): the CI version of the one-hour run of docs/reliability.md.
 
 Five simulated minutes of seeded random pushes on one pair of FMU instances: no fall, no fault,
 the erect posture comes back under 0.005 rad before every push, resident memory flat after the
@@ -10,12 +10,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from anklehip.soak import SoakReport, quiet_seconds, random_pushes
+from anklehip.running.soak import SoakReport, quiet_seconds, random_pushes
 
 
 @pytest.fixture(scope="module")
 def five_minutes(fmu_dir):
-    from anklehip.soak import soak
+    from anklehip.running.soak import soak
     return soak(300.0, seed=11, fmu_dir=fmu_dir)
 
 

@@ -61,9 +61,9 @@ def test_source_lists_agree(fmu_path):
 
 
 def test_built_from_sources_equals_the_shipped_binary(rebuilt, fmu_path):
-    from anklehip.master import Models, simulate
-    from anklehip.paths import scenarios_dir
-    from anklehip.scenario import load_scenario
+    from anklehip.running.master import Models, simulate
+    from anklehip.files.paths import scenarios_dir
+    from anklehip.files.scenario import load_scenario
 
     sc = load_scenario(scenarios_dir() / "hip_saves_push.toml")
     shipped = simulate(sc, Models.load(), progress=False)

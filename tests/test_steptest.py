@@ -8,8 +8,8 @@ import pytest
 from fmpy.util import read_csv, write_csv
 
 from anklehip.cli import main
-from anklehip.paths import CONTROLLER_FMU, find_fmu, find_rt_runner
-from anklehip.steptest import case_files, read_opt, run_case
+from anklehip.files.paths import CONTROLLER_FMU, find_fmu, find_rt_runner
+from anklehip.running.steptest import case_files, read_opt, run_case
 
 CASES = sorted(p for p in (Path(__file__).parent / "steptests").iterdir() if p.is_dir()) \
     if (Path(__file__).parent / "steptests").is_dir() else []
@@ -35,7 +35,7 @@ def test_committed_case_passes(controller_fmu, case, tmp_path):
     assert (tmp_path / "AnkleHipController_out.csv").is_file()
 
 
-def test_record_then_steptest_round_trip(controller_fmu, tmp_path, capsys):
+def test_record_then_steptest_round_trip(controller_fmu, tmp_path, capsys, monkeypatch):
     case = tmp_path / "case"
     assert main(["record", "ankle_small_push", str(case), "--stop-time", "1.5"]) == 0
     f = case_files(case)
@@ -47,10 +47,16 @@ def test_record_then_steptest_round_trip(controller_fmu, tmp_path, capsys):
     # a tampered reference fails, with the signal and the time named, and a non-zero exit
     ref["theta_ankle_ref"][1000:] += 0.01
     write_csv(f["ref"], ref)
+    # the plot goes to a results folder (--out, default results/steptest/<case>), never into the case
+    before = sorted(p.name for p in case.iterdir())
+    monkeypatch.chdir(tmp_path)
     assert main(["steptest", str(case), "--failed-only", "--plot"]) == 1
     out = capsys.readouterr().out
     assert "[FAIL] theta_ankle_ref" in out and "first at t=1.0000" in out
-    assert (case / "failed_signals.png").is_file()
+    assert (tmp_path / "results" / "steptest" / "case" / "failed_signals.png").is_file()
+    assert main(["steptest", str(case), "--plot", "--out", str(tmp_path / "o")]) == 1
+    assert (tmp_path / "o" / "case" / "failed_signals.png").is_file()
+    assert sorted(p.name for p in case.iterdir()) == before
 
 
 def test_realtime_pacing_reports_percentiles(controller_fmu, tmp_path):
@@ -117,7 +123,7 @@ def test_case_works_with_fmpy_simulate_fmu(controller_fmu):
     """The cross-check layout is tool-neutral: FMPy's own simulate_fmu reproduces the reference."""
     from fmpy import simulate_fmu
 
-    from anklehip.compare import compare
+    from anklehip.analysis.compare import compare
     case = [c for c in CASES if c.name == "chest_push_hip_cycle"][0]
     f = case_files(case)
     opt = read_opt(f["opt"])
@@ -251,7 +257,7 @@ def test_summary_of_a_passing_run(controller_fmu, capsys):
 def test_histogram_is_readable():
     """Log µs axis with labelled units, the period as a red line, median/p99/max labelled without
     overlapping each other or the bars, the legend outside the data."""
-    from anklehip.steptest import RTStats, rt_histogram_figure
+    from anklehip.running.steptest import RTStats, rt_histogram_figure
     rng = np.random.default_rng(1)
     exec_us = np.concatenate([rng.lognormal(0.0, 0.3, 5000), [2.5, 2.6, 15.0]])   # ~1 µs, a few outliers
     late_us = rng.lognormal(np.log(80.0), 0.4, len(exec_us))

@@ -1,4 +1,4 @@
-"""Sweeps on Dask (anklehip/points.py, anklehip sweep): the same points whether they run one by one,
+"""Sweeps on Dask (anklehip/running/points.py, anklehip sweep): the same points whether they run one by one,
 on a local cluster of two worker processes or on a separately started `dask scheduler` +
 `dask worker` reached by address; a killed sweep resumes to the same table; Ctrl-C stops cleanly
 and keeps the finished points; a point that fails is recorded with its error and the others run;
@@ -17,10 +17,10 @@ from pathlib import Path
 
 import pytest
 
-from anklehip.master import Models
-from anklehip.paths import find_scenario
-from anklehip.points import JournalMismatch
-from anklehip.sweep import Variant, run_sweep, sweep_key
+from anklehip.running.master import Models
+from anklehip.files.paths import find_scenario
+from anklehip.running.points import JournalMismatch
+from anklehip.running.sweep import Variant, run_sweep, sweep_key
 
 ANKLEHIP = str(Path(sys.executable).parent / "anklehip")
 DASK = str(Path(sys.executable).parent / "dask")

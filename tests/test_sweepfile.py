@@ -1,8 +1,8 @@
-"""Sweep files (anklehip/sweepfile.py, `anklehip sweep FILE`): what a file may say and how a wrong
+"""Sweep files (anklehip/running/sweepfile.py, `anklehip sweep FILE`): what a file may say and how a wrong
 one is refused (file, key, value named; exit 2, nothing run), the points a grid and a seeded random
 sample make, how a point's values become the push and the parameters, and a small sweep end to
 end: one row per point with the outcome metrics, the figures, and a second run that only resumes;
-the capability map (anklehip/capability.py: survive_boundary, plot_capability; docs/capability.md).
+the capability map (anklehip/analysis/capability.py: survive_boundary, plot_capability; docs/capability.md).
 """
 from __future__ import annotations
 
@@ -12,11 +12,11 @@ from pathlib import Path
 
 import pytest
 
-from anklehip.capability import plot_capability, survive_boundary
+from anklehip.analysis.capability import plot_capability, survive_boundary
 from anklehip.cli import main
-from anklehip.paths import scenarios_dir
-from anklehip.scenario import ScenarioError
-from anklehip.sweepfile import load_sweep_file, point_setup
+from anklehip.files.paths import scenarios_dir
+from anklehip.files.scenario import ScenarioError
+from anklehip.running.sweepfile import load_sweep_file, point_setup
 from test_bounds import PARAMS
 
 BASE = """description = "test"

@@ -147,8 +147,8 @@ DISCRETE = {"phase", "fault", "fallen", "contact", "contact_mode", "terminated"}
                                                        ("diagonal_push_3d", "3d", 2.0)])
 def test_windows_binaries_replay_a_closed_loop_like_the_linux_ones(win64_fmus, wine, win_runner, native_tool,
                                                                     fmu_dir, tmp_path, scenario, plant_model, stop):
-    from anklehip.master import Models, simulate
-    from anklehip.scenario import load_scenario
+    from anklehip.running.master import Models, simulate
+    from anklehip.files.scenario import load_scenario
 
     models = Models.load(fmu_dir, plant_model=plant_model)
     res = simulate(load_scenario(REPO_ROOT / "scenarios" / f"{scenario}.toml"), models, stop_time=stop)

@@ -89,7 +89,7 @@ def cmd_check(a) -> int:
 
 
 def cmd_scale(a) -> int:
-    from ..master import Models
+    from ..running.master import Models
     from .experiment import find_robot, pendulum_time, tipping_forces
     from .robotfile import load_robot
     from .scaling import RULES, scale

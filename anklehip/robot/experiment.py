@@ -21,9 +21,9 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
-from ..bounds import robot_from_plant_params, static_tipping_force
-from ..master import check_overrides
-from ..scenario import PushProfile, PushSegment, Scenario, ScenarioError, time_grid_problem
+from ..analysis.bounds import robot_from_plant_params, static_tipping_force
+from ..running.master import check_overrides
+from ..files.scenario import PushProfile, PushSegment, Scenario, ScenarioError, time_grid_problem
 from .robotfile import Robot, load_robot
 from .scaling import Scaled, Scales, scale
 
@@ -49,7 +49,7 @@ class RobotRun:
 
 def find_robot(name_or_path: str | Path) -> Path:
     """A robot file given by path, or by name (robots/<name>.toml in the checkout)."""
-    from ..paths import MissingFileError, _find_toml, repo_root
+    from ..files.paths import MissingFileError, _find_toml, repo_root
     return _find_toml(str(name_or_path), repo_root() / "robots", "robot")
 
 

@@ -17,8 +17,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from ..files import read_toml
-from ..scenario import ScenarioError
+from ..files.text import read_toml
+from ..files.scenario import ScenarioError
 
 FORMAT = 1
 

@@ -1,0 +1,243 @@
+"""Figures of a sweep file's points (anklehip sweep FILE): where each configuration survives.
+
+Two swept keys (a grid or random samples): one panel per variant over the two keys, o stood (green:
+the ankle strategy alone; blue: the hip strategy ran), x fell, grey a failed point; and the same
+panels coloured by the peak ZMP and by the time to recover. One swept key: the outcome along it,
+one row per variant. More keys: the first two, every other value pooled.
+
+A grid over push.force and push.duration (or push.height) also gives the capability map
+(`capability.png`): each variant's survive/fall boundary over the other key, with the analytic
+bounds of anklehip/analysis/bounds.py (docs/capability.md).
+"""
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+
+def _label(key: str) -> str:
+    units = {"push.force": "peak push force [N]", "push.duration": "push duration [s]", "push.rise": "rise time [s]",
+             "push.t": "push onset [s]", "push.height": "push height above the sole [m]",
+             "push.direction": "direction (+1 back, -1 chest)"}
+    return units.get(key, key)
+
+
+def swept_keys(sf) -> list[str]:
+    return list(sf.axes) or list(sf.ranges)
+
+
+def plot_points(sf, rows: list[dict[str, Any]], out: Path) -> list[Path]:
+    import matplotlib.pyplot as plt
+    keys = swept_keys(sf)
+    variants = [v.name for v in sf.variants]
+    out = Path(out)
+    figs = []
+    if len(keys) == 1:
+        k = keys[0]
+        fig, ax = plt.subplots(figsize=(8, 1.2 + 0.7 * len(variants)))
+        for i, v in enumerate(variants):
+            for r in (r for r in rows if r.get("variant") == v):
+                ax.scatter(r[k], i, **_marker(r))
+        ax.set_yticks(range(len(variants)), variants)
+        ax.set_ylim(-0.7, len(variants) - 0.3)
+        ax.set_xlabel(_label(k))
+        ax.set_title(f"{sf.name}: o stood (green ankle strategy only, blue hip strategy), x fell", fontsize=9)
+        ax.grid(alpha=0.3)
+        fig.tight_layout()
+        p = out / "points_outcome.png"
+        fig.savefig(p, dpi=120)
+        plt.close(fig)
+        return [p]
+    kx, ky = keys[0], keys[1]
+    for what, fname in (("outcome", "points_outcome.png"), ("peak_zmp", "points_peak_zmp.png"),
+                        ("time_to_recover", "points_recovery.png")):
+        fig, axes = plt.subplots(1, len(variants), figsize=(4.2 * len(variants) + 0.8, 4.0), squeeze=False,
+                                 sharex=True, sharey=True)
+        sc = None
+        for ax, v in zip(axes[0], variants):
+            rr = [r for r in rows if r.get("variant") == v]
+            if what == "outcome":
+                for r in rr:
+                    ax.scatter(r[kx], r[ky], **_marker(r, size=28))
+                stood = sum(r["outcome"] == "completed" for r in rr)
+                ax.set_title(f"{v}: {stood} of {len(rr)} stood", fontsize=9)
+            else:
+                ok = [r for r in rr if r["outcome"] == "completed" and _finite(r.get(what))]
+                fell = [r for r in rr if r["outcome"] != "completed"]
+                scale = 1000.0 if what == "peak_zmp" else 1.0
+                sc = ax.scatter([r[kx] for r in ok], [r[ky] for r in ok], c=[scale * abs(r[what]) for r in ok],
+                                cmap="viridis", s=28, vmin=0.0)
+                ax.scatter([r[kx] for r in fell], [r[ky] for r in fell], marker="x", c="tab:red", s=24)
+                ax.set_title(v, fontsize=9)
+            ax.set_xlabel(_label(kx))
+            ax.grid(alpha=0.3)
+        for k, setter in ((kx, axes[0][0].set_xscale), (ky, axes[0][0].set_yscale)):
+            vals = [r[k] for r in rows if _finite(r.get(k))]
+            if vals and min(vals) > 0 and max(vals) / min(vals) >= 20:   # e.g. durations 0.1 ... 4 s
+                setter("log")
+        axes[0][0].set_ylabel(_label(ky))
+        if sc is not None:
+            fig.colorbar(sc, ax=axes[0].tolist(), label="peak |ZMP| [mm]" if what == "peak_zmp"
+                         else "time to recover after the push [s]")
+        fig.suptitle(f"{sf.name}: " + {"outcome": "o stood (green ankle strategy only, blue hip strategy), x fell",
+                                      "peak_zmp": "peak |ZMP| of the runs that stood; x fell",
+                                      "time_to_recover": "time to recover; x fell"}[what], fontsize=10)
+        p = out / fname
+        fig.savefig(p, dpi=120, bbox_inches="tight")
+        plt.close(fig)
+        figs.append(p)
+    return figs
+
+
+def _finite(x) -> bool:
+    return isinstance(x, (int, float)) and math.isfinite(x)
+
+
+def _marker(r: dict, size: int = 60) -> dict:
+    if r.get("outcome") == "error":
+        return {"marker": "s", "c": "0.6", "s": size}
+    if r.get("outcome") != "completed":
+        return {"marker": "x", "c": "tab:red", "s": size}
+    return {"marker": "o", "c": "tab:blue" if r.get("max_phase", 0) > 0 else "tab:green", "s": size}
+
+
+# ---------------------------------------------------------------------------------------------
+# capability map: survive/fall boundary per variant against the analytic bounds
+
+CAPABILITY_X = ("push.duration", "push.height")
+
+
+def capability_key(sf) -> str | None:
+    """The x key of the capability map: a grid over push.force and one of CAPABILITY_X; else None."""
+    keys = list(sf.axes)
+    if len(keys) != 2 or "push.force" not in keys:
+        return None
+    kx = keys[0] if keys[1] == "push.force" else keys[1]
+    return kx if kx in CAPABILITY_X else None
+
+
+def survive_boundary(rows: list[dict[str, Any]], variant: str, kx: str,
+                     ky: str = "push.force") -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """For each value of kx (sorted) among the variant's rows: the largest force ky at which the
+    robot stood with every smaller force at that x standing too (0 when the smallest one fell; an
+    error counts as not standing), and whether every force tried there stood (the true boundary
+    is then higher). Returns (x, force, all_stood) arrays. The row of a point that raised
+    (anklehip.running.points) carries only its id and outcome: it is not seen here."""
+    by_x: dict[float, list[tuple[float, bool]]] = {}
+    for r in rows:
+        if r.get("variant") == variant:
+            by_x.setdefault(float(r[kx]), []).append((float(r[ky]), r.get("outcome") == "completed"))
+    xs, fs, top = [], [], []
+    for x in sorted(by_x):
+        best, all_stood = 0.0, True
+        for f, stood in sorted(by_x[x]):
+            if not stood:
+                all_stood = False
+                break
+            best = f
+        xs.append(x); fs.append(best); top.append(all_stood)
+    return np.array(xs), np.array(fs), np.array(top, bool)
+
+
+def _axis_ends(xs: np.ndarray, log: bool) -> tuple[float, float]:
+    """The x range of the map: half a grid step (geometric on a log axis) beyond the first and last x."""
+    u = np.log(xs) if log else np.asarray(xs, float)
+    half = (u[1] - u[0]) / 2 if len(u) > 1 else (0.2 if log else 0.05 * max(abs(u[0]), 1e-3))
+    half_end = (u[-1] - u[-2]) / 2 if len(u) > 1 else half
+    lo, hi = u[0] - half, u[-1] + half_end
+    return (math.exp(lo), math.exp(hi)) if log else (lo, hi)
+
+
+def plot_capability(sf, rows: list[dict[str, Any]], out: Path, plant_params: dict) -> Path | None:
+    """capability_figure as <out>/capability.png; None when there is none."""
+    fig = capability_figure(sf, rows, plant_params)
+    if fig is None:
+        return None
+    import matplotlib.pyplot as plt
+    p = Path(out) / "capability.png"
+    fig.savefig(p, dpi=120, bbox_inches="tight")
+    plt.close(fig)
+    return p
+
+
+def capability_figure(sf, rows: list[dict[str, Any]], plant_params: dict):
+    """The capability map: one axes, x = push.duration (log) or push.height, y = peak push force; each
+    variant's survive/fall boundary (survive_boundary) as a step line, each value held back to the
+    previous x (a longer or higher push is harder), the best variant's region shaded, and the
+    analytic bounds: static tipping, sustained-push limit and the LIP bound of the ankle strategy.
+    Forces are magnitudes (push.direction -1: on the chest, bounds mirrored). The bounds use
+    plant_params (the plant FMU's defaults with the scenario's and the first variant's overrides).
+    None when the sweep is not a grid over push.force and push.duration / push.height, or the
+    parameters are not the sagittal model's."""
+    import dataclasses
+
+    from .bounds import lip_force_limit, robot_from_plant_params, static_tipping_force, sustained_push_limit
+    kx = capability_key(sf)
+    if kx is None:
+        return None
+    try:
+        robot = robot_from_plant_params(plant_params)
+    except KeyError:
+        return None
+    import matplotlib.pyplot as plt
+    direction = 1 if sf.push["direction"] >= 0 else -1
+    side = "back" if direction > 0 else "chest"
+    rise, dur = sf.push["rise"], sf.push["duration"]
+    xv = np.array(sorted(set(sf.axes[kx])), float)
+    log = kx == "push.duration" and xv[0] > 0
+    fig, ax = plt.subplots(figsize=(8, 5.2))
+    names = [x.name for x in sf.variants]
+    boundaries = {v: survive_boundary(rows, v, kx) for v in names}
+    # A longer (or higher) push is harder: the force that stood at x also stands for every x' between
+    # the previous grid value and x. Each step is drawn back to the previous x: an inner estimate.
+    x0, x1 = _axis_ends(xv, log)
+    best = [max([float(fs[xs == x][0]) for xs, fs, _ in boundaries.values() if x in xs], default=0.0) for x in xv]
+    ax.stairs(best, np.concatenate([[x0], xv]), fill=True, color="tab:green", alpha=0.10, lw=0)   # the best variant
+    for i, v in enumerate(names):     # earlier variants drawn wider: equal boundaries stay visible
+        xs, fs, top = boundaries[v]
+        if not len(xs):
+            continue
+        c = f"C{i}"
+        ax.stairs(fs, np.concatenate([[x0], xs]), baseline=None, color=c, lw=1.3 + 1.2 * (len(names) - 1 - i), label=v)
+        ax.plot(xs[~top], fs[~top], "o", color=c, ms=4)
+        ax.plot(xs[top], fs[top], "^", color=c, ms=7)
+    # the analytic bounds over x
+    xx = np.geomspace(x0, x1, 400) if log else np.linspace(max(x0, 1e-3), x1, 400)
+    if kx == "push.duration":
+        static = np.full_like(xx, static_tipping_force(robot, direction))
+        sustained = np.full_like(xx, sustained_push_limit(robot, direction))
+        lip = lip_force_limit(robot, xx, rise, direction)
+        lip_label = f"LIP bound of the ankle strategy ({1000 * rise:g} ms rise/fall, h = {robot.h:.3f} m)"
+        shape = f"trapezoid push on the {side}, rise/fall {1000 * rise:g} ms, at h = {robot.h:.3f} m"
+    else:
+        hs = [dataclasses.replace(robot, h=h) for h in xx]
+        static = np.array([static_tipping_force(r, direction) for r in hs])
+        sustained = np.array([sustained_push_limit(r, direction) for r in hs])
+        lip = np.array([float(lip_force_limit(r, dur, rise, direction)) for r in hs])
+        lip_label = f"LIP bound of the ankle strategy ({dur:g} s push, {1000 * rise:g} ms rise/fall)"
+        shape = f"trapezoid push on the {side}, {dur:g} s, rise/fall {1000 * rise:g} ms"
+    ax.plot(xx, static, "--", color="k", lw=1.3, label="static tipping force (erect, rigid)")
+    ax.plot(xx, sustained, ":", color="0.35", lw=1.6, label="sustained-push limit (any flat-footed strategy)")
+    ax.plot(xx, lip, "-", color="k", lw=1.3, label=lip_label)
+    fmax = max(max(sf.axes["push.force"]), float(np.max(sustained)))
+    ax.set_ylim(0.0, 1.15 * fmax)
+    ax.set_xlim(xx[0], xx[-1])
+    if log:
+        ax.set_xscale("log")
+        ax.set_xticks(xv, [f"{x:g}" for x in xv])
+        ax.minorticks_off()
+    ax.set_xlabel(_label(kx))
+    ax.set_ylabel(f"peak push force on the {side} [N]")
+    ax.grid(alpha=0.3)
+    note = "steps: largest force that stood with every smaller one (o), held back to the previous x; ^ all stood"
+    errors = sum(r.get("outcome") == "error" for r in rows)
+    if errors:
+        note += f"; {errors} points failed (error), see points.csv"
+    if any(v.plant != sf.variants[0].plant for v in sf.variants):
+        note += f"; bounds for the plant of variant {sf.variants[0].name}"
+    ax.set_title(f"{sf.name}: capability map, {shape}\n{note}", fontsize=9)
+    ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.12), ncol=2, fontsize=8, frameon=False)
+    return fig

@@ -1,0 +1,57 @@
+"""Command-line interface: ``anklehip <command> ...`` (docs/scenarios.md, docs/step-tests.md), a thin
+layer over the Python API (docs/python-api.md): the parser (cli.parser) and the commands
+(cli.commands).
+
+Exit status: 0 success, 1 a check failed (expected outcome, comparison, step test),
+2 the input is wrong (bad scenario, missing file or column, unknown parameter, bad option value,
+parameters the FMU refuses, output folder in use): an InputError, before anything is written.
+An error is one line on stderr that names the file, key, cell or option and the reason; no input
+ends in a Python traceback.
+"""
+from __future__ import annotations
+
+import os
+import sys
+
+from ..errors import InputError
+from .parser import EXIT_ERROR, EXIT_FAIL, EXIT_OK, build_parser
+
+__all__ = ["main", "build_parser", "UsageError", "EXIT_OK", "EXIT_FAIL", "EXIT_ERROR"]
+
+
+class UsageError(InputError):
+    """A command-line argument is wrong (the message names the option and the value)."""
+
+
+def _err(msg: str) -> int:
+    print(f"anklehip: error: {msg}", file=sys.stderr)
+    return EXIT_ERROR
+
+
+def main(argv=None) -> int:
+    import matplotlib
+    matplotlib.use("Agg")          # the command line only writes figures (the API leaves the backend alone)
+    from . import commands
+    p = build_parser()
+    a = p.parse_args(argv)
+    try:
+        return (a.fn if callable(a.fn) else getattr(commands, f"cmd_{a.fn}"))(a)   # robot: its own module
+    except KeyboardInterrupt:
+        print("interrupted", file=sys.stderr)
+        return 130
+    except BrokenPipeError:
+        return EXIT_OK
+    except InputError as e:
+        return _err(str(e))
+    except OSError as e:      # a file or folder we cannot read or write
+        return _err(f"{e.filename}: {e.strerror}" if e.filename else str(e))
+    except Exception as e:
+        if os.environ.get("ANKLEHIP_DEBUG"):
+            raise
+        # a bug: still one line on stderr, not a traceback
+        return _err(f"unexpected {type(e).__name__}: {e} (please report it with the command line; "
+                    "ANKLEHIP_DEBUG=1 shows the traceback)")
+
+
+if __name__ == "__main__":
+    sys.exit(main())

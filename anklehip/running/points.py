@@ -1,0 +1,289 @@
+"""Many independent closed-loop runs ("points") on Dask, the same code path from a laptop to a
+cluster: a local cluster by default, any running Dask scheduler by address (`scheduler`, else
+$DASK_SCHEDULER_ADDRESS). Every finished point is appended to a journal (JSON lines) at once, so:
+
+* a point that raises is recorded with its error (outcome "error"), the others go on;
+* Ctrl-C stops cleanly: the workers ignore SIGINT, the futures are cancelled, the finished points
+  stay in the journal (and in the caller's table), and no Dask shutdown noise is printed;
+* a rerun with the same journal skips the points already done (a killed run loses at most the
+  points in flight; a half-written last line is ignored).
+
+Progress is a bar on a terminal and a line per tenth of the points (or 30 s) otherwise, so that it
+shows in logs and CI too. The function that runs a point must be importable by the workers (a
+module-level function of this package) and return a dict of plain values.
+"""
+from __future__ import annotations
+
+import contextlib
+import json
+import logging
+import os
+import signal
+import sys
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Callable
+from ..errors import InputError
+
+JOURNAL_FORMAT = "anklehip-points"
+
+
+class JournalMismatch(InputError):
+    """The journal in the output folder belongs to other points (another definition or other FMUs)."""
+
+
+@dataclass
+class Outcome:
+    rows: list[dict[str, Any]]          # one per finished point, in the order of the specs
+    total: int
+    resumed: int = 0                    # rows taken over from the journal
+    interrupted: bool = False
+    errors: int = 0
+    wall: float = 0.0
+    missing: list[str] = field(default_factory=list)   # ids of the points not done (interrupted)
+
+    @property
+    def complete(self) -> bool:
+        return not self.interrupted and not self.missing
+
+
+def call_point(fn: Callable[[dict], dict], spec: dict) -> dict:
+    """Run one point; an exception becomes the point's recorded error (never fatal to the sweep)."""
+    try:
+        row = dict(fn(spec))
+    except Exception as e:          # noqa: BLE001 - recorded, the sweep goes on
+        row = {"outcome": "error", "error": f"{type(e).__name__}: {e}"}
+    row["id"] = spec["id"]
+    return row
+
+
+# ---------------------------------------------------------------------------------------------
+# journal
+
+def read_journal(path: Path, key: str) -> dict[str, dict]:
+    """The rows already done, by id; {} when there is no journal. Raises JournalMismatch when the
+    journal was written for another key."""
+    path = Path(path)
+    if not path.is_file():
+        return {}
+    rows: dict[str, dict] = {}
+    with open(path, encoding="utf-8") as f:
+        lines = f.read().split("\n")
+    if not lines or not lines[0].strip():
+        return {}
+    try:
+        head = json.loads(lines[0])
+    except json.JSONDecodeError:
+        raise JournalMismatch(f"{path}: not a points journal (first line is not JSON)") from None
+    if head.get("journal") != JOURNAL_FORMAT:
+        raise JournalMismatch(f"{path}: not a points journal")
+    if head.get("key") != key:
+        raise JournalMismatch(f"{path} holds the points of another definition or of other FMUs "
+                              f"({head.get('what', '?')}); use another output folder, or --restart to discard it")
+    for line in lines[1:]:
+        if not line.strip():
+            continue
+        try:
+            r = json.loads(line)
+        except json.JSONDecodeError:     # the half-written last line of a killed run
+            continue
+        if isinstance(r, dict) and "id" in r:
+            rows[r["id"]] = r
+    return rows
+
+
+class _Journal:
+    def __init__(self, path: Path | None, key: str, what: str):
+        self.f = None
+        if path is None:
+            return
+        path = Path(path)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        new = not path.is_file() or path.stat().st_size == 0
+        self.f = open(path, "a", encoding="utf-8")
+        if new:
+            self._write({"journal": JOURNAL_FORMAT, "version": 1, "key": key, "what": what})
+
+    def _write(self, obj: dict) -> None:
+        self.f.write(json.dumps(obj, allow_nan=True) + "\n")
+        self.f.flush()
+        os.fsync(self.f.fileno())
+
+    def add(self, row: dict) -> None:
+        if self.f is not None:
+            self._write(row)
+
+    def close(self) -> None:
+        if self.f is not None:
+            self.f.close()
+
+
+# ---------------------------------------------------------------------------------------------
+# progress
+
+class _Progress:
+    """A bar on a terminal; otherwise a line on stderr per tenth of the points or per 30 s; nothing
+    with show=False."""
+
+    def __init__(self, total: int, done: int, label: str, stream=None, show: bool = True):
+        self.total, self.done, self.label = total, done, label
+        self.stream = stream or sys.stderr
+        self.show = show
+        self.t0 = self.t_last = time.perf_counter()
+        self.start_done = done
+        self.bar = None
+        self.next_line = done + max(1, total // 10)
+        if not show:
+            pass
+        elif self.stream.isatty():
+            from tqdm import tqdm
+            self.bar = tqdm(total=total, initial=done, unit="pt", desc=label, leave=False, file=self.stream)
+        elif total:
+            print(f"{label}: {total} points" + (f", {done} already done (resumed)" if done else ""),
+                  file=self.stream, flush=True)
+
+    def update(self) -> None:
+        self.done += 1
+        if self.bar is not None:
+            self.bar.update(1)
+            return
+        if not self.show:
+            return
+        now = time.perf_counter()
+        if self.done >= self.next_line or now - self.t_last >= 30.0 or self.done == self.total:
+            rate = (self.done - self.start_done) / max(now - self.t0, 1e-9) * 60.0
+            left = (self.total - self.done) / rate if rate > 0 else float("nan")
+            print(f"{self.label}: {self.done}/{self.total} points ({100 * self.done / self.total:.0f} %), "
+                  f"{rate:.1f} per min, about {left:.1f} min left", file=self.stream, flush=True)
+            self.t_last = now
+            self.next_line = self.done + max(1, self.total // 10)
+
+    def close(self) -> None:
+        if self.bar is not None:
+            self.bar.close()
+
+
+# ---------------------------------------------------------------------------------------------
+# Dask
+
+def scheduler_address(scheduler: str | None) -> str | None:
+    """The scheduler to use: the argument, else $DASK_SCHEDULER_ADDRESS, else None (a local cluster)."""
+    return scheduler or os.environ.get("DASK_SCHEDULER_ADDRESS") or None
+
+
+@contextlib.contextmanager
+def _quiet_dask():
+    """Dask's own logging at ERROR, and nothing at all once we shut down after Ctrl-C."""
+    names = ("distributed", "distributed.nanny", "distributed.worker", "distributed.scheduler",
+             "distributed.core", "distributed.comm", "asyncio", "tornado")
+    old = {n: logging.getLogger(n).level for n in names}
+    for n in names:
+        logging.getLogger(n).setLevel(logging.ERROR)
+    try:
+        yield
+    finally:
+        for n, lvl in old.items():
+            logging.getLogger(n).setLevel(lvl)
+
+
+@contextlib.contextmanager
+def dask_client(workers: int, scheduler: str | None):
+    """A Client of the scheduler at `scheduler` ($DASK_SCHEDULER_ADDRESS), else of a local cluster of
+    `workers` processes that ignore SIGINT (Ctrl-C reaches only this process, which then stops
+    them)."""
+    from dask.distributed import Client, LocalCluster
+    addr = scheduler_address(scheduler)
+    if addr:
+        with Client(addr, timeout="20s") as client:
+            yield client
+        return
+    # inherited by the worker processes: SIGINT ignored, Dask's logging at ERROR (a worker whose
+    # task is cancelled at Ctrl-C would log a warning otherwise)
+    old = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    old_env = os.environ.get("DASK_LOGGING__DISTRIBUTED")
+    os.environ["DASK_LOGGING__DISTRIBUTED"] = "error"
+    try:
+        cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None)
+    finally:
+        signal.signal(signal.SIGINT, old)
+        if old_env is None:
+            os.environ.pop("DASK_LOGGING__DISTRIBUTED", None)
+        else:
+            os.environ["DASK_LOGGING__DISTRIBUTED"] = old_env
+    try:
+        with Client(cluster) as client:
+            yield client
+    finally:
+        with contextlib.suppress(Exception):
+            cluster.close(timeout=10)
+
+
+def run_points(fn: Callable[[dict], dict], specs: list[dict], *, workers: int = 2, scheduler: str | None = None,
+               journal: Path | None = None, key: str = "", what: str = "", label: str = "points",
+               restart: bool = False, progress: bool = True) -> Outcome:
+    """Run fn(spec) for every spec (each with a unique str "id") and collect the rows.
+
+    workers <= 1 and no scheduler: in this process, one after the other (no Dask cluster).
+    `journal`: where finished rows are appended (and read back on a rerun with the same `key`;
+    `restart` discards it first). Ctrl-C returns what is done with interrupted=True. `progress`:
+    the bar or lines on stderr (False: none)."""
+    ids = [s["id"] for s in specs]
+    if len(set(ids)) != len(ids):
+        raise ValueError("run_points: point ids are not unique")
+    if journal is not None and restart and Path(journal).exists():
+        Path(journal).unlink()
+    done = read_journal(journal, key) if journal is not None else {}
+    done = {i: r for i, r in done.items() if i in set(ids)}
+    todo = [s for s in specs if s["id"] not in done]
+    out = Outcome(rows=[], total=len(specs), resumed=len(done))
+    j = _Journal(journal, key, what)
+    prog = _Progress(len(specs), len(done), label, show=progress)
+    t0 = time.perf_counter()
+    try:
+        with _quiet_dask():
+            if workers <= 1 and not scheduler_address(scheduler):
+                try:
+                    for s in todo:
+                        r = call_point(fn, s)
+                        done[s["id"]] = r
+                        j.add(r)
+                        prog.update()
+                except KeyboardInterrupt:
+                    out.interrupted = True
+            else:
+                _run_dask(fn, todo, workers, scheduler, done, j, prog, out)
+    finally:
+        prog.close()
+        j.close()
+    out.wall = time.perf_counter() - t0
+    out.rows = [done[i] for i in ids if i in done]
+    out.missing = [i for i in ids if i not in done]
+    out.errors = sum(1 for r in out.rows if r.get("outcome") == "error")
+    return out
+
+
+def _silence_dask() -> None:
+    for n in ("distributed", "asyncio", "tornado"):
+        logging.getLogger(n).setLevel(logging.CRITICAL + 1)
+
+
+def _run_dask(fn, todo, workers, scheduler, done, journal, prog, out) -> None:
+    from dask.distributed import as_completed
+    try:
+        with dask_client(workers, scheduler) as client:
+            futures = client.map(call_point, [fn] * len(todo), todo, pure=False)
+            try:
+                for fut in as_completed(futures):
+                    r = fut.result()
+                    done[r["id"]] = r
+                    journal.add(r)
+                    prog.update()
+            except KeyboardInterrupt:
+                out.interrupted = True
+                _silence_dask()
+                with contextlib.suppress(Exception):
+                    client.cancel(futures)
+    except KeyboardInterrupt:          # during the cluster's start or shutdown
+        out.interrupted = True
+        _silence_dask()

@@ -1,0 +1,248 @@
+"""Sweep files (`scenarios/sweeps/<name>.toml`): a base scenario, the push that is swept, the
+controller variants compared, and a full grid or seeded random samples over the push's magnitude,
+duration, rise time, height, onset and direction, controller and plant parameters and fault
+options. Each point is one closed-loop run of the base scenario with that push and those values
+(docs/scenarios.md, "Sweep files"). Errors name the file, the key and the value.
+
+    description = "..."
+    scenario = "hip_saves_push"           # the base scenario (a name in scenarios/, or a path)
+    stop_time = 8.0                       # optional: instead of the scenario's
+    [push]                                # the swept push; it replaces the scenario's pushes
+    t = 2.0                               # onset [s]
+    force = 8.0                           # peak [N] (> 0; the direction gives the sign)
+    duration = 0.5                        # [s], rise included
+    rise = 0.05                           # [s]
+    direction = 1                         # +1 on the back (forward), -1 on the chest
+    [[variant]]                           # compared configurations (default: one, the scenario's)
+    name = "ankle_only"
+    controller = { hip_strategy_enabled = 0 }
+    config = "paper"                      # optional: a named controller configuration
+    [grid]                                # every combination ...
+    "push.force" = "2:20:1"               # start:stop:step, a,b,c or a list of numbers
+    "push.duration" = [0.1, 0.5, 1.0]
+    [random]                              # ... or n seeded uniform samples
+    n = 200
+    seed = 1
+    "push.force" = [2.0, 20.0]
+
+Swept keys: push.force, push.duration, push.rise, push.t, push.direction, push.height (the push
+point's height above the sole, the plant's h_push); controller.<parameter>, plant.<parameter>
+(checked against the FMUs); faults.<key> (docs/scenarios.md, "Fault injection").
+"""
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..files.text import read_toml
+from ..files.scenario import PushProfile, PushSegment, ScenarioError, _V
+from .sweep import MAX_GRID, Variant, parse_grid
+
+TOP_KEYS = {"description", "scenario", "stop_time", "push", "variant", "grid", "random"}
+PUSH_FIELDS = {"t": 2.0, "force": 8.0, "duration": 0.5, "rise": 0.05, "direction": 1.0}
+PUSH_SWEPT = {"force", "duration", "rise", "t", "direction", "height"}
+RANDOM_KEYS = {"n", "seed"}
+
+
+@dataclass
+class SweepFile:
+    name: str
+    path: Path
+    scenario: Path
+    description: str = ""
+    stop_time: float | None = None
+    push: dict[str, float] = field(default_factory=lambda: dict(PUSH_FIELDS))
+    variants: list[Variant] = field(default_factory=lambda: [Variant("default", {}, {})])
+    axes: dict[str, list[float]] = field(default_factory=dict)          # grid: key -> values
+    ranges: dict[str, tuple[float, float]] = field(default_factory=dict)  # random: key -> (lo, hi)
+    n_random: int = 0
+    seed: int = 1
+
+    def values(self) -> list[dict[str, float]]:
+        """The swept values of every point (without the variant), in a fixed order."""
+        if self.axes:
+            keys = list(self.axes)
+            grids = np.meshgrid(*[self.axes[k] for k in keys], indexing="ij")
+            return [{k: float(g.flat[i]) for k, g in zip(keys, grids)} for i in range(grids[0].size)]
+        rng = np.random.default_rng(self.seed)
+        keys = list(self.ranges)
+        u = rng.random((self.n_random, len(keys)))
+        return [{k: float(lo + (hi - lo) * u[i, j]) for j, (k, (lo, hi)) in enumerate(self.ranges.items())}
+                for i in range(self.n_random)]
+
+    def specs(self, fmu_dir: str | None, engine: str) -> list[dict[str, Any]]:
+        out = []
+        for v in self.variants:
+            vh = hashlib.sha256(json.dumps([v.name, v.controller, v.plant, v.config], sort_keys=True)
+                                .encode()).hexdigest()[:8]
+            for vals in self.values():
+                pid = v.name + "|" + ",".join(f"{k}={x!r}" for k, x in vals.items()) + f"#{vh}"
+                out.append({"id": pid, "sweep": str(self.path), "fmu_dir": fmu_dir, "engine": engine,
+                            "variant": {"name": v.name, "controller": v.controller, "plant": v.plant,
+                                        "config": v.config}, "values": vals})
+        return out
+
+
+def load_sweep_file(path: str | Path) -> SweepFile:
+    path = Path(path)
+    from ..files.paths import repo_root
+    try:
+        where = str(path.resolve().relative_to(repo_root()))
+    except ValueError:
+        where = str(path)
+    data = read_toml(path, where, ScenarioError)
+    v = _V(where)
+    v.keys(data, TOP_KEYS, "", {"scenario"})
+    from ..files.paths import find_scenario
+    sc_name = v.str_(data["scenario"], "scenario")
+    try:
+        scenario = find_scenario(sc_name) if "/" not in sc_name else (path.parent / sc_name).resolve()
+    except FileNotFoundError as e:
+        v.fail("scenario", str(e))
+    if not scenario.is_file():
+        v.fail("scenario", f"{sc_name!r}: no such scenario file")
+    sf = SweepFile(name=path.stem, path=path, scenario=scenario)
+    if "description" in data:
+        sf.description = v.str_(data["description"], "description")
+    if "stop_time" in data:
+        sf.stop_time = v.num(data["stop_time"], "stop_time", gt=0.0)
+    if "push" in data:
+        p = v.table(data["push"], "push")
+        v.keys(p, set(PUSH_FIELDS), "push.")
+        for k, x in p.items():
+            sf.push[k] = v.num(x, f"push.{k}", **({"gt": 0.0} if k in ("force", "duration") else {"ge": 0.0}
+                                                  if k in ("t", "rise") else {}))
+    if "variant" in data:
+        sf.variants = []
+        for i, it in enumerate(v.list_(data["variant"], "variant")):
+            it = v.table(it, f"variant[{i}]")
+            v.keys(it, {"name", "controller", "plant", "config"}, f"variant[{i}].", {"name"})
+            name = v.str_(it["name"], f"variant[{i}].name")
+            if name in {x.name for x in sf.variants}:
+                v.fail(f"variant[{i}].name", f"{name!r} is used twice")
+            sf.variants.append(Variant(name, dict(v.table(it.get("controller", {}), f"variant[{i}].controller")),
+                                       dict(v.table(it.get("plant", {}), f"variant[{i}].plant")),
+                                       v.str_(it["config"], f"variant[{i}].config") if "config" in it else None))
+    if ("grid" in data) == ("random" in data):
+        v.fail("grid", "give exactly one of [grid] (every combination) or [random] (seeded samples)")
+    if "grid" in data:
+        g = v.table(data["grid"], "grid")
+        if not g:
+            v.fail("grid", "names no key to sweep")
+        n = 1
+        for k, spec in g.items():
+            _check_key(v, f"grid.{k}", k)
+            if isinstance(spec, str):
+                try:
+                    vals = parse_grid(spec, f"{where}: grid.{k}")
+                except ValueError as e:
+                    raise ScenarioError(str(e)) from None
+            else:
+                vals = [v.num(x, f"grid.{k}") for x in v.list_(spec, f"grid.{k}")]
+            if not vals:
+                v.fail(f"grid.{k}", "no values")
+            sf.axes[k] = vals
+            n *= len(vals)
+        if n * len(sf.variants) > MAX_GRID:
+            v.fail("grid", f"{n * len(sf.variants)} points (variants included), more than {MAX_GRID}")
+    else:
+        r = v.table(data["random"], "random")
+        if "n" not in r:
+            v.fail("random.n", "required key missing (the number of samples)")
+        sf.n_random = v.int_(r["n"], "random.n", ge=1)
+        sf.seed = v.int_(r["seed"], "random.seed", ge=0) if "seed" in r else 1
+        for k, spec in r.items():
+            if k in RANDOM_KEYS:
+                continue
+            _check_key(v, f"random.{k}", k)
+            lst = v.list_(spec, f"random.{k}")
+            if len(lst) != 2:
+                v.fail(f"random.{k}", f"must be [low, high], got {spec!r}")
+            lo, hi = (v.num(x, f"random.{k}") for x in lst)
+            if not lo < hi:
+                v.fail(f"random.{k}", f"needs low < high, got {spec!r}")
+            sf.ranges[k] = (lo, hi)
+        if not sf.ranges:
+            v.fail("random", "names no key to sweep")
+        if sf.n_random * len(sf.variants) > MAX_GRID:
+            v.fail("random.n", f"{sf.n_random * len(sf.variants)} points (variants included), more than {MAX_GRID}")
+    return sf
+
+
+def _check_key(v: _V, where: str, key: str) -> None:
+    group, _, name = key.partition(".")
+    if group == "push" and name in PUSH_SWEPT:
+        return
+    if group in ("controller", "plant", "faults") and name:
+        return
+    v.fail(where, "unknown key to sweep (push.force|duration|rise|t|direction|height, controller.P, "
+                  "plant.P, faults.KEY)")
+
+
+def point_setup(sf: SweepFile, vals: dict[str, float], scenario) -> tuple[PushProfile, dict, dict, dict]:
+    """The push profile and the controller / plant / fault overrides of one point."""
+    push = dict(sf.push)
+    c, p, f = {}, {}, {}
+    for k, x in vals.items():
+        group, _, name = k.partition(".")
+        if group == "push":
+            if name == "height":
+                p["h_push"] = x
+            else:
+                push[name] = x
+        elif group == "controller":
+            c[name] = x
+        elif group == "plant":
+            p[name] = x
+        else:
+            f[name] = x
+    force = push["force"] * (1.0 if push["direction"] >= 0 else -1.0)
+    prof = PushProfile.from_segments([PushSegment("pulse", t=push["t"], force=force, duration=push["duration"],
+                                                  rise=push["rise"])])
+    return prof, c, p, f
+
+
+def sweepfile_point(spec: dict) -> dict[str, Any]:
+    """One point of a sweep file (anklehip.running.points runs it on the workers): the row of the table."""
+    from .master import simulate
+    from ..analysis.summary import summarize_pushes
+    from ..files.scenario import faults_from, load_scenario
+    from .sweep import cached_models
+    sf = load_sweep_file(spec["sweep"])
+    sc = load_scenario(sf.scenario)
+    vals = spec["values"]
+    var = spec["variant"]
+    if var["config"]:
+        sc.controller_config = var["config"]
+    push, c, p, f = point_setup(sf, vals, sc)
+    faults = faults_from(f, sc.faults, f"{sf.path}: faults") if f else sc.faults
+    engine = spec["engine"] if not (faults.sensor_active or faults.transition_push) else "fmpy"
+    stop = sf.stop_time or sc.stop_time
+    res = simulate(sc, cached_models(spec["fmu_dir"], sc.plant_model), controller_overrides={**var["controller"], **c},
+                   plant_overrides={**var["plant"], **p}, push=push, faults=faults, stop_time=stop,
+                   progress=False, engine=engine, check_load=False)
+    d = res.data
+    ps = summarize_pushes(res, push, sc.expect.erect_tol)
+    s = ps[0] if ps else None
+    row: dict[str, Any] = {"variant": var["name"], **vals, "outcome": res.outcome,
+                           "fell_at": res.fell_at if res.fell_at is not None else math.nan,
+                           "peak_force": push.peak(), "impulse": s.impulse if s else math.nan,
+                           "peak_zmp": s.peak_zmp if s else math.nan,
+                           "phases": "".join(str(x) for x in s.phases) if s else "",
+                           "max_phase": int(d["phase"].max()) if "phase" in d.dtype.names else -1,
+                           "time_to_recover": s.time_to_recover if s and s.time_to_recover is not None else math.nan,
+                           "peak_hip": s.peak_hip if s else math.nan, "peak_ankle": s.peak_ankle if s else math.nan,
+                           "max_abs_foot_pitch": float(np.max(np.abs(d["foot_pitch"]))) if "foot_pitch" in d.dtype.names else math.nan,
+                           "mode_switches": int(d["mode_switches"][-1]) if "mode_switches" in d.dtype.names else -1,
+                           "solver_steps": int(d["cvode_steps"][-1]) if "cvode_steps" in d.dtype.names else -1,
+                           "rhs_evals": int(d["rhs_evals"][-1]) if "rhs_evals" in d.dtype.names else -1,
+                           "engine": engine, "wall_time": res.wall_time}
+    if res.outcome == "error":
+        row["error"] = res.message
+    return row
