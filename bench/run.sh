@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# All benchmarks in one run (figures, not pass/fail): the controller tick (C), the 3D plant on ODE,
-# the FMPy closed loop's per-step split, then bench/report.py: the sagittal plant with both
+# All benchmarks in one run (figures, not pass/fail): the controller tick (C), the 3D plant on ODE
+# and the closed loop on it, the FMPy closed loop's per-step split, then bench/report.py: the sagittal plant with both
 # integrators, the closed loop on the FMPy master and on the native engine, the peers (FMPy's
 # simulate_fmu, a container FMU, the Rust fmi-sim crate) and scaling: a table on stdout and
 # bench/results.json (docs/performance.md).
@@ -15,8 +15,11 @@ cmake --build "$build" --target controller_step_bench plant_bench plant3d_bench 
 echo "== controller: ahc_step (C99 library), 20 passes over an 8 s sequence through all phases"
 "$build/bench/controller_step_bench" 20
 echo
-echo "== 3D plant: Hoap2Plant3D model on ODE, 1 ms communication steps, internal step side by side"
+echo "== 3D plant: Hoap2Plant3D model on ODE, 1 ms communication steps, configurations side by side"
 "$build/plant3d/plant3d_bench"
+echo
+echo "== closed loop on the 3D plant: paper_five_pushes, native engine and FMPy master, as shipped and as before"
+"$py" "$root/bench/closed_loop_3d_bench.py"
 echo
 echo "== closed loop, FMPy master: where a step's time goes (paper_five_pushes, 20 s)"
 "$py" "$root/bench/closed_loop_bench.py" paper_five_pushes --stop-time 20
