@@ -52,7 +52,7 @@ def main() -> int:
     T = sc.stop_time
     engines = ["native", "fmpy"] if native.available() else ["fmpy"]
     print(f"paper_five_pushes on Hoap2Plant3D ({T:g} s), medians of {a.repeat}")
-    print(f"{'plant configuration':<20} {'engine':<8} {'wall [s]':>9} {'x real time':>12} {'CPU [s]':>9} {'x (CPU)':>9}")
+    print(f"{'plant configuration':<20} {'engine':<12} {'wall [s]':>9} {'x real time':>12} {'CPU [s]':>9} {'x (CPU)':>9}")
     with tempfile.TemporaryDirectory() as tmp:
         for label, plant in (("as shipped", {}), ("previous release", PREVIOUS)):
             for engine in engines:
@@ -63,7 +63,7 @@ def main() -> int:
                         native.write_csv(Path(tmp) / "run.csv", r.data)
                 wall, cpu = measure(one, a.repeat)
                 what = engine + (" +CSV" if engine == "native" else "")
-                print(f"{label:<20} {what:<8} {wall:9.3f} {T / wall:12.1f} {cpu:9.3f} {T / cpu:9.1f}")
+                print(f"{label:<20} {what:<12} {wall:9.3f} {T / wall:12.1f} {cpu:9.3f} {T / cpu:9.1f}")
     return 0
 
 

@@ -209,6 +209,8 @@ def test_tipping_force_equals_the_sagittal_plants(unzipped3d, plant_unzipped, si
     f2, cx2, mode2 = _tipping_force(plant_unzipped, {}, sign=sign)
     assert mode3 == mode2 == (1 if sign > 0 else 2)
     assert f3 == pytest.approx(f2, rel=0.02), (f3, f2, cx3, cx2)
+    print(f"{'heels' if sign > 0 else 'toes'} lift at {f3:+.3f} N (3D) vs {f2:+.3f} N (sagittal): "
+          f"{100 * (f3 / f2 - 1):+.2f} %")
 
 
 def _step_push(unzipped: Path, params: dict, force: float, t_push: float = 0.2, t_end: float = 3.0):
@@ -273,7 +275,9 @@ def test_paper_pushes_on_the_3d_plant_match_the_sagittal_plants():
     from its constants, nothing else changes): five 0->1->2->3->0 cycles, no fall; phase 2 of every
     push ends by the paper's condition (the ZMP on the side opposite the push, p < 0, at the 2->3
     switch, not the fallback); per push the peak hip angle and the peak ZMP within 5 % and the
-    recovery time within 25 % of the sagittal plant's."""
+    recovery time within 25 % of the sagittal plant's. Check 4b: with the 3D knees made stiff (the
+    sagittal knees are rigid) the peak ZMP and the peak hip angle measured from the controller's
+    erect posture agree within 0.5 %."""
     import dataclasses
 
     from anklehip.running.master import Models, simulate
@@ -283,11 +287,13 @@ def test_paper_pushes_on_the_3d_plant_match_the_sagittal_plants():
 
     base = load_scenario(scenarios_dir() / "paper_five_pushes.toml")
     runs = {}
-    for plant in ("sagittal", "3d"):
+    stiff_knees = {"kp_knee": 1e5, "kd_knee": 2000.0}     # the sagittal model's knees are rigid
+    for label, plant, overrides in (("sagittal", "sagittal", None), ("3d", "3d", None),
+                                    ("3d, stiff knees", "3d", stiff_knees)):
         sc = dataclasses.replace(base, plant_model=plant)
-        res = simulate(sc, Models.load(plant_model=plant), progress=False)
+        res = simulate(sc, Models.load(plant_model=plant), plant_overrides=overrides, progress=False)
         assert res.outcome == "completed", res.message
-        runs[plant] = (res, summarize_pushes(res, sc.push, sc.expect.erect_tol))
+        runs[label] = (res, summarize_pushes(res, sc.push, sc.expect.erect_tol))
     res3, p3 = runs["3d"]
     assert res3.controller_overrides == {"link1_com_x": NOMINAL["LINK1_COM_X"],
                                          "link2_com_x": NOMINAL["LINK2_COM_X"]}, res3.controller_overrides
@@ -305,3 +311,59 @@ def test_paper_pushes_on_the_3d_plant_match_the_sagittal_plants():
               f"({100 * (a.peak_hip / b.peak_hip - 1):+.1f} %), peak ZMP {1000 * a.peak_zmp:.1f} vs "
               f"{1000 * b.peak_zmp:.1f} mm ({100 * (a.peak_zmp / b.peak_zmp - 1):+.1f} %), recovery "
               f"{a.time_to_recover:.3f} vs {b.time_to_recover:.3f} s")
+    # check 4b: with stiff knees what is left is the erect hip angle (the controller's, from the
+    # link CoM offsets): the ZMP and the hip's excursion from erect agree within 0.5 %
+    hip_erect = runs["3d, stiff knees"][0].erect[1]
+    for i, (a, b) in enumerate(zip(runs["3d, stiff knees"][1], runs["sagittal"][1])):
+        assert a.peak_zmp == pytest.approx(b.peak_zmp, rel=0.005), (i, a.peak_zmp, b.peak_zmp)
+        assert a.peak_hip - hip_erect == pytest.approx(b.peak_hip, rel=0.005), (i, a.peak_hip, hip_erect, b.peak_hip)
+        print(f"push {i + 1}, stiff knees: peak ZMP {100 * (a.peak_zmp / b.peak_zmp - 1):+.2f} %, hip from erect "
+              f"{100 * ((a.peak_hip - hip_erect) / b.peak_hip - 1):+.2f} %")
+
+def test_closed_loop_converges_at_the_default_steps():
+    """Establishes (docs/plant3d.md section 2, "Time steps, on evidence"): the closed loop on the 3D
+    plant has converged in the plant's internal steps. The first push of the main job on this plant,
+    run as shipped (1 ms flat, 0.25 ms rocking) and with both steps at 1/32 ms, peaks at the same ZMP
+    and hip angle within 0.2 % and crosses the same phases. The force outputs are the communication
+    step's mean (section 2, "Force outputs"); sampled at the end of the last internal step they
+    would vary by several per cent over the same range."""
+    from anklehip.running.master import Models, simulate
+    from anklehip.files.paths import scenarios_dir
+    from anklehip.files.scenario import load_scenario
+
+    base = load_scenario(scenarios_dir() / "paper_five_pushes_3d.toml")
+    models = Models.load(plant_model="3d")
+    peaks = {}
+    for label, steps in (("default", {}), ("1/32 ms", {"internal_step": 1e-3 / 32, "rocking_step": 1e-3 / 32})):
+        res = simulate(base, models, plant_overrides=steps, stop_time=6.0, progress=False)
+        assert res.outcome == "completed", res.message
+        d = res.data
+        peaks[label] = (float(d["zmp_x"].max()), float(d["theta_hip"].max()), sorted(set(d["phase"].tolist())))
+    (z1, h1, ph1), (z2, h2, ph2) = peaks["default"], peaks["1/32 ms"]
+    assert ph1 == ph2 == [0, 1, 2, 3]
+    assert z1 == pytest.approx(z2, rel=0.002) and h1 == pytest.approx(h2, rel=0.002), peaks
+    print(f"first push: peak ZMP {1e3 * z1:.3f} mm (default steps) vs {1e3 * z2:.3f} mm (1/32 ms), "
+          f"peak hip {h1:.5f} vs {h2:.5f} rad")
+
+
+@pytest.mark.parametrize("scenario, force, falls", [
+    ("side_push_3d", 15.0, False), ("side_push_3d", 16.0, True),
+    ("diagonal_push_3d", 8.5, False), ("diagonal_push_3d", 9.0, True)])
+def test_side_and_diagonal_push_limits(scenario, force, falls):
+    """Establishes the limits docs/plant3d.md section 6 quotes (checks 5 and 5b) for the sagittal
+    controller on the 3D plant: the side push's shape (1 s, 0.3 s ramps, toward +y) is survived at
+    15 N and fells the robot at 16 N; the diagonal push's shape (as much forward as to the left)
+    is survived at 8.5 N each way and fells it at 9 N each way. Both scenarios' pushes are scaled
+    to that peak, each component alike."""
+    import dataclasses
+
+    from anklehip.running.master import Models, simulate
+    from anklehip.files.paths import scenarios_dir
+    from anklehip.files.scenario import load_scenario
+
+    sc = load_scenario(scenarios_dir() / f"{scenario}.toml")
+    k = force / abs(sc.push_y.peak())
+    sc = dataclasses.replace(sc, push=sc.push.scaled(k), push_y=sc.push_y.scaled(k))
+    res = simulate(sc, Models.load(plant_model="3d"), progress=False)
+    assert res.outcome == ("fell" if falls else "completed"), (res.outcome, res.fell_at)
+    print(f"{scenario} at {force:g} N: {res.outcome}, |zmp_y| up to {1e3 * np.max(np.abs(res.data['zmp_y'])):.1f} mm")

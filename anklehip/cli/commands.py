@@ -7,7 +7,9 @@ Exit status: 0 success, 1 a check failed, 2 the input is wrong (an InputError; n
 from __future__ import annotations
 
 import json
+import math
 import shutil
+import statistics
 import sys
 from pathlib import Path
 from typing import Any
@@ -306,7 +308,11 @@ def cmd_sweep(a) -> int:
               f"{res.wall:.1f} s")
         for v in res.sweep_file.variants:
             rr = [r for r in res.rows if r.get("variant") == v.name]
-            print(f"  {v.name:<16} {sum(r['outcome'] == 'completed' for r in rr)} of {len(rr)} stood")
+            stood = [r for r in rr if r["outcome"] == "completed"]
+            rec = [r["time_to_recover"] for r in stood if math.isfinite(r.get("time_to_recover", math.nan))]
+            print(f"  {v.name:<16} {len(stood)} of {len(rr)} stood" + (
+                f", {len(rec)} of them erect again (median recovery {statistics.median(rec):.2f} s)" if rec else ""))
+        _print_boundaries(res.sweep_file, res.rows)
         figs = [f for k, f in res.files.items() if k.startswith("figure") or k == "capability"]
         print(f"table {res.files['table']}\n      {res.files['parquet']}" + "".join(f"\nfigure {f}" for f in figs))
     else:
@@ -320,6 +326,19 @@ def cmd_sweep(a) -> int:
         print(f"{len(res.rows)} of {res.total} points ({res.resumed} from an earlier run), {res.wall:.1f} s",
               file=sys.stderr)
     return _points_end(res, res.files["journal"], "sweep")
+
+
+def _print_boundaries(sf, rows) -> None:
+    """A force grid over a push's duration or height: per variant and per x, the largest force that
+    stood with every smaller one standing too (the capability map's boundary; >= when all stood)."""
+    from ..analysis.capability import capability_key, survive_boundary
+    kx = capability_key(sf)
+    if kx is None:
+        return
+    print(f"largest push.force that stood, every smaller one standing too [N], by {kx}:")
+    for v in sf.variants:
+        xs, fs, top = survive_boundary(rows, v.name, kx)
+        print(f"  {v.name:<16} " + "  ".join(f"{x:g}: {'>=' if t else ''}{f:g}" for x, f, t in zip(xs, fs, top)))
 
 
 def _points_end(res, journal: Path, command: str) -> int:

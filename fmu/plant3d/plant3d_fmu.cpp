@@ -161,11 +161,11 @@ ModelInfo makeInfo() {
   add("theta_hip", vr::theta_hip, R, Out, Cont, "rad", "Hip pitch (trunk relative to leg), mean of both legs");
   add("dtheta_ankle", vr::dtheta_ankle, R, Out, Cont, "rad/s", "Ankle pitch rate, mean of both legs");
   add("dtheta_hip", vr::dtheta_hip, R, Out, Cont, "rad/s", "Hip pitch rate, mean of both legs");
-  add("zmp_x", vr::zmp_x, R, Out, Cont, "m", "ZMP from the eight sole load cells, x from the ankles (feet frame); 0 when unloaded");
-  add("zmp_y", vr::zmp_y, R, Out, Cont, "m", "ZMP from the load cells, y from the middle of the ankles (feet frame)");
-  add("fz", vr::fz, R, Out, Cont, "N", "Total normal force: sum of the eight load cells");
-  add("fx", vr::fx, R, Out, Cont, "N", "Horizontal ground reaction force, x (+ forward)");
-  add("fy", vr::fy, R, Out, Cont, "N", "Horizontal ground reaction force, y (+ left)");
+  add("zmp_x", vr::zmp_x, R, Out, Cont, "m", "ZMP from the eight sole load cells, x from the ankles (feet frame); 0 when unloaded; mean over the communication step");
+  add("zmp_y", vr::zmp_y, R, Out, Cont, "m", "ZMP from the load cells, y from the middle of the ankles (feet frame) (mean over the communication step)");
+  add("fz", vr::fz, R, Out, Cont, "N", "Total normal force: sum of the eight load cells (mean over the communication step)");
+  add("fx", vr::fx, R, Out, Cont, "N", "Horizontal ground reaction force, x (+ forward) (mean over the communication step)");
+  add("fy", vr::fy, R, Out, Cont, "N", "Horizontal ground reaction force, y (+ left) (mean over the communication step)");
   add("com_x", vr::com_x, R, Out, Cont, "m", "Whole-robot CoM, x from the ankles (feet frame)");
   add("com_y", vr::com_y, R, Out, Cont, "m", "Whole-robot CoM, y from the middle of the ankles (feet frame)");
   add("com_z", vr::com_z, R, Out, Cont, "m", "Whole-robot CoM, height above the ankle axes");
@@ -173,13 +173,13 @@ ModelInfo makeInfo() {
   add("foot_roll", vr::foot_roll, R, Out, Cont, "rad", "Sole roll, mean of both feet (+ = left edge up)");
   add("contact_mode", vr::contact_mode, I, Out, Disc, "", "Contact of both feet: 0 flat, 1 on toes, 2 on heels, 3 airborne");
   add("fallen", vr::fallen, B, Out, Disc, "", "The robot has fallen (sole tilt or body lean past threshold)");
-  add("f_toe", vr::f_toe, R, Out, Cont, "N", "Toe load cells of both feet (sole-normal force, with noise/bias if enabled)");
+  add("f_toe", vr::f_toe, R, Out, Cont, "N", "Toe load cells of both feet: sole-normal force, mean over the communication step, with noise/bias if enabled");
   add("f_heel", vr::f_heel, R, Out, Cont, "N", "Heel load cells of both feet");
   add("required_mu", vr::required_mu, R, Out, Cont, "", "Friction coefficient required to prevent slip |f_horizontal|/fz");
-  add("zmp_true", vr::zmp_true, R, Out, Cont, "m", "Centre of pressure of the contact forces, x (no sensor model)");
+  add("zmp_true", vr::zmp_true, R, Out, Cont, "m", "Centre of pressure of the contact forces, x (no sensor model) (mean over the communication step)");
   add("zmp_true_y", vr::zmp_true_y, R, Out, Cont, "m", "Centre of pressure of the contact forces, y");
-  add("fz_true", vr::fz_true, R, Out, Cont, "N", "Vertical ground reaction of the contact forces");
-  add("moment_ankle", vr::moment_ankle, R, Out, Cont, "N.m", "Ground reaction moment about the mean ankle axis (foot-pitch sense)");
+  add("fz_true", vr::fz_true, R, Out, Cont, "N", "Vertical ground reaction of the contact forces (mean over the communication step)");
+  add("moment_ankle", vr::moment_ankle, R, Out, Cont, "N.m", "Ground reaction moment about the mean ankle axis (foot-pitch sense) (mean over the communication step)");
   add("energy", vr::energy, R, Out, Cont, "J", "Mechanical energy (kinetic + potential)");
   add("tau_ankle", vr::tau_ankle, R, Out, Cont, "N.m", "Ankle pitch servo torque, both legs");
   add("tau_hip", vr::tau_hip, R, Out, Cont, "N.m", "Hip pitch servo torque, both legs");
@@ -199,7 +199,7 @@ ModelInfo makeInfo() {
   for (int s = 0; s < kLegs; ++s)
     for (int c = 0; c < kCells; ++c)
       add(std::string("f_") + kSideNames[s] + "_" + kCellNames[c], vr::first_cell + s * kCells + c, R, Out, Cont, "N",
-          std::string("Load cell under the ") + kCellNames[c] + " corner of the " + kSideNames[s] + " sole");
+          std::string("Load cell under the ") + kCellNames[c] + " corner of the " + kSideNames[s] + " sole (mean over the communication step)");
   for (int s = 0; s < kLegs; ++s)
     for (int k = 0; k < kLegJoints; ++k)
       add(std::string("q_") + kSideNames[s] + "_" + joint_name(k), vr::first_joint + s * kLegJoints + k, R, Out, Cont,
