@@ -75,7 +75,7 @@ def path_of(name: str) -> Path:
 
 
 def run(name: str, models=None, engine: str | None = None) -> dict:
-    """paper_five_pushes on robots/<name>.toml: the summary of the run (anklehip.results)."""
+    """paper_five_pushes on robots/<name>.toml: the summary of the run (anklehip.analysis.summary)."""
     from anklehip.running.master import Models, simulate
     from anklehip.running.native import default_engine
     from anklehip.files.paths import find_scenario

@@ -132,9 +132,11 @@ def _write_inputs(path: Path, data, columns: list[tuple[str, str]], n: int) -> P
     return path
 
 
-def _replay(cmd_prefix, env, runner, unzipdir, csv_in, csv_out, step, stop):
+def _replay(cmd_prefix, env, runner, unzipdir, csv_in, csv_out, step, stop, params=None):
     cmd = [*cmd_prefix, str(runner), "--fmu-dir", str(unzipdir), "--input", str(csv_in), "--output", str(csv_out),
            "--fast", "--step", repr(step), "--stop-time", repr(stop)]
+    for k, v in (params or {}).items():
+        cmd += ["--param", f"{k}={v!r}"]
     p = subprocess.run(cmd, capture_output=True, text=True, timeout=600, env=env)
     assert p.returncode == 0, f"{' '.join(cmd)}\n{p.stdout}\n{p.stderr}"
     return read_csv_exact(csv_out)
@@ -158,16 +160,21 @@ def test_windows_binaries_replay_a_closed_loop_like_the_linux_ones(win64_fmus, w
 
     by_var = {var: col for col, var in res.controller_columns.items()}
     plant_inputs = [v.name for v in models.plant.by_causality("input")]
+    # each FMU with the parameters the closed loop gave it (the 3D plant's link CoM offsets reach
+    # the controller this way, docs/fmu.md)
+    sc = load_scenario(REPO_ROOT / "scenarios" / f"{scenario}.toml")
     cases = {
-        "controller": (models.controller, [(c, c) for c in res.controller_inputs]),
-        "plant": (models.plant, [(v, by_var.get(v, v)) for v in plant_inputs if by_var.get(v, v) in d.dtype.names]),
+        "controller": (models.controller, [(c, c) for c in res.controller_inputs], res.controller_overrides),
+        "plant": (models.plant, [(v, by_var.get(v, v)) for v in plant_inputs if by_var.get(v, v) in d.dtype.names],
+                  sc.plant),
     }
     linux_runner = native_tool("anklehip_rt_step")
     wine_cmd, wine_env = wine
-    for role, (info, columns) in cases.items():
+    for role, (info, columns, params) in cases.items():
         csv_in = _write_inputs(tmp_path / f"{role}_in.csv", d, columns, n)
-        lin = _replay([], None, linux_runner, info.unzipdir, csv_in, tmp_path / f"{role}_linux.csv", h, t_end)
-        win = _replay(wine_cmd, wine_env, win_runner, info.unzipdir, csv_in, tmp_path / f"{role}_win64.csv", h, t_end)
+        lin = _replay([], None, linux_runner, info.unzipdir, csv_in, tmp_path / f"{role}_linux.csv", h, t_end, params)
+        win = _replay(wine_cmd, wine_env, win_runner, info.unzipdir, csv_in, tmp_path / f"{role}_win64.csv", h, t_end,
+                      params)
         assert len(lin) == len(win) == n + 1
 
         # The Linux replay is the closed loop: a controller's outputs after step k are row k of
