@@ -216,7 +216,7 @@ def _scenario_and_models(a):
         sc.plant_model = a.plant
     if sc.push_y.peak() != 0 and sc.plant_model == "sagittal":
         raise ScenarioError(f"{_rel(sc.path)}: push_y: a sideways push needs the 3D plant (--plant 3d)")
-    models = Models.load(a.fmu_dir, plant_model=sc.plant_model)
+    models = Models.load(a.fmu_dir, plant_model=sc.plant_model, fmi=a.fmi)
     if getattr(a, "controller_config", None):
         sc.controller_config = a.controller_config
         models.controller.configuration(sc.controller_config, "--controller-config")
@@ -698,7 +698,7 @@ def cmd_info(a) -> int:
     from .info import format_text, interface, resolve_fmu, select
     from .paths import MissingFileError
     try:
-        info = select(interface(resolve_fmu(a.fmu, a.fmu_dir)), a.causality, a.name)
+        info = select(interface(resolve_fmu(a.fmu, a.fmu_dir, a.fmi)), a.causality, a.name)
     except (MissingFileError, FMUError) as e:
         return _err(str(e))
     print(json.dumps(info, indent=2) if a.json else format_text(info))
@@ -805,6 +805,9 @@ def cmd_export(a) -> int:
         return _err(str(e))
     print(f"wrote {out}: {models.controller.name} + {models.plant.name}, parameters of {sc.name}; "
           f"drive push_force (N) at the scenario's step {sc.step:g} s (docs/integration.md)")
+    if a.kind == "ssp":
+        from .export import SSP_VARIANTS
+        print(f"  this SSP is {SSP_VARIANTS[not a.libcosim]}")
     return EXIT_OK
 
 
@@ -846,6 +849,9 @@ def build_parser() -> argparse.ArgumentParser:
                                 "scenarios, step tests, comparison, plots, sweeps, FMU interfaces.")
     p.add_argument("--fmu-dir", metavar="DIR",
                    help="folder with the .fmu files (default: $ANKLEHIP_FMU_DIR or <repo>/build/fmus)")
+    p.add_argument("--fmi", type=int, choices=FMI_COMMANDS_VERSIONS, default=2,
+                   help="FMI version of the FMUs: 2 (default) or 3, the FMI 3.0 twins in <fmu dir>/fmi3/ "
+                        f"(commands: {', '.join(FMI3_COMMANDS)}; the FMPy engine)")
     p.add_argument("--version", action="version", version=f"anklehip {__version__}",
                    help="print the package's version and exit")
     sub = p.add_subparsers(dest="cmd", required=True, metavar="COMMAND",
@@ -1049,7 +1055,9 @@ def build_parser() -> argparse.ArgumentParser:
                    help="parameter override written into the artefact, e.g. controller.Ka=30 (repeatable)")
     s.add_argument("--controller-config", metavar="NAME", help=CONTROLLER_CONFIG_HELP)
     s.add_argument("--libcosim", action="store_true",
-                   help="ssp: no system-level push input (libcosim rejects it); drive plant.push_force instead")
+                   help="ssp: the variant for libcosim: no system-level push input (libcosim rejects its "
+                        "connection); drive plant.push_force instead. Default: the variant for fmpy.ssp and SSP "
+                        "tools that drive system inputs")
     s.set_defaults(fn=cmd_export)
 
     s = sub.add_parser("regen-references", help="re-run the scenarios and rewrite scenarios/reference/*.csv")
@@ -1075,9 +1083,15 @@ def _input_errors() -> tuple[type[Exception], ...]:
     return UsageError, ScenarioError, MissingFileError, FMUError, CompareError, StepTestError, OutputBusyError
 
 
+FMI_COMMANDS_VERSIONS = (2, 3)
+FMI3_COMMANDS = ("run", "export", "info")   # the commands that load the FMI 3.0 twins with --fmi 3
+
+
 def main(argv=None) -> int:
     p = build_parser()
     a = p.parse_args(argv)
+    if a.fmi == 3 and a.cmd not in FMI3_COMMANDS:
+        return _err(f"--fmi 3: `{a.cmd}` runs the FMI 2.0 FMUs only (--fmi 3 works with {', '.join(FMI3_COMMANDS)})")
     try:
         return a.fn(a)
     except KeyboardInterrupt:

@@ -50,7 +50,7 @@ _CAPABILITIES = {
 # ----------------------------------------------------------------------------------------------
 # finding and reading the FMU
 
-def resolve_fmu(name_or_path: str, fmu_dir: str | os.PathLike | None = None) -> Path:
+def resolve_fmu(name_or_path: str, fmu_dir: str | os.PathLike | None = None, fmi: int = 2) -> Path:
     """An FMU given by path (a .fmu file or an extracted FMU folder), or by model name
     (``AnkleHipController`` or ``AnkleHipController.fmu``), looked up like the package's own FMUs
     (--fmu-dir, else $ANKLEHIP_FMU_DIR, else <repo>/build/fmus). A MissingFileError names what
@@ -62,7 +62,7 @@ def resolve_fmu(name_or_path: str, fmu_dir: str | os.PathLike | None = None) -> 
         raise MissingFileError(f"{name_or_path}: no such file")
     filename = name_or_path if name_or_path.endswith(".fmu") else f"{name_or_path}.fmu"
     try:
-        return find_fmu(filename, fmu_dir)
+        return find_fmu(filename, fmu_dir, fmi)
     except MissingFileError:
         pass
     dirs = [Path(fmu_dir)] if fmu_dir else fmu_dirs()

@@ -3,7 +3,7 @@
 FMUs are looked up in the folder(s) named by the environment variable ``ANKLEHIP_FMU_DIR``
 (several folders may be given, separated by ``os.pathsep``), else in ``<repo>/build/fmus``
 (``<build>/fmus`` with ``ANKLEHIP_BUILD_DIR`` when that is set), the folder that
-``bash scripts/setup.sh`` fills.
+``bash scripts/setup.sh`` fills; the FMI 3.0 twins in the ``fmi3/`` folder inside each.
 """
 from __future__ import annotations
 
@@ -49,9 +49,17 @@ def fmu_dirs() -> list[Path]:
     return [build_dir() / "fmus"]
 
 
-def find_fmu(filename: str, fmu_dir: str | os.PathLike | None = None) -> Path:
-    """Path of a packed FMU; a clear error naming the file and the fix when it is missing."""
+FMI_VERSIONS = (2, 3)
+
+
+def find_fmu(filename: str, fmu_dir: str | os.PathLike | None = None, fmi: int = 2) -> Path:
+    """Path of a packed FMU; a clear error naming the file and the fix when it is missing. fmi=3:
+    its FMI 3.0 twin, in the fmi3/ folder beside the FMI 2.0 FMUs (the build's layout)."""
+    if fmi not in FMI_VERSIONS:
+        raise ValueError(f"FMI version {fmi!r}: one of {', '.join(map(str, FMI_VERSIONS))}")
     dirs = [Path(fmu_dir)] if fmu_dir else fmu_dirs()
+    if fmi == 3:
+        dirs = [d / "fmi3" for d in dirs]
     for d in dirs:
         p = d / filename
         if p.is_file():

@@ -125,7 +125,9 @@ def test_container_fmu_runs_the_loop_like_our_master(scenario, models, master_ru
     inp["push_force"][-1] = inp["push_force"][-2]
     r = fmpy.simulate_fmu(str(fmu), stop_time=STOP, step_size=h, output_interval=h, input=inp,
                           output=["theta_ankle", "theta_hip", "phase", "fault", "controller.zmp_limit_front"])
-    assert r["fault"][1] == 32 and not np.any(np.delete(r["fault"], 1)), r["fault"][:5]   # docs/fmu.md section 2
+    # the container reads the plant's initial outputs in initialization mode (issue 28): no lifted
+    # fault at the start (docs/fmu.md section 2)
+    assert not np.any(r["fault"]), r["fault"][:5]
     assert np.all(r["controller.zmp_limit_front"] == 0.045)     # the scenario's configuration inside
     _compare(np.round(r["time"], 9), r["theta_ankle"], r["theta_hip"], r["phase"], master_run)
 

@@ -197,10 +197,11 @@ class ControllerModel final : public Model {
     return fmi2OK;
   }
 
-  void update_initial_outputs(Context& ctx) override {
+  fmi2Status update_initial_outputs(Context& ctx) override {
     ahc_params p;
     readParams(ctx, p);
     writeInitialOutputs(ctx, p);
+    return fmi2OK;
   }
 
   fmi2Status tunable_parameters_changed(Context& ctx) override {
