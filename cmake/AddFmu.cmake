@@ -175,18 +175,32 @@ ${xml_files}      <IncludeDirectory name=\".\"/>
                  COMMAND "${CMAKE_COMMAND}" -E copy "${dll}" "${stage}/binaries/${win_dir}/${name}.dll")
     set(win_deps "${dll}")
   endif()
+  # With ANKLEHIP_AARCH64 the aarch64 sub-build's <name>.so goes to binaries/aarch64-linux in both
+  # versions (Aarch64LinuxFmus.cmake says why FMI 2.0 uses the FMI 3.0 tuple).
+  set(arm_cmds "")
+  set(arm_deps "")
+  if(ANKLEHIP_AARCH64)
+    set(arm_so "${ANKLEHIP_AARCH64_BINARY_DIR}/${name}.so")
+    if(api STREQUAL "fmi3")
+      set(arm_so "${ANKLEHIP_AARCH64_BINARY_DIR}/fmi3/${name}.so")
+    endif()
+    set(arm_cmds COMMAND "${CMAKE_COMMAND}" -E make_directory "${stage}/binaries/aarch64-linux"
+                 COMMAND "${CMAKE_COMMAND}" -E copy "${arm_so}" "${stage}/binaries/aarch64-linux/${name}.so")
+    set(arm_deps "${arm_so}")
+  endif()
   add_custom_command(OUTPUT "${fmu}"
     COMMAND "${CMAKE_COMMAND}" -E rm -rf "${stage}"
     COMMAND "${CMAKE_COMMAND}" -E make_directory "${stage}/binaries/${linux_dir}" "${stage}/documentation/licenses" "${stage}/documentation/images" "${stage}/resources" "${fmu_dir}"
     COMMAND $<TARGET_FILE:${name}_gen> ${gen_args} ${gen_src_names}
     COMMAND "${CMAKE_COMMAND}" -E copy "${so}" "${stage}/binaries/${linux_dir}/${name}.so"
     ${win_cmds}
+    ${arm_cmds}
     ${doc_cmds}
     ${src_cmds}
     COMMAND "${CMAKE_COMMAND}" -E rm -f "${fmu}"
     COMMAND "${CMAKE_COMMAND}" -E chdir "${stage}" "${CMAKE_COMMAND}" -E tar cf "${fmu}" --format=zip
             modelDescription.xml binaries documentation resources ${src_entry}
-    DEPENDS ${so_dep} ${name}_gen ${doc_deps} ${src_deps} ${win_deps}
+    DEPENDS ${so_dep} ${name}_gen ${doc_deps} ${src_deps} ${win_deps} ${arm_deps}
     COMMENT "Packing ${name}.fmu (${api_name})"
     VERBATIM)
   add_custom_target(${target} ALL DEPENDS "${fmu}")
@@ -195,6 +209,9 @@ ${xml_files}      <IncludeDirectory name=\".\"/>
   endif()
   if(ANKLEHIP_LINUX_BASELINE_BINARY_DIR)
     add_dependencies(${target} linux64_fmus)
+  endif()
+  if(ANKLEHIP_AARCH64)
+    add_dependencies(${target} aarch64_fmus)
   endif()
   set_property(TARGET ${target} PROPERTY FMU_FILE "${fmu}")
   set_property(TARGET ${target} PROPERTY FMU_STAGE_DIR "${stage}")

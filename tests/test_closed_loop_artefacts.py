@@ -79,6 +79,21 @@ def test_ssp_is_valid_and_complete(scenario, models, tmp_path):
     for v in ("theta_ankle_ref", "theta_hip_ref"):
         assert ("controller", v, "plant", v) in conns
     assert (None, "push_force", "plant", "push_force") in conns
+    # the controller's phase is the FMU's Enumeration (issue 28), with its items, in both variants
+    # the tools that read enumerations get (the libcosim variant leaves it out: libcosim aborts)
+    import xml.etree.ElementTree as ET
+    ns = {"ssd": "http://ssp-standard.org/SSP1/SystemStructureDescription",
+          "ssc": "http://ssp-standard.org/SSP1/SystemStructureCommon"}
+    root = ET.fromstring(zipfile.ZipFile(ssp).read("SystemStructure.ssd"))
+    phase = root.find(".//ssd:Component[@name='controller']/ssd:Connectors/ssd:Connector[@name='phase']", ns)
+    assert phase is not None and phase.find("ssc:Enumeration", ns).get("name") == "Phase"
+    items = [(i.get("name"), int(i.get("value")))
+             for i in root.findall("ssd:Enumerations/ssc:Enumeration[@name='Phase']/ssc:Item", ns)]
+    assert items == [("ankle", 0), ("ankle_to_hip", 1), ("hip", 2), ("hip_to_ankle", 3)]
+    lc = write_ssp(tmp_path / "lc.ssp", scenario, models, system_input=False)
+    read_ssd(str(lc), validate=True)
+    lc_root = ET.fromstring(zipfile.ZipFile(lc).read("SystemStructure.ssd"))
+    assert lc_root.find(".//ssc:Enumeration", ns) is None and lc_root.find("ssd:Enumerations", ns) is None
 
 
 def test_ssp_runs_in_fmpy_like_our_master(scenario, models, master_run, tmp_path):

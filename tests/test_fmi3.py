@@ -203,10 +203,29 @@ def test_states_move_between_fmi_versions(twins, tmp_path, name):
         f.freeInstance()
 
 
+@pytest.mark.parametrize("name", NAMES)
+def test_fmi3_states_under_a_t_equals_k_h_master(twins, tmp_path, name):
+    """The t = k*h master of tests/test_importer_time_and_init.py on the FMI 3.0 API: fmi3GetFMUState
+    + fmi3SetFMUState at each of 1 500 points, and the time there read from `time`."""
+    p2, p3 = twins[name]
+    md, fmu = _fmu3(p3, tmp_path)
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    fmu.instantiate()
+    fmu.enterInitializationMode(startTime=0.0)
+    fmu.exitInitializationMode()
+    h = 1e-3
+    for k in range(1500):
+        fmu.doStep(k * h, h)
+        fmu.setFMUState(fmu.getFMUState())       # FMPy raises on fmi3Error
+    assert fmu.getFloat64([vr["time"]]) == [1499 * h + h]
+    fmu.terminate()
+    fmu.freeInstance()
+
+
 def test_fmi3_rules(twins, tmp_path):
     """Enumerations are read with fmi3GetInt64 (fmi3GetInt32 on `phase` is refused, naming it), the
     independent variable through fmi3GetFloat64, nValues must match, eventModeUsed is refused
-    (hasEventMode = false), and a t = k*h master is served with states at every point."""
+    (hasEventMode = false)."""
     from fmpy.fmi3 import fmi3Error
     p2, p3 = twins["AnkleHipController"]
     md, fmu = _fmu3(p3, tmp_path)
@@ -252,3 +271,24 @@ def test_fmi3_plant_outputs_in_initialization_mode(twins, tmp_path, name):
     assert fmu.getFloat64([vr["theta_ankle"], vr["fz"]]) == [theta, fz]
     fmu.terminate()
     fmu.freeInstance()
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_native_runner_on_fmi3_equals_fmi2(twins, native_tool, tmp_path, name):
+    """Our C++ importer (anklehip_rt_step, which reads FMI 2.0 and 3.0 descriptions and calls
+    fmi3InstantiateCoSimulation / fmi3DoStep / fmi3GetInt64 ...) writes the same output CSV for the
+    twin as for the FMI 2.0 FMU, byte for byte."""
+    from conftest import write_csv
+    runner = native_tool("anklehip_rt_step")
+    csv_in = write_csv(tmp_path / "in.csv", _inputs(name))
+    out = {}
+    for fmi, fmu in zip((2, 3), twins[name]):
+        d = tmp_path / f"fmi{fmi}"
+        with zipfile.ZipFile(fmu) as z:
+            z.extractall(d)
+        import subprocess
+        p = subprocess.run([str(runner), "--fmu-dir", str(d), "--input", str(csv_in), "--output", str(d / "out.csv"),
+                            "--fast", "--step", "0.001"], capture_output=True, text=True, timeout=300)
+        assert p.returncode == 0, p.stderr
+        out[fmi] = (d / "out.csv").read_bytes()
+    assert out[2] == out[3] and out[2].count(b"\n") == 2002   # header + 2001 rows
