@@ -216,7 +216,7 @@ def _scenario_and_models(a):
         sc.plant_model = a.plant
     if sc.push_y.peak() != 0 and sc.plant_model == "sagittal":
         raise ScenarioError(f"{_rel(sc.path)}: push_y: a sideways push needs the 3D plant (--plant 3d)")
-    models = Models.load(a.fmu_dir, plant_model=sc.plant_model, fmi=a.fmi)
+    models = Models.load(a.fmu_dir, plant_model=sc.plant_model, fmi=getattr(a, "fmi", 2))
     if getattr(a, "controller_config", None):
         sc.controller_config = a.controller_config
         models.controller.configuration(sc.controller_config, "--controller-config")
@@ -698,7 +698,7 @@ def cmd_info(a) -> int:
     from .info import format_text, interface, resolve_fmu, select
     from .paths import MissingFileError
     try:
-        info = select(interface(resolve_fmu(a.fmu, a.fmu_dir, a.fmi)), a.causality, a.name)
+        info = select(interface(resolve_fmu(a.fmu, a.fmu_dir, getattr(a, "fmi", 2))), a.causality, a.name)
     except (MissingFileError, FMUError) as e:
         return _err(str(e))
     print(json.dumps(info, indent=2) if a.json else format_text(info))
@@ -808,6 +808,9 @@ def cmd_export(a) -> int:
     if a.kind == "ssp":
         from .export import SSP_VARIANTS
         print(f"  this SSP is {SSP_VARIANTS[not a.libcosim]}")
+        if a.fmi == 3:
+            from .export import SSP_FMI3
+            print(f"  {SSP_FMI3}")
     return EXIT_OK
 
 

@@ -119,6 +119,11 @@ def _enumerations(infos: dict[str, FMUInfo]) -> list[str]:
     return out + ["  </ssd:Enumerations>"]
 
 
+# An SSP of the FMI 3.0 twins (SSP 1.0 components are FMUs of any FMI version): fmpy.ssp and
+# libcosim import FMI 2.0 FMUs only, so nothing here runs it (docs/integration.md).
+SSP_FMI3 = "its FMUs are the FMI 3.0 twins: for SSP tools that import FMI 3.0 FMUs (fmpy.ssp and libcosim do not)"
+
+
 def write_ssp(path: str | Path, scenario: Scenario, models: Models, *, name: str = "AnkleHipBalance",
               system_input: bool = True, enumerations: bool | None = None) -> Path:
     """Write the closed loop of `scenario` (its controller configuration and parameter overrides;
@@ -142,11 +147,13 @@ def write_ssp(path: str | Path, scenario: Scenario, models: Models, *, name: str
     ssd = ['<?xml version="1.0" encoding="UTF-8"?>',
            f'<ssd:SystemStructureDescription {SSD_NS} version="1.0" name={quoteattr(name)}>',
            f"  <!-- {SSP_VARIANTS[system_input]} -->",
-           f'  <ssd:System name={quoteattr(name)} description={quoteattr(scenario.description or scenario.name)}>',
-           "    <ssd:Connectors>"]
-    ssd += [f"      {_connector(v, models.plant, 'input')}" for v in ins] or ["      <!-- none: the plant's push inputs are driven directly -->"]
-    ssd += ["    </ssd:Connectors>",
-            "    <ssd:ParameterBindings>",
+           f'  <ssd:System name={quoteattr(name)} description={quoteattr(scenario.description or scenario.name)}>']
+    if ins:   # an empty <ssd:Connectors> is not schema-valid: the libcosim variant has none
+        ssd += ["    <ssd:Connectors>"] + [f"      {_connector(v, models.plant, 'input')}" for v in ins]
+        ssd += ["    </ssd:Connectors>"]
+    else:
+        ssd += ["    <!-- no system connectors: the plant's push inputs are driven directly -->"]
+    ssd += ["    <ssd:ParameterBindings>",
             '      <ssd:ParameterBinding source="resources/parameters.ssv"/>',
             "    </ssd:ParameterBindings>",
             "    <ssd:Elements>"]
@@ -192,6 +199,9 @@ def write_container_fmu(path: str | Path, scenario: Scenario, models: Models, *,
     from fmpy.model_description import CoSimulation, DefaultExperiment, ModelDescription, ModelVariable, Unknown
 
     path = Path(path)
+    if 3 in (models.controller.fmi_version, models.plant.fmi_version):
+        raise FMUError("a container FMU packs FMI 2.0 FMUs (FMPy's container binary and its platform folders are "
+                       "FMI 2.0's here): export it from the FMI 2.0 FMUs (without --fmi 3)")
     c_over, p_over = scenario_parameters(scenario, models)
     infos = {"controller": models.controller, "plant": models.plant}
     mds = {k: info.md for k, info in infos.items()}

@@ -198,7 +198,7 @@ def test_info_controller_parameters_with_unit_default_and_range(controller_fmu, 
     assert main(["--fmu-dir", str(controller_fmu.parent), "info", "AnkleHipController"]) == 0
     text = capsys.readouterr().out
     for needle in (f"model name          {md.modelName}", f"FMI version         {md.fmiVersion}", md.guid,
-                   md.generationTool, md.generationDateAndTime, "platforms           linux64", md.license,
+                   md.generationTool, md.generationDateAndTime, "platforms           aarch64-linux, linux64", md.license,
                    "default experiment  start 0 s, stop", "logEvents"):
         assert needle in text, needle
     rows = _rows(text, "Parameters")

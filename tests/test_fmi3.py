@@ -292,3 +292,20 @@ def test_native_runner_on_fmi3_equals_fmi2(twins, native_tool, tmp_path, name):
         assert p.returncode == 0, p.stderr
         out[fmi] = (d / "out.csv").read_bytes()
     assert out[2] == out[3] and out[2].count(b"\n") == 2002   # header + 2001 rows
+
+
+def test_export_of_the_twins(fmu_dir, tmp_path, capsys):
+    """`anklehip --fmi 3 export ssp` packs the FMI 3.0 twins into a schema-valid SSP and says which
+    tools it is for; a container FMU (FMPy's, FMI 2.0 components) is refused with the reason."""
+    from fmpy.ssp.ssd import read_ssd
+    from anklehip.cli import main
+    ssp = tmp_path / "p5.ssp"
+    assert main(["--fmu-dir", str(fmu_dir), "--fmi", "3", "export", "ssp", "hip_saves_push", "--out", str(ssp)]) == 0
+    assert "FMI 3.0" in capsys.readouterr().out
+    read_ssd(str(ssp), validate=True)
+    with zipfile.ZipFile(ssp) as z:
+        md = read_model_description(z.open("resources/AnkleHipController.fmu"))
+    assert md.fmiVersion == "3.0"
+    assert main(["--fmu-dir", str(fmu_dir), "--fmi", "3", "export", "container", "hip_saves_push",
+                 "--out", str(tmp_path / "c.fmu")]) == 2
+    assert "FMI 2.0 FMUs" in capsys.readouterr().err and not (tmp_path / "c.fmu").exists()
