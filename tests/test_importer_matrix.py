@@ -11,7 +11,7 @@ import zipfile
 from conftest import REPO_ROOT
 
 SHIPPED = ["AnkleHipController", "Hoap2Plant", "Hoap2Plant3D"]
-COLUMNS = ["FMU", "FMI", "platform", "FMPy", "libcosim", "native runner (x86-64 Linux)",
+COLUMNS = ["FMU", "FMI", "platform", "FMPy", "libcosim", "fmi-sim 0.7", "native runner (x86-64 Linux)",
            "Wine (runner for Windows)", "qemu-aarch64 (runner for aarch64)", "t = k·h master (ctypes)"]
 
 
