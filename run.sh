@@ -11,11 +11,12 @@ case "${1:-}" in
     .venv/bin/anklehip run paper_five_pushes --out results/paper_five_pushes --plots
     ;;
   test)
-    # The suite includes the Windows binaries under Wine (tests/test_win64.py): build them, and
-    # fail rather than skip if any piece is missing. Then the reliability checks on the sanitizer
+    # The suite includes the Windows binaries under Wine (tests/test_win64.py) and the aarch64
+    # ones under qemu-user (tests/test_aarch64.py), and the fmi-sim importer (tests/test_fmi_sim.py):
+    # build them, and fail rather than skip if any piece is missing. Then the reliability checks on the sanitizer
     # build: sanitized CTest, FMI fuzzing, a sanitized closed loop, Valgrind (docs/reliability.md).
-    bash scripts/setup.sh --win64 --sanitize
-    export PATH="$root/.venv/bin:$PATH" ANKLEHIP_REQUIRE_WIN64=1
+    bash scripts/setup.sh --win64 --sanitize --aarch64 --fmi-sim
+    export PATH="$root/.venv/bin:$PATH" ANKLEHIP_REQUIRE_WIN64=1 ANKLEHIP_REQUIRE_AARCH64=1 ANKLEHIP_REQUIRE_FMI_SIM=1
     ctest --test-dir "${ANKLEHIP_BUILD_DIR:-build}" --output-on-failure --no-tests=error
     .venv/bin/python -m pytest -q tests
     bash scripts/reliability.sh

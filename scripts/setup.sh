@@ -4,17 +4,27 @@
 # Fast and silent when everything is already there; prints what it does otherwise.
 #   --win64     also the Windows 64-bit binaries of every FMU (mingw-w64 cross build, packed next to
 #               linux64) and Wine to run them (tests/test_win64.py); kept on for later runs.
+#   --aarch64   also the aarch64 Linux binaries of every FMU (zig cc, packed as
+#               binaries/aarch64-linux) and an aarch64 anklehip_rt_step, and Debian's qemu-user and
+#               libc6-arm64-cross to run them (tests/test_aarch64.py); kept on for later runs.
+#               llvm (llvm-nm, llvm-readelf) to check the cross-built binaries comes with it.
+#   --fmi-sim   also the Rust FMI importer fmi-sim 0.7 (crates registry; Debian's libclang-dev for
+#               its bindgen build) in <build>/fmi-sim, for tests/test_fmi_sim.py; needs Rust's cargo.
 #   --sanitize  also the reliability build in <build>/sanitize: every native target with clang,
 #               AddressSanitizer + UndefinedBehaviorSanitizer and a libFuzzer harness per FMU, and
 #               Valgrind (scripts/reliability.sh, docs/reliability.md).
 set -euo pipefail
 win64=0
 sanitize=0
+aarch64=0
+fmisim=0
 for arg in "$@"; do
   case "$arg" in
     --win64) win64=1 ;;
     --sanitize) sanitize=1 ;;
-    *) echo "usage: bash scripts/setup.sh [--win64] [--sanitize]" >&2; exit 2 ;;
+    --aarch64) aarch64=1 ;;
+    --fmi-sim) fmisim=1 ;;
+    *) echo "usage: bash scripts/setup.sh [--win64] [--sanitize] [--aarch64] [--fmi-sim]" >&2; exit 2 ;;
   esac
 done
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -72,6 +82,10 @@ debs=(build-essential cmake dpkg-dev libeigen3-dev libsundials-dev libode-dev pk
 # --sanitize: clang with its sanitizer and libFuzzer runtimes, the OpenMP runtime SUNDIALS' CMake
 # package asks clang for, llvm-symbolizer for readable reports, and Valgrind.
 [ "$sanitize" -eq 1 ] && debs+=(clang libclang-rt-dev libomp-dev llvm valgrind)
+# --aarch64: qemu-user (qemu-aarch64), the aarch64 glibc and loader it runs the runner with, llvm.
+[ "$aarch64" -eq 1 ] && debs+=(qemu-user libc6-arm64-cross llvm)
+# --fmi-sim: libclang for the bindgen step of fmi-sim's build.
+[ "$fmisim" -eq 1 ] && debs+=(libclang-dev)
 missing=()
 for p in "${debs[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
@@ -108,12 +122,19 @@ fi
 # user's activated venv would; the build also works with Debian's cmake 3.25.
 export PATH="$root/.venv/bin:$PATH"
 win_flag=()
-[ "$win64" -eq 1 ] && win_flag=(-DANKLEHIP_WIN64=ON)
+[ "$win64" -eq 1 ] && win_flag+=(-DANKLEHIP_WIN64=ON)
+[ "$aarch64" -eq 1 ] && win_flag+=(-DANKLEHIP_AARCH64=ON)
 if [ ! -f "$build/CMakeCache.txt" ]; then
   cmake -S . -B "$build" -DCMAKE_BUILD_TYPE=Release -DPython3_EXECUTABLE="$root/.venv/bin/python" "${win_flag[@]}" >/dev/null
-elif [ "$win64" -eq 1 ] && ! grep -q '^ANKLEHIP_WIN64:BOOL=ON' "$build/CMakeCache.txt"; then
-  echo "setup: enabling the Windows 64-bit FMU binaries in $build"
-  cmake -S . -B "$build" -DANKLEHIP_WIN64=ON >/dev/null
+else
+  if [ "$win64" -eq 1 ] && ! grep -q '^ANKLEHIP_WIN64:BOOL=ON' "$build/CMakeCache.txt"; then
+    echo "setup: enabling the Windows 64-bit FMU binaries in $build"
+    cmake -S . -B "$build" -DANKLEHIP_WIN64=ON >/dev/null
+  fi
+  if [ "$aarch64" -eq 1 ] && ! grep -q '^ANKLEHIP_AARCH64:BOOL=ON' "$build/CMakeCache.txt"; then
+    echo "setup: enabling the aarch64 Linux FMU binaries in $build"
+    cmake -S . -B "$build" -DANKLEHIP_AARCH64=ON >/dev/null
+  fi
 fi
 cmake --build "$build" -j"$(nproc)" >"$build/last-build.log" 2>&1 || { cat "$build/last-build.log"; exit 1; }
 
@@ -126,4 +147,17 @@ if [ "$sanitize" -eq 1 ]; then
       -DPython3_EXECUTABLE="$root/.venv/bin/python" >/dev/null
   fi
   cmake --build "$sbuild" -j"$(nproc)" >"$sbuild/last-build.log" 2>&1 || { cat "$sbuild/last-build.log"; exit 1; }
+fi
+
+# --- fmi-sim (--fmi-sim) ----------------------------------------------------------------------
+# An FMI importer that shares no code with FMPy or libcosim (Rust; FMI 2.0 and 3.0), built once
+# from the crates registry into <build>/fmi-sim (tests/test_fmi_sim.py, docs/integration.md).
+if [ "$fmisim" -eq 1 ] && [ ! -x "$build/fmi-sim/bin/fmi-sim" ]; then
+  cargo_bin="$(command -v cargo || true)"
+  [ -n "$cargo_bin" ] || [ ! -x "$HOME/.cargo/bin/cargo" ] || cargo_bin="$HOME/.cargo/bin/cargo"
+  if [ -z "$cargo_bin" ]; then echo "setup: --fmi-sim needs Rust's cargo (https://rustup.rs)" >&2; exit 1; fi
+  echo "setup: building fmi-sim 0.7.0 (cargo install) into $build/fmi-sim"
+  log="$build/fmi-sim-install.log"
+  "$cargo_bin" install fmi-sim --version 0.7.0 --root "$build/fmi-sim" >"$log" 2>&1 \
+    || { tail -n 40 "$log"; echo "setup: cargo install fmi-sim failed (full log: $log)" >&2; exit 1; }
 fi

@@ -7,7 +7,7 @@ Establishes, for each packed FMU, from the ELF file itself (binutils' objdump an
     system's glibc lacks, so this is the condition for loading on RHEL 7/8/9, Ubuntu 20.04, Debian 11;
   - it requires no version of any other library (no GLIBCXX_/CXXABI_/GCC_: the C++ runtime,
     SUNDIALS and ODE are linked in) and its NEEDED libraries are glibc's own;
-  - it exports nothing but the fmi2* functions.
+  - it exports nothing but the fmi2* functions (the FMI 3.0 twin's x86_64-linux binary: fmi3*).
 The baseline build is cmake/LinuxBaselineFmus.cmake (zig cc against glibc 2.17 stubs); a build
 configured with -DANKLEHIP_GLIBC_BASELINE= (the host compiler's binaries) fails this test on
 purpose: its binaries need the build machine's glibc.
@@ -72,10 +72,19 @@ def binutils():
     return tools
 
 
+def _fmu(fmu_path, model, fmi):
+    """The FMI 2.0 FMU or its FMI 3.0 twin (fmi3/, binaries/x86_64-linux), and the binary's path in it."""
+    if fmi == 2:
+        return fmu_path(model), f"binaries/linux64/{model}.so"
+    return fmu_path(model).parent / "fmi3" / f"{model}.fmu", f"binaries/x86_64-linux/{model}.so"
+
+
+@pytest.mark.parametrize("fmi", [2, 3])
 @pytest.mark.parametrize("model", SHIPPED)
-def test_linux_binary_needs_only_old_glibc(model, fmu_path, binutils, tmp_path):
-    with zipfile.ZipFile(fmu_path(model)) as z:
-        so = z.extract(f"binaries/linux64/{model}.so", tmp_path)
+def test_linux_binary_needs_only_old_glibc(model, fmi, fmu_path, binutils, tmp_path):
+    fmu, member = _fmu(fmu_path, model, fmi)
+    with zipfile.ZipFile(fmu) as z:
+        so = z.extract(member, tmp_path)
     p = subprocess.run([binutils["objdump"], "-p", so], capture_output=True, text=True, check=True).stdout
     needed = set(re.findall(r"^\s*NEEDED\s+(\S+)", p, re.M))
     assert needed and needed <= GLIBC_LIBRARIES, f"{model}.so needs {sorted(needed - GLIBC_LIBRARIES)}"
@@ -94,17 +103,19 @@ def test_linux_binary_needs_only_old_glibc(model, fmu_path, binutils, tmp_path):
     syms = subprocess.run([binutils["nm"], "-D", "--defined-only", so], capture_output=True, text=True,
                           check=True).stdout
     names = [line.split()[-1] for line in syms.splitlines() if line.strip()]
-    assert names and all(n.startswith("fmi2") for n in names), [n for n in names if not n.startswith("fmi2")]
+    api = f"fmi{fmi}"
+    assert names and all(n.startswith(api) for n in names), [n for n in names if not n.startswith(api)]
 
 
+@pytest.mark.parametrize("fmi", [2, 3])
 @pytest.mark.parametrize("model", SHIPPED)
-def test_process_exits_cleanly_after_unloading(model, fmu_path):
+def test_process_exits_cleanly_after_unloading(model, fmi, fmu_path):
     """A process that simulated the FMU and unloaded its binary (FMPy's simulate_fmu frees the
     instance and dlcloses the library) exits with status 0: the destructors of the binary's
     static objects ran at unload, not at process exit in an unmapped library (the crash the first
     zig build had: it links no crtbeginS.o, fmu/common/src/fmi2_api.cpp)."""
     code = ("import sys, fmpy; r = fmpy.simulate_fmu(sys.argv[1], stop_time=0.01); "
             "assert len(r) > 1; print('simulated')")
-    r = subprocess.run([sys.executable, "-c", code, str(fmu_path(model))], capture_output=True, text=True,
-                       timeout=120)
+    r = subprocess.run([sys.executable, "-c", code, str(_fmu(fmu_path, model, fmi)[0])], capture_output=True,
+                       text=True, timeout=120)
     assert r.returncode == 0 and "simulated" in r.stdout, (r.returncode, r.stderr[-2000:])

@@ -102,20 +102,25 @@ def _elf_exports(path) -> set[str]:
     return {line.split()[-1] for line in out.splitlines() if line.split()[1:2] == ["T"]}
 
 
+@pytest.mark.parametrize("fmi", [2, 3])
 @pytest.mark.parametrize("name", SHIPPED)
-def test_fmu_holds_static_win64_dll_next_to_linux64_so(win64_fmus, name, tmp_path):
-    with zipfile.ZipFile(win64_fmus[name]) as z:
+def test_fmu_holds_static_win64_dll_next_to_linux64_so(win64_fmus, name, fmi, tmp_path):
+    """The FMI 2.0 FMU (win64 next to linux64) and its FMI 3.0 twin (x86_64-windows next to
+    x86_64-linux)."""
+    fmu = win64_fmus[name] if fmi == 2 else win64_fmus[name].parent / "fmi3" / f"{name}.fmu"
+    win, lin = ("win64", "linux64") if fmi == 2 else ("x86_64-windows", "x86_64-linux")
+    with zipfile.ZipFile(fmu) as z:
         names = set(z.namelist())
-        assert f"binaries/linux64/{name}.so" in names and f"binaries/win64/{name}.dll" in names, sorted(names)
-        z.extract(f"binaries/win64/{name}.dll", tmp_path)
-        z.extract(f"binaries/linux64/{name}.so", tmp_path)
-    dll, so = tmp_path / "binaries/win64" / f"{name}.dll", tmp_path / "binaries/linux64" / f"{name}.so"
+        assert f"binaries/{lin}/{name}.so" in names and f"binaries/{win}/{name}.dll" in names, sorted(names)
+        z.extract(f"binaries/{win}/{name}.dll", tmp_path)
+        z.extract(f"binaries/{lin}/{name}.so", tmp_path)
+    dll, so = tmp_path / "binaries" / win / f"{name}.dll", tmp_path / "binaries" / lin / f"{name}.so"
     assert "file format pei-x86-64" in _objdump(["-f"], dll)          # PE32+ for x86-64
     imports = _pe_imports(dll)
     assert imports and imports <= WINDOWS_SYSTEM_DLLS, f"{name}.dll needs non-system DLLs: {imports - WINDOWS_SYSTEM_DLLS}"
     exports = _pe_exports(dll)
     assert exports == _elf_exports(so), "the .dll and the .so export different functions"
-    assert all(e.startswith("fmi2") for e in exports) and "fmi2DoStep" in exports
+    assert all(e.startswith(f"fmi{fmi}") for e in exports) and f"fmi{fmi}DoStep" in exports
 
 
 def test_windows_runner_is_static(win64_fmus, win_runner):
@@ -145,14 +150,17 @@ def _replay(cmd_prefix, env, runner, unzipdir, csv_in, csv_out, step, stop, para
 DISCRETE = {"phase", "fault", "fallen", "contact", "contact_mode", "terminated"}
 
 
+@pytest.mark.parametrize("fmi", [2, 3])
 @pytest.mark.parametrize("scenario,plant_model,stop", [("hip_saves_push", "sagittal", 4.0),
                                                        ("diagonal_push_3d", "3d", 2.0)])
 def test_windows_binaries_replay_a_closed_loop_like_the_linux_ones(win64_fmus, wine, win_runner, native_tool,
-                                                                    fmu_dir, tmp_path, scenario, plant_model, stop):
+                                                                    fmu_dir, tmp_path, scenario, plant_model, stop,
+                                                                    fmi):
+    """FMI 2.0 (win64) and the FMI 3.0 twins (x86_64-windows): the runner reads either."""
     from anklehip.running.master import Models, simulate
     from anklehip.files.scenario import load_scenario
 
-    models = Models.load(fmu_dir, plant_model=plant_model)
+    models = Models.load(fmu_dir, plant_model=plant_model, fmi=fmi)
     res = simulate(load_scenario(REPO_ROOT / "scenarios" / f"{scenario}.toml"), models, stop_time=stop)
     assert res.outcome == "completed", res.message
     d, n, h = res.data, len(res.data) - 1, res.step

@@ -14,7 +14,7 @@ import os
 import sys
 
 from ..errors import InputError
-from .parser import EXIT_ERROR, EXIT_FAIL, EXIT_OK, build_parser
+from .parser import EXIT_ERROR, EXIT_FAIL, EXIT_OK, FMI3_COMMANDS, build_parser
 
 __all__ = ["main", "build_parser", "UsageError", "EXIT_OK", "EXIT_FAIL", "EXIT_ERROR"]
 
@@ -34,6 +34,8 @@ def main(argv=None) -> int:
     from . import commands
     p = build_parser()
     a = p.parse_args(argv)
+    if a.fmi == 3 and a.cmd not in FMI3_COMMANDS:
+        return _err(f"--fmi 3: `{a.cmd}` runs the FMI 2.0 FMUs only (--fmi 3 works with {', '.join(FMI3_COMMANDS)})")
     try:
         return (a.fn if callable(a.fn) else getattr(commands, f"cmd_{a.fn}"))(a)   # robot: its own module
     except KeyboardInterrupt:

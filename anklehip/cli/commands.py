@@ -92,7 +92,7 @@ def cmd_where(a) -> int:
 
 def cmd_info(a) -> int:
     from ..files.info import format_text, interface, resolve_fmu, select
-    info = select(interface(resolve_fmu(a.fmu, a.fmu_dir)), a.causality, a.name)
+    info = select(interface(resolve_fmu(a.fmu, a.fmu_dir, a.fmi)), a.causality, a.name)
     print(json.dumps(info, indent=2) if a.json else format_text(info))
     return EXIT_OK
 
@@ -110,7 +110,7 @@ def cmd_run(a) -> int:
     # the scenario, the overrides and the FMUs: loaded, checked, instantiated and initialized
     prepared = prepare(a.scenario, plant=a.plant, engine=a.engine, controller_config=a.controller_config,
                        parameters=_set(a.set), faults=_faults(a), stop_time=a.stop_time, fmu_dir=a.fmu_dir,
-                       origins=ORIGINS, robot=a.robot)
+                       origins=ORIGINS, robot=a.robot, fmi=a.fmi)
     sc = prepared.scenario
     try:
         out = check_output_folder(a.out or Path("results") / sc.name, "--out")
@@ -443,7 +443,7 @@ def cmd_export(a) -> int:
     from ..files.output import check_output_folder
     from ..running.run import resolve
     sc, models = resolve(a.scenario, plant=a.plant, controller_config=a.controller_config, parameters=_set(a.set),
-                         fmu_dir=a.fmu_dir, origins=ORIGINS)
+                         fmu_dir=a.fmu_dir, origins=ORIGINS, fmi=a.fmi)
     suffix = ".ssp" if a.kind == "ssp" else ".fmu"
     dest = Path(a.out) if a.out else Path("results") / sc.name / f"{sc.name}{suffix}"
     check_output_folder(dest.parent, "--out")
@@ -453,6 +453,11 @@ def cmd_export(a) -> int:
         out = write_container_fmu(dest, sc, models)
     print(f"wrote {out}: {models.controller.name} + {models.plant.name}, parameters of {sc.name}; "
           f"drive push_force (N) at the scenario's step {sc.step:g} s (docs/integration.md)")
+    if a.kind == "ssp":
+        from ..files.export import SSP_FMI3, SSP_VARIANTS
+        print(f"  this SSP is {SSP_VARIANTS[not a.libcosim]}")
+        if a.fmi == 3:
+            print(f"  {SSP_FMI3}")
     return EXIT_OK
 
 

@@ -8,6 +8,8 @@ import math
 from .. import __version__
 
 EXIT_OK, EXIT_FAIL, EXIT_ERROR = 0, 1, 2
+FMI_VERSIONS = (2, 3)
+FMI3_COMMANDS = ("run", "export", "info")   # the commands that load the FMI 3.0 twins with --fmi 3
 
 CONTROLLER_CONFIG_HELP = ("a named controller configuration (default: the scenario's controller_config or "
                           "'default'; e.g. paper); --set overrides still apply on top")
@@ -24,6 +26,9 @@ def global_options(p: argparse.ArgumentParser, default) -> None:
     p.add_argument("--fmu-dir", metavar="DIR", default=default,
                    help="folder with the .fmu files (default: $ANKLEHIP_FMU_DIR, else the checkout's build/fmus, "
                         "else the installed package's; `anklehip where` shows which)")
+    p.add_argument("--fmi", type=int, choices=FMI_VERSIONS, default=2 if default is None else default,
+                   help="FMI version of the FMUs: 2 (default) or 3, the FMI 3.0 twins in <fmu dir>/fmi3/ "
+                        f"(commands: {', '.join(FMI3_COMMANDS)}; the FMPy engine)")
 
 
 class _Parser(argparse.ArgumentParser):

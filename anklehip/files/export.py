@@ -29,8 +29,17 @@ from .scenario import Scenario
 SSD_NS = ('xmlns:ssc="http://ssp-standard.org/SSP1/SystemStructureCommon" '
           'xmlns:ssd="http://ssp-standard.org/SSP1/SystemStructureDescription" '
           'xmlns:ssv="http://ssp-standard.org/SSP1/SystemStructureParameterValues"')
-SSC_TYPE = {"Real": "ssc:Real", "Integer": "ssc:Integer", "Enumeration": "ssc:Integer",
-            "Boolean": "ssc:Boolean", "String": "ssc:String"}
+SSC_TYPE = {"Real": "ssc:Real", "Integer": "ssc:Integer", "Boolean": "ssc:Boolean", "String": "ssc:String"}
+# Which importers each SSP variant is for (docs/integration.md, "What is tested where"): SSP 1.0
+# expresses "the system's input push_force feeds the plant" as a connection from a system-level
+# connector, which libcosim rejects; the other variant leaves the plant's push inputs unconnected.
+SSP_VARIANTS = {
+    True: "for fmpy.ssp and SSP tools that drive system inputs (OMSimulator, Silver): drive the system input "
+          "push_force; libcosim rejects this variant: export the libcosim variant for it",
+    False: "for libcosim (and any SSP tool): no system input and no Enumeration connectors (libcosim stops at "
+           "both; the controller's phase output is then not a connector); drive the plant's push_force input "
+           "directly (a libcosim override manipulator or scenario)",
+}
 COMPONENTS = ("controller", "plant")
 
 
@@ -74,16 +83,60 @@ def _ssv(parameters: dict[str, tuple[Var, Any]], name: str) -> str:
     return "\n".join(lines)
 
 
-def _connector(v: Var, kind: str | None = None) -> str:
-    return f'<ssd:Connector name={quoteattr(v.name)} kind="{kind or v.causality}"><{SSC_TYPE[v.type]}/></ssd:Connector>'
+def _connector(v: Var, info: FMUInfo | None = None, kind: str | None = None) -> str:
+    """An SSD connector of the FMU variable's type; an Enumeration names its type (declared in the
+    SSD's <ssd:Enumerations> by _enumerations, as the FMU declares it)."""
+    if v.type == "Enumeration":
+        typ = f"<ssc:Enumeration name={quoteattr(_declared_type(info, v).name)}/>"
+    else:
+        typ = f"<{SSC_TYPE[v.type]}/>"
+    return f'<ssd:Connector name={quoteattr(v.name)} kind="{kind or v.causality}">{typ}</ssd:Connector>'
+
+
+def _declared_type(info: FMUInfo, v: Var):
+    return next(mv.declaredType for mv in info.md.modelVariables if mv.name == v.name)
+
+
+def _enumerations(infos: dict[str, FMUInfo]) -> list[str]:
+    """<ssd:Enumerations>: the enumeration types of the connected variables, items as the FMUs
+    declare them (an SSD's enumeration names must be unique: two FMUs declaring one name differently
+    is refused)."""
+    types: dict[str, list[tuple[str, int]]] = {}
+    for info in infos.values():
+        for v in info.vars.values():
+            if v.type == "Enumeration" and v.causality in ("input", "output"):
+                t = _declared_type(info, v)
+                items = [(it.name, int(it.value)) for it in t.items]
+                if types.setdefault(t.name, items) != items:
+                    raise FMUError(f"enumeration {t.name!r} is declared differently by the FMUs ({info.name})")
+    if not types:
+        return []
+    out = ["  <ssd:Enumerations>"]
+    for name, items in types.items():
+        out.append(f"    <ssc:Enumeration name={quoteattr(name)}>")
+        out += [f'      <ssc:Item name={quoteattr(n)} value="{x}"/>' for n, x in items]
+        out.append("    </ssc:Enumeration>")
+    return out + ["  </ssd:Enumerations>"]
+
+
+# An SSP of the FMI 3.0 twins (SSP 1.0 components are FMUs of any FMI version): fmpy.ssp and
+# libcosim import FMI 2.0 FMUs only, so nothing here runs it (docs/integration.md).
+SSP_FMI3 = "its FMUs are the FMI 3.0 twins: for SSP tools that import FMI 3.0 FMUs (fmpy.ssp and libcosim do not)"
 
 
 def write_ssp(path: str | Path, scenario: Scenario, models: Models, *, name: str = "AnkleHipBalance",
-              system_input: bool = True) -> Path:
+              system_input: bool = True, enumerations: bool | None = None) -> Path:
     """Write the closed loop of `scenario` (its controller configuration and parameter overrides;
     the push profile is the caller's input) as an SSP 1.0 archive. system_input=False leaves the
     plant's push inputs unconnected instead of connecting them to system-level inputs, for libcosim,
-    which rejects a connection without a startElement (docs/integration.md)."""
+    which rejects a connection without a startElement (docs/integration.md; SSP_VARIANTS says which
+    tools each variant is for, and the SSD says it in a comment). Enumeration outputs (the controller's
+    phase) are ssc:Enumeration connectors of the FMU's enumeration type; enumerations=False leaves
+    them out (none is connected), as the libcosim variant must: libcosim aborts at an Enumeration
+    connector ("Don't know how to handle Enumeration type", its issue #246). Default: as
+    system_input."""
+    if enumerations is None:
+        enumerations = system_input
     path = Path(path)
     c_over, p_over = scenario_parameters(scenario, models)
     infos = {"controller": models.controller, "plant": models.plant}
@@ -93,11 +146,14 @@ def write_ssp(path: str | Path, scenario: Scenario, models: Models, *, name: str
     ins = system_inputs(models) if system_input else []
     ssd = ['<?xml version="1.0" encoding="UTF-8"?>',
            f'<ssd:SystemStructureDescription {SSD_NS} version="1.0" name={quoteattr(name)}>',
-           f'  <ssd:System name={quoteattr(name)} description={quoteattr(scenario.description or scenario.name)}>',
-           "    <ssd:Connectors>"]
-    ssd += [f"      {_connector(v, 'input')}" for v in ins] or ["      <!-- none: the plant's push inputs are driven directly -->"]
-    ssd += ["    </ssd:Connectors>",
-            "    <ssd:ParameterBindings>",
+           f"  <!-- {SSP_VARIANTS[system_input]} -->",
+           f'  <ssd:System name={quoteattr(name)} description={quoteattr(scenario.description or scenario.name)}>']
+    if ins:   # an empty <ssd:Connectors> is not schema-valid: the libcosim variant has none
+        ssd += ["    <ssd:Connectors>"] + [f"      {_connector(v, models.plant, 'input')}" for v in ins]
+        ssd += ["    </ssd:Connectors>"]
+    else:
+        ssd += ["    <!-- no system connectors: the plant's push inputs are driven directly -->"]
+    ssd += ["    <ssd:ParameterBindings>",
             '      <ssd:ParameterBinding source="resources/parameters.ssv"/>',
             "    </ssd:ParameterBindings>",
             "    <ssd:Elements>"]
@@ -105,14 +161,15 @@ def write_ssp(path: str | Path, scenario: Scenario, models: Models, *, name: str
         ssd.append(f'      <ssd:Component name="{comp}" type="application/x-fmu-sharedlibrary" '
                    f'source="resources/{info.path.name}">')
         ssd.append("        <ssd:Connectors>")
-        ssd += [f"          {_connector(v)}" for v in info.vars.values() if v.causality in ("input", "output")]
+        ssd += [f"          {_connector(v, info)}" for v in info.vars.values()
+                if v.causality in ("input", "output") and (enumerations or v.type != "Enumeration")]
         ssd += ["        </ssd:Connectors>", "      </ssd:Component>"]
     ssd += ["    </ssd:Elements>", "    <ssd:Connections>"]
     ssd += [f'      <ssd:Connection startElement="{a}" startConnector="{x}" endElement="{b}" endConnector="{y}"/>'
             for a, x, b, y in links]
     ssd += [f'      <ssd:Connection startConnector="{v.name}" endElement="plant" endConnector="{v.name}"/>' for v in ins]
-    ssd += ["    </ssd:Connections>", "  </ssd:System>",
-            f'  <ssd:DefaultExperiment startTime="0" stopTime="{scenario.stop_time!r}"/>',
+    ssd += ["    </ssd:Connections>", "  </ssd:System>"] + (_enumerations(infos) if enumerations else [])
+    ssd += [f'  <ssd:DefaultExperiment startTime="0" stopTime="{scenario.stop_time!r}"/>',
             "</ssd:SystemStructureDescription>", ""]
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = path.with_name(path.name + ".part")
@@ -142,6 +199,9 @@ def write_container_fmu(path: str | Path, scenario: Scenario, models: Models, *,
     from fmpy.model_description import CoSimulation, DefaultExperiment, ModelDescription, ModelVariable, Unknown
 
     path = Path(path)
+    if 3 in (models.controller.fmi_version, models.plant.fmi_version):
+        raise FMUError("a container FMU packs FMI 2.0 FMUs (FMPy's container binary and its platform folders are "
+                       "FMI 2.0's here): export it from the FMI 2.0 FMUs (without --fmi 3)")
     c_over, p_over = scenario_parameters(scenario, models)
     infos = {"controller": models.controller, "plant": models.plant}
     mds = {k: info.md for k, info in infos.items()}

@@ -50,7 +50,7 @@ _CAPABILITIES = {
 # ----------------------------------------------------------------------------------------------
 # finding and reading the FMU
 
-def resolve_fmu(name_or_path: str, fmu_dir: str | os.PathLike | None = None) -> Path:
+def resolve_fmu(name_or_path: str, fmu_dir: str | os.PathLike | None = None, fmi: int = 2) -> Path:
     """An FMU given by path (a .fmu file or an extracted FMU folder), or by model name
     (``AnkleHipController`` or ``AnkleHipController.fmu``), looked up like the package's own FMUs
     (--fmu-dir, else $ANKLEHIP_FMU_DIR, else the checkout's build/fmus and the package's data;
@@ -64,7 +64,7 @@ def resolve_fmu(name_or_path: str, fmu_dir: str | os.PathLike | None = None) -> 
     filename = name_or_path if name_or_path.endswith(".fmu") else f"{name_or_path}.fmu"
     fmu_dirs(fmu_dir)      # a --fmu-dir that does not exist is an error of its own
     try:
-        return find_fmu(filename, fmu_dir)
+        return find_fmu(filename, fmu_dir, fmi)
     except MissingFileError:
         pass
     dirs = [Path(fmu_dir)] if fmu_dir else fmu_dirs()

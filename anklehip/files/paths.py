@@ -126,9 +126,17 @@ def fmu_dirs(fmu_dir: str | os.PathLike | None = None) -> list[Path]:
     return dirs
 
 
-def find_fmu(filename: str, fmu_dir: str | os.PathLike | None = None) -> Path:
-    """Path of a packed FMU; a clear error naming the folders tried and the fix when it is missing."""
+FMI_VERSIONS = (2, 3)
+
+
+def find_fmu(filename: str, fmu_dir: str | os.PathLike | None = None, fmi: int = 2) -> Path:
+    """Path of a packed FMU; a clear error naming the folders tried and the fix when it is missing.
+    fmi=3: its FMI 3.0 twin, in the fmi3/ folder beside the FMI 2.0 FMUs (the build's layout)."""
+    if fmi not in FMI_VERSIONS:
+        raise ValueError(f"FMI version {fmi!r}: one of {', '.join(map(str, FMI_VERSIONS))}")
     dirs = fmu_dirs(fmu_dir)
+    if fmi == 3:
+        dirs = [d / "fmi3" for d in dirs]
     for d in dirs:
         p = d / filename
         if p.is_file():

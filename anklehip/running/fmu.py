@@ -1,5 +1,9 @@
 """Loading FMUs with FMPy: extract once, read the model description, instantiate co-simulation
-slaves, apply parameter overrides, and fast (allocation-free) ctypes access for inner loops."""
+slaves, apply parameter overrides, and fast (allocation-free) ctypes access for inner loops.
+
+FMI 2.0 and FMI 3.0 FMUs alike (the FMI 3.0 twins, docs/fmu.md "FMI 3.0"): an FMI 3.0 FMU's
+variables carry the FMI 2.0 type names here (Float64 -> Real, Int32 -> Integer; Enumeration and
+Boolean as they are), and its Slave offers the same raw entry points as an FMI 2.0 one."""
 from __future__ import annotations
 
 import atexit
@@ -56,20 +60,24 @@ class FMUInfo:
         self.unzipdir = extract(str(self.path))
         self._configurations: dict[str, dict[str, Any]] | None = None
         atexit.register(shutil.rmtree, self.unzipdir, True)
+        self.fmi_version = 3 if str(self.md.fmiVersion).startswith("3") else 2
         self.vars: dict[str, Var] = {}
         for v in self.md.modelVariables:
+            if v.causality == "independent":      # FMI 3.0's `time`: not a signal of the loop
+                continue
             start = v.start
+            vtype = FMI3_TYPES.get(v.type, v.type)
             if start is not None:
-                if v.type == "Real":
+                if vtype == "Real":
                     start = float(start)
-                elif v.type in ("Integer", "Enumeration"):
+                elif vtype in ("Integer", "Enumeration"):
                     start = int(start)
-                elif v.type == "Boolean":
+                elif vtype == "Boolean":
                     start = str(start).lower() in ("true", "1")
-            unit = v.unit if v.type == "Real" else None
-            if unit is None and v.type == "Real" and v.declaredType is not None:
+            unit = v.unit if vtype == "Real" else None
+            if unit is None and vtype == "Real" and v.declaredType is not None:
                 unit = getattr(v.declaredType, "unit", None)
-            self.vars[v.name] = Var(v.name, v.valueReference, v.type, v.causality, v.variability,
+            self.vars[v.name] = Var(v.name, v.valueReference, vtype, v.causality, v.variability,
                                     start, unit, v.description, _bound(v, "min"), _bound(v, "max"))
 
     @classmethod
@@ -172,6 +180,8 @@ class FMUInfo:
 
 
 INT32_MIN, INT32_MAX = -2 ** 31, 2 ** 31 - 1
+# FMI 3.0 type names of the variables our FMUs have, as their FMI 2.0 names
+FMI3_TYPES = {"Float64": "Real", "Int32": "Integer"}
 
 
 def _bound(v, attr: str) -> float | None:
@@ -201,6 +211,11 @@ class Slave:
     (instantiation, parameters, initialization) are held back until it succeeds: when it fails, the
     FMUError names the FMU and carries its own reason instead.
     """
+
+    def __new__(cls, info: FMUInfo, *args, **kwargs):
+        if cls is Slave and info.fmi_version == 3:
+            return super().__new__(Slave3)
+        return super().__new__(cls)
 
     def __init__(self, info: FMUInfo, instance_name: str | None = None, logging: bool = False,
                  logger=None, log_categories: list[str] | None = None):
@@ -361,3 +376,115 @@ def vr_array(vrs: list[int]) -> ctypes.Array:
 
 def addr(obj) -> int:
     return ctypes.addressof(obj)
+
+
+class Slave3(Slave):
+    """An FMI 3.0 Co-Simulation slave with the entry points of an FMI 2.0 Slave: get_real(c, vr,
+    n, dst) etc. call fmi3GetFloat64/Int32/Int64/Boolean (Enumerations are Int64 in FMI 3.0,
+    Booleans one byte: both are read into the caller's 32-bit integers), and do_step(c, t, h,
+    noSet) calls fmi3DoStep and keeps its terminateSimulation / lastSuccessfulTime for
+    terminated_status(). Slave(info) returns one for an FMI 3.0 FMU."""
+
+    def __init__(self, info: FMUInfo, instance_name: str | None = None, logging: bool = False,
+                 logger=None, log_categories: list[str] | None = None):
+        from fmpy.fmi3 import FMU3Slave
+        self.info = info
+        name = instance_name or info.model_identifier
+        self.fmu = FMU3Slave(guid=info.md.instantiationToken, unzipDirectory=info.unzipdir,
+                             modelIdentifier=info.model_identifier, instanceName=name)
+        log_message = None
+        if logger is not None:     # the FMI 2.0 logger's arguments (env, instance, status, category, message)
+            def log_message(env, status, category, message, _name=name.encode()):
+                logger(env, _name, status, category, message)
+        self.fmu.instantiate(loggingOn=logging, logMessage=log_message)
+        if log_categories:
+            self.fmu.setDebugLogging(True, list(log_categories))
+        self.c = self.fmu.component
+        dll = self.fmu.dll
+        proto5 = ctypes.CFUNCTYPE(ctypes.c_int, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_size_t, ctypes.c_void_p,
+                                  ctypes.c_size_t)
+        f64get, f64set = proto5(("fmi3GetFloat64", dll)), proto5(("fmi3SetFloat64", dll))
+        self._i32get, self._i64get = proto5(("fmi3GetInt32", dll)), proto5(("fmi3GetInt64", dll))
+        self._bget = proto5(("fmi3GetBoolean", dll))
+        self._step = ctypes.CFUNCTYPE(ctypes.c_int, ctypes.c_void_p, ctypes.c_double, ctypes.c_double, ctypes.c_bool,
+                                      ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p)(
+            ("fmi3DoStep", dll))
+        self.get_real = lambda c, vr, n, dst: f64get(c, vr, n, dst, n)
+        self.set_real = lambda c, vr, n, src: f64set(c, vr, n, src, n)
+        self._enum_vrs = {v.vr for v in info.vars.values() if v.type == "Enumeration"}
+        self._i64 = ctypes.c_int64()
+        self._bools = (ctypes.c_bool * max(1, len(info.vars)))()
+        self._flags = (ctypes.c_bool * 3)()
+        self._last = ctypes.c_double()
+        self._terminated, self._last_time = False, None
+        self._freed = False
+
+    def get_integer(self, c, vr, n, dst) -> int:
+        """Integer and Enumeration outputs into 32-bit integers at dst (fmi3GetInt32 / fmi3GetInt64)."""
+        base = ctypes.addressof(vr)
+        vrs = (ctypes.c_uint * n).from_address(base)
+        st = 0
+        for k in range(n):
+            if vrs[k] in self._enum_vrs:
+                st |= self._i64get(c, base + 4 * k, 1, ctypes.addressof(self._i64), 1)
+                ctypes.c_int32.from_address(dst + 4 * k).value = self._i64.value
+            else:
+                st |= self._i32get(c, base + 4 * k, 1, dst + 4 * k, 1)
+        return st
+
+    def get_boolean(self, c, vr, n, dst) -> int:
+        """Boolean outputs (one byte each in FMI 3.0) into 32-bit integers at dst."""
+        st = self._bget(c, vr, n, self._bools, n)
+        for k in range(n):
+            ctypes.c_int32.from_address(dst + 4 * k).value = int(self._bools[k])
+        return st
+
+    def do_step(self, c, t, h, no_set_prior) -> int:
+        f = self._flags
+        st = self._step(c, t, h, bool(no_set_prior), ctypes.addressof(f), ctypes.addressof(f) + 1,
+                        ctypes.addressof(f) + 2, ctypes.addressof(self._last))
+        self._terminated, self._last_time = bool(f[1]), self._last.value
+        return st
+
+    def set_values(self, values: dict[str, Any]) -> None:
+        for name, val in values.items():
+            v = self.info.var(name)
+            try:
+                if v.type == "Real":
+                    self.fmu.setFloat64([v.vr], [float(val)])
+                elif v.type == "Integer":
+                    self.fmu.setInt32([v.vr], [int(val)])
+                elif v.type == "Enumeration":
+                    self.fmu.setInt64([v.vr], [int(val)])
+                elif v.type == "Boolean":
+                    self.fmu.setBoolean([v.vr], [bool(val)])
+                else:
+                    self.fmu.setString([v.vr], [str(val)])
+            except Exception as e:    # FMPy's FMICallException: the FMU refused the value (it logs why)
+                raise FMUError(f"{self.info.name} refused {name} = {val!r}: {e}") from None
+
+    def get_values(self, names: list[str]) -> dict[str, Any]:
+        out = {}
+        for name in names:
+            v = self.info.var(name)
+            if v.type == "Real":
+                out[name] = self.fmu.getFloat64([v.vr])[0]
+            elif v.type == "Integer":
+                out[name] = self.fmu.getInt32([v.vr])[0]
+            elif v.type == "Enumeration":
+                out[name] = self.fmu.getInt64([v.vr])[0]
+            elif v.type == "Boolean":
+                out[name] = bool(self.fmu.getBoolean([v.vr])[0])
+        return out
+
+    def initialize(self, start_time: float, stop_time: float, parameters: dict[str, Any],
+                   tolerance: float | None = None) -> None:
+        """Parameters (in the Instantiated state, as FMI 3.0 allows for initial exact/approx), then
+        enter (with the experiment) and exit initialization mode."""
+        self.set_values(parameters)
+        self.fmu.enterInitializationMode(tolerance=tolerance, startTime=start_time, stopTime=stop_time)
+        self.fmu.exitInitializationMode()
+
+    def terminated_status(self) -> tuple[bool, float | None]:
+        """After a Discard: (terminated?, last successful time) from the last fmi3DoStep."""
+        return self._terminated, self._last_time

@@ -84,13 +84,13 @@ class Models:
 
     @classmethod
     def load(cls, fmu_dir=None, controller: str | Path | None = None,
-             plant: str | Path | None = None, plant_model: str = "sagittal") -> "Models":
+             plant: str | Path | None = None, plant_model: str = "sagittal", fmi: int = 2) -> "Models":
         """The controller FMU and the plant FMU: `plant` (a path) or the FMU of `plant_model`
-        (a key of paths.PLANT_FMUS: "sagittal" or "3d")."""
+        (a key of paths.PLANT_FMUS: "sagittal" or "3d"); fmi=3: the FMI 3.0 twins."""
         if plant_model not in PLANT_FMUS:
             raise FMUError(f"unknown plant model {plant_model!r} (known: {', '.join(PLANT_FMUS)})")
-        c = Path(controller) if controller else find_fmu(CONTROLLER_FMU, fmu_dir)
-        p = Path(plant) if plant else find_fmu(PLANT_FMUS[plant_model], fmu_dir)
+        c = Path(controller) if controller else find_fmu(CONTROLLER_FMU, fmu_dir, fmi)
+        p = Path(plant) if plant else find_fmu(PLANT_FMUS[plant_model], fmu_dir, fmi)
         return cls(FMUInfo.load(c), FMUInfo.load(p))
 
 
@@ -216,6 +216,9 @@ class ClosedLoop:
         if engine not in ENGINES:
             raise InputError(f"engine {engine!r}: one of {', '.join(ENGINES)}")
         models = models or Models.load(fmu_dir, plant_model=scenario.plant_model)
+        if engine == "native" and 3 in (models.controller.fmi_version, models.plant.fmi_version):
+            raise ScenarioError(f"{scenario.path or scenario.name}: the native engine runs FMI 2.0 FMUs only; "
+                                "run the FMI 3.0 twins with the FMPy engine (--engine fmpy)")
         if scenario.robot_run is None and (scenario.robot or scenario.push_units != "SI"):
             from ..robot.experiment import apply_robot    # the scenario's robot file / robot units
             scenario = apply_robot(scenario, models)

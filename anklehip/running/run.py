@@ -130,13 +130,14 @@ def resolve(scenario: str | os.PathLike | Scenario, *, plant: str | None = None,
             controller_config: str | None = None, parameters: Mapping[str, Any] | None = None,
             faults: Mapping[str, Any] | Faults | None = None, stop_time: float | None = None,
             fmu_dir: str | os.PathLike | None = None, models: Models | None = None,
-            origins: Mapping[str, str] | None = None, robot: str | os.PathLike | None = None
+            origins: Mapping[str, str] | None = None, robot: str | os.PathLike | None = None, fmi: int = 2
             ) -> tuple[Scenario, Models]:
     """The scenario with the overrides applied and its FMUs, checked against each other (names,
     types and ranges of every parameter, the configuration, the stop time) without running
     anything; an InputError naming the file, key or variable otherwise. `origins` names the
     arguments as the caller calls them in messages, e.g. {"parameters": "--set"} for the CLI.
-    `robot`: run on this robot (a robot file or a name in robots/, docs/your-robot.md)."""
+    `robot`: run on this robot (a robot file or a name in robots/, docs/your-robot.md). `fmi`: 3 loads
+    the FMI 3.0 twins (the FMPy engine only; docs/fmu.md section 8)."""
     from ..files.scenario import ScenarioError, faults_from, time_grid_problem
     from .master import check_overrides
     name = {"parameters": "parameters", "faults": "faults", "stop_time": "stop_time",
@@ -151,7 +152,7 @@ def resolve(scenario: str | os.PathLike | Scenario, *, plant: str | None = None,
         sc.plant_model = plant
     if sc.push_y.peak() != 0 and sc.plant_model == "sagittal":
         raise ScenarioError(f"{_where(sc)}: push_y: a sideways push needs the 3D plant ({name['plant']} 3d)")
-    models = models or Models.load(fmu_dir, plant_model=sc.plant_model)
+    models = models or Models.load(fmu_dir, plant_model=sc.plant_model, fmi=fmi)
     if controller_config is not None:
         sc.controller_config = controller_config
         models.controller.configuration(sc.controller_config, name["controller_config"])
@@ -288,14 +289,15 @@ def prepare(scenario: str | os.PathLike | Scenario, *, plant: str | None = None,
             faults: Mapping[str, Any] | Faults | None = None, push: PushProfile | None = None,
             stop_time: float | None = None, fmu_dir: str | os.PathLike | None = None,
             models: Models | None = None, logger: Callable | None = None,
-            origins: Mapping[str, str] | None = None, robot: str | os.PathLike | None = None) -> PreparedRun:
+            origins: Mapping[str, str] | None = None, robot: str | os.PathLike | None = None,
+            fmi: int = 2) -> PreparedRun:
     """resolve() the input, then instantiate and initialize both FMUs (ClosedLoop): a PreparedRun,
     or an InputError naming what is wrong (also the FMU's own reason when it refuses its
     parameters at initialization)."""
     own_plant = scenario_of(scenario).plant_model
     sc, models = resolve(scenario, plant=plant, controller_config=controller_config, parameters=parameters,
                          faults=faults, stop_time=stop_time, fmu_dir=fmu_dir, models=models, origins=origins,
-                         robot=robot)
+                         robot=robot, fmi=fmi)
     # the scenario's reference is of its own plant, robot and parameters
     changed = (bool(parameters) or controller_config is not None or bool(faults) or push is not None
                or robot is not None or sc.plant_model != own_plant)
@@ -310,7 +312,7 @@ def run(scenario: str | os.PathLike | Scenario, *, plant: str | None = None, eng
         animation: Mapping[str, Any] | None = None, record_steptest: str | os.PathLike | None = None,
         fmu_dir: str | os.PathLike | None = None, models: Models | None = None,
         logger: Callable | None = None, progress: bool | None = False,
-        robot: str | os.PathLike | None = None) -> ScenarioResult:
+        robot: str | os.PathLike | None = None, fmi: int = 2) -> ScenarioResult:
     """Run a scenario in closed loop and check it.
 
     scenario           a name (``"paper_five_pushes"``), a path to a scenario TOML, or an
@@ -327,6 +329,7 @@ def run(scenario: str | os.PathLike | Scenario, *, plant: str | None = None, eng
                        <name>.summary.json and, on request, figures, the GIF, a step-test case
     fmu_dir, models    where the FMUs are (default: docs/python-api.md), or FMUs already loaded
     robot              run on this robot: a robot file or a name in robots/ (docs/your-robot.md)
+    fmi                3: the FMI 3.0 twins of the FMUs (engine ``"fmpy"``; docs/fmu.md section 8)
     logger             the FMUs' log messages (FMI logger signature); default: printed
     progress           a progress bar on stderr (None: on a terminal)
 
@@ -335,7 +338,7 @@ def run(scenario: str | os.PathLike | Scenario, *, plant: str | None = None, eng
     """
     prepared = prepare(scenario, plant=plant, engine=engine, controller_config=controller_config,
                        parameters=parameters, faults=faults, push=push, stop_time=stop_time, fmu_dir=fmu_dir,
-                       models=models, logger=logger, robot=robot)
+                       models=models, logger=logger, robot=robot, fmi=fmi)
     return prepared.run(out=out, figures=figures, animate=animate, animation=animation,
                         record_steptest=record_steptest, compare_reference=compare_reference, progress=progress)
 

@@ -95,6 +95,7 @@ ModelInfo makeInfo() {
       "Ankle and hip balance strategies with smooth transitions (Nenchev & Nishio, ICRA 2010) for the "
       "HOAP-2 humanoid; sampled controller on its own grid (sample_period)";
   m.default_experiment = {0.0, 5.0, 0.0, def.sample_period};  // no integrator: no tolerance
+  m.fixed_internal_step = def.sample_period;  // FMI 3.0: the control tick grid (sample_period's default)
   m.outputs_depend_on_inputs = false;
 
   auto in = [&](const char* n, fmi2ValueReference r, const char* unit, const char* d, double start) {
@@ -210,10 +211,11 @@ class ControllerModel final : public Model {
     return fmi2OK;
   }
 
-  void update_initial_outputs(Context& ctx) override {
+  fmi2Status update_initial_outputs(Context& ctx) override {
     ahc_params p;
     readParams(ctx, p);
     writeInitialOutputs(ctx, p);
+    return fmi2OK;
   }
 
   fmi2Status tunable_parameters_changed(Context& ctx) override {

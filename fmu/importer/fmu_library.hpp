@@ -1,6 +1,6 @@
 // Loading an FMU's binary as an importer (the native runners in fmu/rt_runner and
 // fmu/closed_loop): binaries/<platform>/<modelIdentifier><suffix> of an extracted FMU, with dlopen
-// (LoadLibrary on Windows), and its fmi2 entry points by name.
+// (LoadLibrary on Windows), and its fmi2 (or fmi3) entry points by name.
 #pragma once
 
 #ifdef _WIN32
@@ -13,11 +13,13 @@
 #include <string>
 
 #include "fmi2Functions.h"
+#include "fmi3Functions.h"
 
 namespace fmuimport {
 
 #ifdef _WIN32
 inline const char* const kPlatform = "win64";
+inline const char* const kPlatform3 = "x86_64-windows";
 inline const char* const kLibSuffix = ".dll";
 inline void* openLibrary(const std::string& path, std::string& err) {
   HMODULE h = LoadLibraryA(path.c_str());
@@ -29,7 +31,15 @@ inline void* librarySymbol(void* lib, const char* name) {
 }
 inline void closeLibrary(void* lib) { FreeLibrary(static_cast<HMODULE>(lib)); }
 #else
+// x86_64: FMI 2.0's linux64. aarch64: FMI 3.0's tuple aarch64-linux, which the FMI 2.0 FMUs use too
+// (FMI 2.0 names no ARM platform; docs/fmu.md, "Platforms").
+#if defined(__aarch64__)
+inline const char* const kPlatform = "aarch64-linux";
+inline const char* const kPlatform3 = "aarch64-linux";
+#else
 inline const char* const kPlatform = "linux64";
+inline const char* const kPlatform3 = "x86_64-linux";  // FMI 3.0 platform tuple
+#endif
 inline const char* const kLibSuffix = ".so";
 inline void* openLibrary(const std::string& path, std::string& err) {
   void* h = dlopen(path.c_str(), RTLD_NOW | RTLD_LOCAL);
@@ -40,9 +50,9 @@ inline void* librarySymbol(void* lib, const char* name) { return dlsym(lib, name
 inline void closeLibrary(void* lib) { dlclose(lib); }
 #endif
 
-// The binary of an extracted FMU.
-inline std::string binaryPath(const std::string& unzipdir, const std::string& modelIdentifier) {
-  return unzipdir + "/binaries/" + kPlatform + "/" + modelIdentifier + kLibSuffix;
+// The binary of an extracted FMU (of an FMI 3.0 FMU with fmi3).
+inline std::string binaryPath(const std::string& unzipdir, const std::string& modelIdentifier, bool fmi3 = false) {
+  return unzipdir + "/binaries/" + (fmi3 ? kPlatform3 : kPlatform) + "/" + modelIdentifier + kLibSuffix;
 }
 
 // f = the entry point `name`; false (and `err` names it) when the binary lacks it.
@@ -84,6 +94,36 @@ struct Fmi2Api {
            symbol(lib, "fmi2GetInteger", getInteger, err) && symbol(lib, "fmi2GetBoolean", getBoolean, err) &&
            symbol(lib, "fmi2DoStep", doStep, err) && symbol(lib, "fmi2GetRealStatus", getRealStatus, err) &&
            symbol(lib, "fmi2GetBooleanStatus", getBooleanStatus, err);
+  }
+};
+
+// The FMI 3.0 Co-Simulation entry points an importer calls (Enumerations through Int64).
+struct Fmi3Api {
+  fmi3InstantiateCoSimulationTYPE* instantiate = nullptr;
+  fmi3FreeInstanceTYPE* freeInstance = nullptr;
+  fmi3EnterInitializationModeTYPE* enterInitializationMode = nullptr;
+  fmi3ExitInitializationModeTYPE* exitInitializationMode = nullptr;
+  fmi3TerminateTYPE* terminate = nullptr;
+  fmi3SetFloat64TYPE* setFloat64 = nullptr;
+  fmi3SetInt32TYPE* setInt32 = nullptr;
+  fmi3SetInt64TYPE* setInt64 = nullptr;
+  fmi3SetBooleanTYPE* setBoolean = nullptr;
+  fmi3GetFloat64TYPE* getFloat64 = nullptr;
+  fmi3GetInt32TYPE* getInt32 = nullptr;
+  fmi3GetInt64TYPE* getInt64 = nullptr;
+  fmi3GetBooleanTYPE* getBoolean = nullptr;
+  fmi3DoStepTYPE* doStep = nullptr;
+
+  bool load(void* lib, std::string& err) {
+    return symbol(lib, "fmi3InstantiateCoSimulation", instantiate, err) &&
+           symbol(lib, "fmi3FreeInstance", freeInstance, err) &&
+           symbol(lib, "fmi3EnterInitializationMode", enterInitializationMode, err) &&
+           symbol(lib, "fmi3ExitInitializationMode", exitInitializationMode, err) &&
+           symbol(lib, "fmi3Terminate", terminate, err) && symbol(lib, "fmi3SetFloat64", setFloat64, err) &&
+           symbol(lib, "fmi3SetInt32", setInt32, err) && symbol(lib, "fmi3SetInt64", setInt64, err) &&
+           symbol(lib, "fmi3SetBoolean", setBoolean, err) && symbol(lib, "fmi3GetFloat64", getFloat64, err) &&
+           symbol(lib, "fmi3GetInt32", getInt32, err) && symbol(lib, "fmi3GetInt64", getInt64, err) &&
+           symbol(lib, "fmi3GetBoolean", getBoolean, err) && symbol(lib, "fmi3DoStep", doStep, err);
   }
 };
 

@@ -8,6 +8,7 @@
 #include <cstring>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "fmuglue/glue.hpp"
 #include "hoap2plant/plant.hpp"
@@ -199,11 +200,23 @@ bool paramsFromStore(const Context& ctx, Params& p, std::string& why) {
 
 class PlantFmu : public Model {
  public:
-  void reset(Context&) override { plant_.reset(); }
+  void reset(Context&) override {
+    plant_.reset();
+    built_from_.clear();
+  }
 
   std::uint32_t state_version() const override { return 2; }  // 2: field by field, parameters from the store
 
-  fmi2Status exit_initialization(Context& ctx) override {
+  // The initial outputs in initialization mode (<InitialUnknowns>: computed from the parameters):
+  // the plant is built there and kept for fmi2ExitInitializationMode while the parameters stay.
+  fmi2Status update_initial_outputs(Context& ctx) override { return build(ctx); }
+  fmi2Status exit_initialization(Context& ctx) override { return build(ctx); }
+
+  fmi2Status build(Context& ctx) {
+    std::vector<double> key = initialKey(ctx);
+    if (plant_ && key == built_from_) return fmi2OK;  // built for an fmi2Get* in initialization mode
+    plant_.reset();
+    built_from_.clear();
     Params p;
     std::string why;
     if (!paramsFromStore(ctx, p, why)) {
@@ -223,6 +236,7 @@ class PlantFmu : public Model {
     last_in_[2] = 0.0;
     write_outputs(ctx);
     detach();
+    built_from_ = std::move(key);
     return fmi2OK;
   }
 
@@ -232,7 +246,7 @@ class PlantFmu : public Model {
 
   StepResult do_step(Context& ctx, double t, double h, bool) override {
     StepResult res;
-    if (!plantMayStep(ctx, plant_ != nullptr, t, plant_ ? plant_->time() : 0.0, plant_ && plant_->fallen(),
+    if (!plantMayStep(ctx, plant_ != nullptr, t, h, plant_ ? plant_->time() : 0.0, plant_ && plant_->fallen(),
                       plant_ ? plant_->fall_time() : 0.0, res))
       return res;
     attach(ctx);
@@ -241,7 +255,7 @@ class PlantFmu : public Model {
     double in[3];
     const fmi2Status st = readFiniteInputs(ctx, t, 3, kInputVr, kInputNames, last_in_, in, vr::input_fault);
     plant_->set_inputs(in[0], in[1], in[2]);
-    const auto r = plant_->do_step(h);
+    const auto r = plant_->do_step(plantStepTo(t, h, plant_->time()));  // to the master's t + h
     write_outputs(ctx);
     detach();
     const PlantOutcome outcome = r == Plant::Result::Ok       ? PlantOutcome::Ok
@@ -263,6 +277,7 @@ class PlantFmu : public Model {
     double li[3];
     Params p;
     if (!readPlantState(ctx, r, has, s, li, 3, err)) return false;
+    built_from_.clear();
     if (!has) {
       plant_.reset();
       return true;
@@ -321,6 +336,7 @@ class PlantFmu : public Model {
   }
 
   std::unique_ptr<Plant> plant_;
+  std::vector<double> built_from_;  // initialKey() of plant_ while it is the initialization mode's
   Context* ctx_ = nullptr;
   double last_in_[3] = {0, 0, 0};
 };

@@ -269,14 +269,54 @@ bool paramsConsistent(const Params& p, std::string& why) {
   return false;
 }
 
+// A restored snapshot's rigid bodies must be ones a simulation can have (a state's bytes are
+// untrusted input; finiteness alone let a forged 1e70 quaternion through, and ODE's next step
+// then failed): unit quaternions, rotation matrices (ODE's 3x4 layout) with unit rows, positions
+// within 1 km of the origin, speeds below 1 km/s and 1e4 rad/s. False with the first violation.
+bool plausibleBodies(const Snapshot& s, std::string& why) {
+  auto bad = [&](const char* what, int b) {
+    why = std::string("invalid plant snapshot: body ") + std::to_string(b) + " " + what;
+    return false;
+  };
+  for (int b = 0; b < kBodies; ++b) {
+    const BodyState& x = s.body[b];
+    const double qn = x.quat[0] * x.quat[0] + x.quat[1] * x.quat[1] + x.quat[2] * x.quat[2] + x.quat[3] * x.quat[3];
+    if (!(std::fabs(qn - 1.0) <= 1e-6)) return bad("quaternion is not a unit quaternion", b);
+    for (int r = 0; r < 3; ++r) {
+      const double* row = x.rot + 4 * r;
+      if (!(std::fabs(row[0] * row[0] + row[1] * row[1] + row[2] * row[2] - 1.0) <= 1e-6))
+        return bad("rotation matrix is not a rotation", b);
+    }
+    for (int k = 0; k < 3; ++k) {
+      if (!(std::fabs(x.pos[k]) <= 1e3)) return bad("position is more than 1 km away", b);
+      if (!(std::fabs(x.lvel[k]) <= 1e3)) return bad("speed is above 1 km/s", b);
+      if (!(std::fabs(x.avel[k]) <= 1e4)) return bad("angular speed is above 1e4 rad/s", b);
+    }
+  }
+  return true;
+}
+
 class Plant3DFmu : public Model {
  public:
-  void reset(Context&) override { plant_.reset(); }
+  void reset(Context&) override {
+    plant_.reset();
+    built_from_.clear();
+  }
 
   // 2: field by field, parameters from the store; 3: the held feet
   std::uint32_t state_version() const override { return 3; }
 
-  fmi2Status exit_initialization(Context& ctx) override {
+  // The initial outputs in initialization mode (<InitialUnknowns>: computed from the parameters,
+  // after the settling): the plant is built there and kept for fmi2ExitInitializationMode while
+  // the parameters stay.
+  fmi2Status update_initial_outputs(Context& ctx) override { return build(ctx); }
+  fmi2Status exit_initialization(Context& ctx) override { return build(ctx); }
+
+  fmi2Status build(Context& ctx) {
+    std::vector<double> key = initialKey(ctx);
+    if (plant_ && key == built_from_) return fmi2OK;  // built for an fmi2Get* in initialization mode
+    plant_.reset();
+    built_from_.clear();
     const Params p = paramsFromStore(ctx);
     std::string why;
     if (!paramsConsistent(p, why)) {
@@ -301,6 +341,7 @@ class Plant3DFmu : public Model {
     last_in_[1] = p.theta_hip_init;
     write_outputs(ctx);
     detach();
+    built_from_ = std::move(key);
     return fmi2OK;
   }
 
@@ -314,7 +355,7 @@ class Plant3DFmu : public Model {
 
   StepResult do_step(Context& ctx, double t, double h, bool) override {
     StepResult res;
-    if (!plantMayStep(ctx, plant_ != nullptr, t, plant_ ? plant_->time() : 0.0, plant_ && plant_->fallen(),
+    if (!plantMayStep(ctx, plant_ != nullptr, t, h, plant_ ? plant_->time() : 0.0, plant_ && plant_->fallen(),
                       plant_ ? plant_->fall_time() : 0.0, res))
       return res;
     attach(ctx);
@@ -330,7 +371,7 @@ class Plant3DFmu : public Model {
     pin.ref[HipYaw] = in[6];
     pin.ref[Knee] = in[7];
     plant_->set_inputs(pin);
-    const auto r = plant_->do_step(h);
+    const auto r = plant_->do_step(plantStepTo(t, h, plant_->time()));  // to the master's t + h
     write_outputs(ctx);
     detach();
     const PlantOutcome outcome = r == Plant3D::Result::Ok       ? PlantOutcome::Ok
@@ -351,10 +392,12 @@ class Plant3DFmu : public Model {
     Snapshot s;
     double li[kInputs];
     if (!readPlantState(ctx, r, has, s, li, kInputs, err)) return false;
+    built_from_.clear();
     if (!has) {
       plant_.reset();
       return true;
     }
+    if (!plausibleBodies(s, err)) return false;
     const Params p = paramsFromStore(ctx);
     if (!paramsConsistent(p, err)) return false;
     std::unique_ptr<Plant3D> fresh;
@@ -408,6 +451,7 @@ class Plant3DFmu : public Model {
   }
 
   std::unique_ptr<Plant3D> plant_;
+  std::vector<double> built_from_;  // initialKey() of plant_ while it is the initialization mode's
   Context* ctx_ = nullptr;
   double last_in_[kInputs] = {};
 };

@@ -1,8 +1,10 @@
-// anklehip_rt_step — native real-time step test of an FMI 2.0 co-simulation FMU (no Python).
+// anklehip_rt_step — native real-time step test of an FMI 2.0 or FMI 3.0 co-simulation FMU (no
+// Python).
 //
-// Loads <fmu-dir>/binaries/linux64/<modelIdentifier>.so from an extracted FMU with dlopen (on
-// Windows binaries/win64/<modelIdentifier>.dll with LoadLibrary: the same program cross-built with
-// mingw-w64 replays a recorded run through the Windows binaries, under Wine here), reads
+// Loads <fmu-dir>/binaries/linux64/<modelIdentifier>.so from an extracted FMU with dlopen (FMI 3.0:
+// binaries/x86_64-linux; on Windows binaries/win64 or x86_64-windows/<modelIdentifier>.dll with
+// LoadLibrary: the same program cross-built with mingw-w64 replays a recorded run through the
+// Windows binaries, under Wine here; built for aarch64, binaries/aarch64-linux under qemu), reads
 // an input CSV (time + input columns by variable name), steps the FMU at a fixed period either
 // paced in wall-clock time with absolute deadlines (clock_nanosleep TIMER_ABSTIME on
 // CLOCK_MONOTONIC; deadline k = start + k*period, so no drift accumulates) or as fast as possible
@@ -27,6 +29,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
+#include <memory>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -42,6 +45,7 @@ struct Var {
 };
 
 struct Md {
+  bool fmi3 = false;  // fmiVersion 3.0: instantiationToken, Float64/Int32/Enumeration/Boolean elements
   std::string id, guid;
   double stepSize = 0.0;
   std::vector<Var> vars;
@@ -79,33 +83,63 @@ bool parseMd(const std::string& xml, Md& md, std::string& err) {
   md.id = attr(xml.substr(cs, xml.find('>', cs) - cs), "modelIdentifier");
   size_t root = xml.find("<fmiModelDescription");
   if (root == std::string::npos) { err = "no <fmiModelDescription>"; return false; }
-  md.guid = attr(xml.substr(root, xml.find('>', root) - root), "guid");
+  const std::string rootTag = xml.substr(root, xml.find('>', root) - root);
+  md.fmi3 = attr(rootTag, "fmiVersion").rfind("3", 0) == 0;
+  md.guid = attr(rootTag, md.fmi3 ? "instantiationToken" : "guid");
   size_t de = xml.find("<DefaultExperiment");
   if (de != std::string::npos) {
     std::string s = attr(xml.substr(de, xml.find('>', de) - de), "stepSize");
     if (!s.empty()) md.stepSize = std::strtod(s.c_str(), nullptr);
   }
-  size_t p = 0;
-  while ((p = xml.find("<ScalarVariable", p)) != std::string::npos) {
-    size_t e = xml.find('>', p);
-    if (e == std::string::npos) break;
-    std::string tag = xml.substr(p, e - p);
-    Var v;
-    v.name = attr(tag, "name");
-    v.causality = attr(tag, "causality");
-    if (v.causality.empty()) v.causality = "local";
-    v.vr = static_cast<fmi2ValueReference>(std::strtoul(attr(tag, "valueReference").c_str(), nullptr, 10));
-    size_t t = xml.find('<', e);
-    if (t != std::string::npos) {
-      size_t te = xml.find_first_of(" />", t + 1);
-      v.type = xml.substr(t + 1, te - t - 1);
-      if (v.type == "Enumeration") v.type = "Integer";  // FMI 2.0: enumerations go through fmi2Get/SetInteger
+  if (md.fmi3) {
+    // FMI 3.0: one element per variable, named by its type. Types as the loop calls them: Real
+    // (Float64), Integer (Int32), Enum (Enumeration: fmi3Get/SetInt64), Boolean; others kept by name.
+    size_t p = xml.find("<ModelVariables>");
+    const size_t end = xml.find("</ModelVariables>");
+    while (p != std::string::npos && (p = xml.find('<', p + 1)) < end) {
+      if (xml[p + 1] == '/' || xml[p + 1] == '!') continue;
+      const size_t e = xml.find('>', p);
+      const size_t te = xml.find_first_of(" />\n\t", p + 1);
+      const std::string type = xml.substr(p + 1, te - p - 1);
+      if (type == "Start" || type == "Dimension" || type == "Alias" || type == "Item") continue;
+      const std::string tag = xml.substr(p, e - p);
+      Var v;
+      v.name = attr(tag, "name");
+      v.causality = attr(tag, "causality");
+      if (v.causality.empty()) v.causality = "local";
+      v.vr = static_cast<fmi2ValueReference>(std::strtoul(attr(tag, "valueReference").c_str(), nullptr, 10));
+      v.type = type == "Float64" ? "Real" : type == "Int32" ? "Integer" : type == "Enumeration" ? "Enum" : type;
+      md.vars.push_back(v);
     }
-    md.vars.push_back(v);
-    p = e;
+  } else {
+    size_t p = 0;
+    while ((p = xml.find("<ScalarVariable", p)) != std::string::npos) {
+      size_t e = xml.find('>', p);
+      if (e == std::string::npos) break;
+      std::string tag = xml.substr(p, e - p);
+      Var v;
+      v.name = attr(tag, "name");
+      v.causality = attr(tag, "causality");
+      if (v.causality.empty()) v.causality = "local";
+      v.vr = static_cast<fmi2ValueReference>(std::strtoul(attr(tag, "valueReference").c_str(), nullptr, 10));
+      size_t t = xml.find('<', e);
+      if (t != std::string::npos) {
+        size_t te = xml.find_first_of(" />", t + 1);
+        v.type = xml.substr(t + 1, te - t - 1);
+        if (v.type == "Enumeration") v.type = "Integer";  // FMI 2.0: enumerations go through fmi2Get/SetInteger
+      }
+      md.vars.push_back(v);
+      p = e;
+    }
   }
   if (md.id.empty() || md.guid.empty()) { err = "modelIdentifier or guid missing"; return false; }
   return true;
+}
+
+void logMessage3(fmi3InstanceEnvironment, fmi3Status status, fmi3String category, fmi3String message) {
+  static const char* names[] = {"OK", "Warning", "Discard", "Error", "Fatal"};
+  std::fprintf(stderr, "[%s] rt %s: %s\n", status >= 0 && status <= 4 ? names[status] : "?", category ? category : "",
+               message ? message : "");
 }
 
 void logger(fmi2ComponentEnvironment, fmi2String instance, fmi2Status status, fmi2String category,
@@ -168,8 +202,9 @@ void usage(const char* a0) {
                "usage: %s --fmu-dir DIR --input IN.csv [--output OUT.csv] [--step H] [--stop-time T]\n"
                "          [--fast] [--param name=value]... [--timings TIMINGS.csv] [--rt-priority N]\n"
                "          [--mlock] [--log]\n"
-               "  DIR      extracted FMU (modelDescription.xml, binaries/linux64/<id>.so; Windows:\n"
-               "           binaries/win64/<id>.dll, and --fast is required)\n"
+               "  DIR      extracted FMI 2.0 or 3.0 FMU (modelDescription.xml, binaries/linux64/<id>.so or\n"
+               "           x86_64-linux (aarch64: aarch64-linux); Windows: binaries/win64 or\n"
+               "           x86_64-windows/<id>.dll, and --fast is required)\n"
                "  --step   communication step = real-time period [s] (default: DefaultExperiment stepSize)\n"
                "  --fast   do not pace: run as fast as possible (WCET measurement)\n"
                "  --timings  per step: step,time,exec_ns,lateness_ns,miss (miss = 1 when the step's\n"
@@ -244,7 +279,7 @@ int main(int argc, char** argv) {
       std::fprintf(stderr, "warning: column \"%s\" is not an input of %s; ignored\n", f[c].c_str(), md.id.c_str());
       continue;
     }
-    if (v->type != "Real" && v->type != "Integer" && v->type != "Boolean") {
+    if (v->type != "Real" && v->type != "Integer" && v->type != "Enum" && v->type != "Boolean") {
       std::fprintf(stderr, "warning: input \"%s\" of type %s not supported; ignored\n", v->name.c_str(), v->type.c_str());
       continue;
     }
@@ -302,90 +337,152 @@ int main(int argc, char** argv) {
   const size_t nSteps = tp.size() - 1;
 
   // Precompute every input value (no work but the FMU calls inside the timed loop).
-  std::vector<fmi2ValueReference> rvr, ivr, bvr;
-  std::vector<size_t> rcol, icol, bcol;
+  std::vector<fmi2ValueReference> rvr, ivr, evr, bvr;
+  std::vector<size_t> rcol, icol, ecol, bcol;
   for (size_t k = 0; k < cols.size(); ++k) {
     if (cols[k].var->type == "Real") { rvr.push_back(cols[k].var->vr); rcol.push_back(k); }
     else if (cols[k].var->type == "Integer") { ivr.push_back(cols[k].var->vr); icol.push_back(k); }
+    else if (cols[k].var->type == "Enum") { evr.push_back(cols[k].var->vr); ecol.push_back(k); }
     else { bvr.push_back(cols[k].var->vr); bcol.push_back(k); }
   }
   std::vector<double> rin((nSteps + 1) * rvr.size());
   std::vector<fmi2Integer> iin((nSteps + 1) * ivr.size());
+  std::vector<fmi3Int64> ein((nSteps + 1) * evr.size());
   std::vector<fmi2Boolean> bin((nSteps + 1) * bvr.size());
+  std::unique_ptr<fmi3Boolean[]> bin3(new fmi3Boolean[(nSteps + 1) * bvr.size() + 1]);  // not vector<bool>
   for (size_t s = 0; s <= nSteps; ++s) {
     for (size_t j = 0; j < rvr.size(); ++j) rin[s * rvr.size() + j] = inputAt(rcol[j], tp[s]);
     for (size_t j = 0; j < ivr.size(); ++j) iin[s * ivr.size() + j] = static_cast<fmi2Integer>(inputAt(icol[j], tp[s]));
-    for (size_t j = 0; j < bvr.size(); ++j) bin[s * bvr.size() + j] = inputAt(bcol[j], tp[s]) != 0.0;
+    for (size_t j = 0; j < evr.size(); ++j) ein[s * evr.size() + j] = static_cast<fmi3Int64>(inputAt(ecol[j], tp[s]));
+    for (size_t j = 0; j < bvr.size(); ++j) {
+      bin[s * bvr.size() + j] = inputAt(bcol[j], tp[s]) != 0.0;
+      bin3[s * bvr.size() + j] = bin[s * bvr.size() + j] != 0;
+    }
   }
   std::vector<const Var*> outs;
-  std::vector<fmi2ValueReference> orv, oiv, obv;
+  std::vector<fmi2ValueReference> orv, oiv, oev, obv;
   for (const auto& v : md.vars) {
     if (v.causality != "output") continue;
     if (v.type == "Real") orv.push_back(v.vr);
     else if (v.type == "Integer") oiv.push_back(v.vr);
+    else if (v.type == "Enum") oev.push_back(v.vr);
     else if (v.type == "Boolean") obv.push_back(v.vr);
     else continue;
     outs.push_back(&v);
   }
   std::vector<double> rout((nSteps + 1) * orv.size());
   std::vector<fmi2Integer> iout((nSteps + 1) * oiv.size());
+  std::vector<fmi3Int64> eout((nSteps + 1) * oev.size());
   std::vector<fmi2Boolean> bout((nSteps + 1) * obv.size());
+  std::unique_ptr<fmi3Boolean[]> bout3(new fmi3Boolean[obv.size() + 1]);
 
   // ---- load the FMU ----
-  const std::string so = fmuimport::binaryPath(dir, md.id);
+  const std::string so = fmuimport::binaryPath(dir, md.id, md.fmi3);
   std::string loadErr;
   void* lib = fmuimport::openLibrary(so, loadErr);
   if (!lib) { std::fprintf(stderr, "error: loading %s: %s\n", so.c_str(), loadErr.c_str()); return 1; }
   fmuimport::Fmi2Api api;
-  if (!api.load(lib, loadErr)) { std::fprintf(stderr, "error: %s\n", loadErr.c_str()); return 1; }
-  auto* instantiate = api.instantiate; auto* freeInstance = api.freeInstance; auto* setup = api.setupExperiment;
-  auto* enterInit = api.enterInitializationMode; auto* exitInit = api.exitInitializationMode;
-  auto* terminate = api.terminate; auto* setReal = api.setReal; auto* setInteger = api.setInteger;
-  auto* setBoolean = api.setBoolean; auto* getReal = api.getReal; auto* getInteger = api.getInteger;
-  auto* getBoolean = api.getBoolean; auto* doStep = api.doStep;
+  fmuimport::Fmi3Api api3;
+  if (!(md.fmi3 ? api3.load(lib, loadErr) : api.load(lib, loadErr))) {
+    std::fprintf(stderr, "error: %s\n", loadErr.c_str());
+    return 1;
+  }
+  const char* v = md.fmi3 ? "fmi3" : "fmi2";  // for messages
+  void* c = nullptr;
   fmi2CallbackFunctions cb{};
   cb.logger = logger;
   cb.allocateMemory = calloc;
   cb.freeMemory = free;
-  std::string res = "file://" + dir + "/resources";
-  fmi2Component c = instantiate("rt", fmi2CoSimulation, md.guid.c_str(), res.c_str(), &cb, fmi2False,
-                                logOn ? fmi2True : fmi2False);
-  if (!c) { std::fprintf(stderr, "error: fmi2Instantiate failed\n"); return 1; }
-  auto fail = [&](const char* what) {
-    std::fprintf(stderr, "error: %s failed\n", what);
-    freeInstance(c);
+  if (md.fmi3) {
+    std::string res = dir + "/resources/";
+    c = api3.instantiate("rt", md.guid.c_str(), res.c_str(), false, logOn, false, false, nullptr, 0, nullptr,
+                         logMessage3, nullptr);
+  } else {
+    std::string res = "file://" + dir + "/resources";
+    c = api.instantiate("rt", fmi2CoSimulation, md.guid.c_str(), res.c_str(), &cb, fmi2False,
+                        logOn ? fmi2True : fmi2False);
+  }
+  if (!c) { std::fprintf(stderr, "error: %sInstantiate failed\n", v); return 1; }
+  // The calls of the loop, for either version (statuses as ints: FMI 2.0's and 3.0's agree).
+  auto freeInstance = [&] { md.fmi3 ? api3.freeInstance(c) : api.freeInstance(c); };
+  auto terminate = [&] { md.fmi3 ? (void)api3.terminate(c) : (void)api.terminate(c); };
+  auto fail = [&](const std::string& what) {
+    std::fprintf(stderr, "error: %s failed\n", what.c_str());
+    freeInstance();
     return 1;
   };
-  if (setup(c, fmi2False, 0.0, t0, fmi2False, 0.0) > fmi2Warning) return fail("fmi2SetupExperiment");
+  if (!md.fmi3 && api.setupExperiment(c, fmi2False, 0.0, t0, fmi2False, 0.0) > fmi2Warning)
+    return fail("fmi2SetupExperiment");
   for (const auto& kv : params) {
-    const Var* v = nullptr;
+    const Var* var = nullptr;
     for (const auto& x : md.vars)
-      if (x.name == kv.first) v = &x;
-    if (!v) { std::fprintf(stderr, "error: no variable \"%s\"\n", kv.first.c_str()); freeInstance(c); return 2; }
-    fmi2Status st;
-    if (v->type == "Real") { double x = std::strtod(kv.second.c_str(), nullptr); st = setReal(c, &v->vr, 1, &x); }
-    else if (v->type == "Integer") { fmi2Integer x = std::atoi(kv.second.c_str()); st = setInteger(c, &v->vr, 1, &x); }
-    else if (v->type == "Boolean") { fmi2Boolean x = kv.second == "true" || kv.second == "1"; st = setBoolean(c, &v->vr, 1, &x); }
-    else { std::fprintf(stderr, "error: cannot set %s\n", v->name.c_str()); freeInstance(c); return 2; }
-    if (st > fmi2Warning) return fail(("setting " + kv.first).c_str());
+      if (x.name == kv.first) var = &x;
+    if (!var) { std::fprintf(stderr, "error: no variable \"%s\"\n", kv.first.c_str()); freeInstance(); return 2; }
+    int st;
+    if (var->type == "Real") {
+      double x = std::strtod(kv.second.c_str(), nullptr);
+      st = md.fmi3 ? int(api3.setFloat64(c, &var->vr, 1, &x, 1)) : int(api.setReal(c, &var->vr, 1, &x));
+    } else if (var->type == "Integer") {
+      fmi2Integer x = std::atoi(kv.second.c_str());
+      st = md.fmi3 ? int(api3.setInt32(c, &var->vr, 1, &x, 1)) : int(api.setInteger(c, &var->vr, 1, &x));
+    } else if (var->type == "Enum") {
+      fmi3Int64 x = std::atoll(kv.second.c_str());
+      st = api3.setInt64(c, &var->vr, 1, &x, 1);
+    } else if (var->type == "Boolean") {
+      const bool x = kv.second == "true" || kv.second == "1";
+      fmi2Boolean x2 = x;
+      fmi3Boolean x3 = x;
+      st = md.fmi3 ? int(api3.setBoolean(c, &var->vr, 1, &x3, 1)) : int(api.setBoolean(c, &var->vr, 1, &x2));
+    } else {
+      std::fprintf(stderr, "error: cannot set %s\n", var->name.c_str());
+      freeInstance();
+      return 2;
+    }
+    if (st > fmi2Warning) return fail("setting " + kv.first);
   }
-  if (enterInit(c) > fmi2Warning) return fail("fmi2EnterInitializationMode");
-  auto setInputs = [&](size_t s) -> fmi2Status {
-    fmi2Status st = fmi2OK;
-    if (!rvr.empty()) st = std::max(st, setReal(c, rvr.data(), rvr.size(), &rin[s * rvr.size()]));
-    if (!ivr.empty()) st = std::max(st, setInteger(c, ivr.data(), ivr.size(), &iin[s * ivr.size()]));
-    if (!bvr.empty()) st = std::max(st, setBoolean(c, bvr.data(), bvr.size(), &bin[s * bvr.size()]));
+  if ((md.fmi3 ? int(api3.enterInitializationMode(c, false, 0.0, t0, false, 0.0)) : int(api.enterInitializationMode(c))) >
+      fmi2Warning)
+    return fail(std::string(v) + "EnterInitializationMode");
+  auto setInputs = [&](size_t s) -> int {
+    int st = 0;
+    if (md.fmi3) {
+      if (!rvr.empty()) st = std::max<int>(st, api3.setFloat64(c, rvr.data(), rvr.size(), &rin[s * rvr.size()], rvr.size()));
+      if (!ivr.empty()) st = std::max<int>(st, api3.setInt32(c, ivr.data(), ivr.size(), &iin[s * ivr.size()], ivr.size()));
+      if (!evr.empty()) st = std::max<int>(st, api3.setInt64(c, evr.data(), evr.size(), &ein[s * evr.size()], evr.size()));
+      if (!bvr.empty()) st = std::max<int>(st, api3.setBoolean(c, bvr.data(), bvr.size(), &bin3[s * bvr.size()], bvr.size()));
+      return st;
+    }
+    if (!rvr.empty()) st = std::max<int>(st, api.setReal(c, rvr.data(), rvr.size(), &rin[s * rvr.size()]));
+    if (!ivr.empty()) st = std::max<int>(st, api.setInteger(c, ivr.data(), ivr.size(), &iin[s * ivr.size()]));
+    if (!bvr.empty()) st = std::max<int>(st, api.setBoolean(c, bvr.data(), bvr.size(), &bin[s * bvr.size()]));
     return st;
   };
-  auto getOutputs = [&](size_t s) -> fmi2Status {
-    fmi2Status st = fmi2OK;
-    if (!orv.empty()) st = std::max(st, getReal(c, orv.data(), orv.size(), &rout[s * orv.size()]));
-    if (!oiv.empty()) st = std::max(st, getInteger(c, oiv.data(), oiv.size(), &iout[s * oiv.size()]));
-    if (!obv.empty()) st = std::max(st, getBoolean(c, obv.data(), obv.size(), &bout[s * obv.size()]));
+  auto getOutputs = [&](size_t s) -> int {
+    int st = 0;
+    if (md.fmi3) {
+      if (!orv.empty()) st = std::max<int>(st, api3.getFloat64(c, orv.data(), orv.size(), &rout[s * orv.size()], orv.size()));
+      if (!oiv.empty()) st = std::max<int>(st, api3.getInt32(c, oiv.data(), oiv.size(), &iout[s * oiv.size()], oiv.size()));
+      if (!oev.empty()) st = std::max<int>(st, api3.getInt64(c, oev.data(), oev.size(), &eout[s * oev.size()], oev.size()));
+      if (!obv.empty()) {
+        st = std::max<int>(st, api3.getBoolean(c, obv.data(), obv.size(), bout3.get(), obv.size()));
+        for (size_t j = 0; j < obv.size(); ++j) bout[s * obv.size() + j] = bout3[j];
+      }
+      return st;
+    }
+    if (!orv.empty()) st = std::max<int>(st, api.getReal(c, orv.data(), orv.size(), &rout[s * orv.size()]));
+    if (!oiv.empty()) st = std::max<int>(st, api.getInteger(c, oiv.data(), oiv.size(), &iout[s * oiv.size()]));
+    if (!obv.empty()) st = std::max<int>(st, api.getBoolean(c, obv.data(), obv.size(), &bout[s * obv.size()]));
     return st;
+  };
+  auto doStep = [&](double t, double h) -> int {
+    if (!md.fmi3) return api.doStep(c, t, h, fmi2True);
+    fmi3Boolean eventHandlingNeeded = false, terminateSimulation = false, earlyReturn = false;
+    fmi3Float64 lastSuccessfulTime = 0.0;
+    return api3.doStep(c, t, h, true, &eventHandlingNeeded, &terminateSimulation, &earlyReturn, &lastSuccessfulTime);
   };
   if (setInputs(0) > fmi2Warning) return fail("setting the inputs");
-  if (exitInit(c) > fmi2Warning) return fail("fmi2ExitInitializationMode");
+  if ((md.fmi3 ? int(api3.exitInitializationMode(c)) : int(api.exitInitializationMode(c))) > fmi2Warning)
+    return fail(std::string(v) + "ExitInitializationMode");
   if (getOutputs(0) > fmi2Warning) return fail("getting the outputs");
 
   // ---- real-time loop ----
@@ -412,9 +509,9 @@ int main(int argc, char** argv) {
       sleepUntil(deadline);
       late[s] = nowNs() - deadline;
     }
-    fmi2Status st = s == 0 ? fmi2OK : setInputs(s);
+    int st = s == 0 ? 0 : setInputs(s);
     const int64_t a = nowNs();
-    fmi2Status ds = doStep(c, tp[s], tp[s + 1] - tp[s], fmi2True);
+    const int ds = doStep(tp[s], tp[s + 1] - tp[s]);
     const int64_t b = nowNs();
     exec[s] = b - a;
     st = std::max(st, getOutputs(s + 1));
@@ -424,27 +521,28 @@ int main(int argc, char** argv) {
     }
     done = s + 1;
     if (ds > fmi2Warning || st > fmi2Warning) {
-      std::fprintf(stderr, "error: fmi2DoStep at t=%.17g returned status %d\n", tp[s], static_cast<int>(ds));
+      std::fprintf(stderr, "error: %sDoStep at t=%.17g returned status %d\n", v, tp[s], ds);
       rc = 1;
       break;
     }
   }
-  terminate(c);
-  freeInstance(c);
+  terminate();
+  freeInstance();
 
   // ---- results ----
   if (!out.empty()) {
     FILE* fo = std::fopen(out.c_str(), "w");
     if (!fo) { std::fprintf(stderr, "error: cannot write %s\n", out.c_str()); return 1; }
     std::fprintf(fo, "time");
-    for (const Var* v : outs) std::fprintf(fo, ",%s", v->name.c_str());
+    for (const Var* o : outs) std::fprintf(fo, ",%s", o->name.c_str());
     std::fprintf(fo, "\n");
     for (size_t s = 0; s <= done; ++s) {
       std::fprintf(fo, "%.17g", tp[s]);
-      size_t ri = 0, ii = 0, bi = 0;
-      for (const Var* v : outs) {
-        if (v->type == "Real") std::fprintf(fo, ",%.17g", rout[s * orv.size() + ri++]);
-        else if (v->type == "Integer") std::fprintf(fo, ",%d", iout[s * oiv.size() + ii++]);
+      size_t ri = 0, ii = 0, ei = 0, bi = 0;
+      for (const Var* o : outs) {
+        if (o->type == "Real") std::fprintf(fo, ",%.17g", rout[s * orv.size() + ri++]);
+        else if (o->type == "Integer") std::fprintf(fo, ",%d", iout[s * oiv.size() + ii++]);
+        else if (o->type == "Enum") std::fprintf(fo, ",%lld", static_cast<long long>(eout[s * oev.size() + ei++]));
         else std::fprintf(fo, ",%d", bout[s * obv.size() + bi++] ? 1 : 0);
       }
       std::fprintf(fo, "\n");

@@ -1,49 +1,16 @@
-// The FMI 2.0 co-simulation C API, implemented once for every FMU of the project.
-// Compiled into each FMU's shared library by add_fmu(); only the fmi2* symbols are exported.
-// No exception crosses this boundary: every entry point catches everything.
-#include <cmath>
+// The FMI 2.0 co-simulation C API, implemented once for every FMU of the project over the shared
+// operations of api.hpp (the FMI 3.0 API, fmi3_api.cpp, is the other one). Compiled into each FMU's
+// FMI 2.0 shared library by add_fmu(); only the fmi2* symbols are exported. No exception crosses
+// this boundary: every entry point catches everything.
 #include <cstring>
-#include <exception>
-#include <new>
 
-#include "instance.hpp"
+#include "api.hpp"
+#include "binary_runtime.hpp"
 
 using namespace fmuglue;
+using namespace fmuglue::api;
 
 namespace {
-
-constexpr unsigned S(State s) { return static_cast<unsigned>(s); }
-constexpr unsigned kInst = S(State::Instantiated), kInit = S(State::InitializationMode),
-                   kComplete = S(State::StepComplete), kInProgress = S(State::StepInProgress),
-                   kFailed = S(State::StepFailed), kCanceled = S(State::StepCanceled),
-                   kTerminated = S(State::Terminated), kErr = S(State::Error);
-constexpr unsigned kLive = kInst | kInit | kComplete | kInProgress | kFailed | kCanceled | kTerminated | kErr;
-constexpr unsigned kMaskGet = kInit | kComplete | kFailed | kCanceled | kTerminated | kErr;
-constexpr unsigned kMaskSet = kInst | kInit | kComplete;
-constexpr unsigned kMaskState = kInst | kInit | kComplete | kFailed | kCanceled | kTerminated;
-constexpr unsigned kMaskStatus = kComplete | kInProgress | kFailed | kCanceled | kTerminated;
-
-Instance* toInst(fmi2Component c) { return static_cast<Instance*>(c); }
-
-// The instance's own FMU state behind the importer's pointer, or nullptr (logged). The pointer is
-// looked up, never dereferenced first: a freed, forged or foreign pointer is an error, not a crash.
-StateSnapshot* toSnap(Instance* inst, fmi2FMUstate s, const char* fn) {
-  if (s == nullptr) { inst->error("%s: FMUstate is NULL", fn); return nullptr; }
-  auto it = inst->states.find(s);
-  if (it == inst->states.end()) {
-    inst->error("%s: FMUstate %p was not created by this instance or was already freed (move a state to another "
-                "instance with fmi2SerializeFMUstate and fmi2DeSerializeFMUstate)", fn, s);
-    return nullptr;
-  }
-  return it->second.get();
-}
-
-StateSnapshot* newSnap(Instance* inst) {
-  auto snap = std::make_unique<StateSnapshot>();
-  StateSnapshot* p = snap.get();
-  inst->states.emplace(p, std::move(snap));
-  return p;
-}
 
 // The fmi2StatusKind / fmi2Type the caller passed, as the integer it is: an out-of-range value is
 // an error to report, and loading it as the enum type would be undefined behaviour.
@@ -55,122 +22,7 @@ int enumValue(const Enum& e) {
   return v;
 }
 
-// Common checks of fmi2Get*/fmi2Set* arguments; returns the store indices in `idx`.
-bool resolve(Instance* inst, const char* fn, const fmi2ValueReference vr[], size_t nvr, const void* values,
-             Type t, std::vector<int>& idx) {
-  idx.clear();  // a reused buffer: never leave the previous call's indices in it
-  if (nvr == 0) return true;
-  if (vr == nullptr) { inst->error("%s: vr is NULL with nvr = %zu", fn, nvr); return false; }
-  if (values == nullptr) { inst->error("%s: value array is NULL with nvr = %zu", fn, nvr); return false; }
-  if (nvr > inst->info.variables.size() * 16 + 1024) {
-    inst->error("%s: nvr = %zu is larger than any legal request", fn, nvr);
-    return false;
-  }
-  idx.resize(nvr);
-  for (size_t k = 0; k < nvr; ++k) {
-    int i = inst->indexOf(vr[k]);
-    if (i < 0) { inst->error("%s: unknown value reference %u (element %zu)", fn, vr[k], k); return false; }
-    if (inst->info.variables[i].type != t) {
-      inst->error("%s: value reference %u is %s \"%s\", not %s", fn, vr[k],
-                  xmlName(inst->info.variables[i].type), inst->info.variables[i].name.c_str(), xmlName(t));
-      return false;
-    }
-    idx[k] = i;
-  }
-  return true;
-}
-
-void prepareGet(Instance* inst) {
-  if (inst->state == State::InitializationMode && inst->initDirty) {
-    inst->model->update_initial_outputs(inst->ctx);
-    inst->initDirty = false;
-  }
-}
-
-template <class F>
-fmi2Status guarded(fmi2Component c, const char* fn, F&& body) {
-  Instance* inst = toInst(c);
-  if (inst == nullptr) return fmi2Error;
-  try {
-    return body(inst);
-  } catch (const std::bad_alloc&) {
-    inst->error("%s: out of memory", fn);
-  } catch (const std::exception& e) {
-    inst->error("%s: %s", fn, e.what());
-  } catch (...) {
-    inst->error("%s: unknown exception", fn);
-  }
-  inst->state = State::Error;
-  return fmi2Error;
-}
-
-// Apply a set after all values were checked; calls the tunable hook when needed.
-template <class Store>
-fmi2Status commitSet(Instance* inst, const char* fn, const std::vector<int>& idx, Store store) {
-  // After initialization a set that includes a (tunable) parameter may be rejected by the model:
-  // keep the old values for that case only (inputs, set at every step, need no copy).
-  bool anyTunable = false;
-  if (inst->state == State::StepComplete)
-    for (int i : idx)
-      if (inst->info.variables[i].causality == Causality::Parameter) anyTunable = true;
-  std::vector<Value> old;
-  if (anyTunable)
-    for (int i : idx) old.push_back(inst->store[i]);
-  for (size_t k = 0; k < idx.size(); ++k) store(inst->store[idx[k]], k);
-  if (inst->state == State::InitializationMode || inst->state == State::Instantiated) inst->initDirty = true;
-  if (anyTunable) {
-    fmi2Status st = inst->model->tunable_parameters_changed(inst->ctx);
-    if (st == fmi2Error || st == fmi2Fatal) {
-      for (size_t k = 0; k < idx.size(); ++k) inst->store[idx[k]] = old[k];
-      inst->model->tunable_parameters_changed(inst->ctx);
-      return inst->error("%s: the model rejected the new tunable parameter values (previous values kept)", fn);
-    }
-    return st;
-  }
-  return fmi2OK;
-}
-
-bool checkSettable(Instance* inst, const char* fn, const std::vector<int>& idx) {
-  std::string why;
-  for (int i : idx) {
-    if (!inst->settable(i, why)) {
-      inst->error("%s: \"%s\" cannot be set in state %s: %s", fn, inst->info.variables[i].name.c_str(),
-                  stateName(inst->state), why.c_str());
-      return false;
-    }
-  }
-  return true;
-}
-
-bool checkNumber(Instance* inst, const char* fn, int i, double v) {
-  std::string why;
-  if (valueAllowed(inst->info.variables[i], v, why)) return true;
-  inst->error("%s: %s", fn, why.c_str());
-  return false;
-}
-
 }  // namespace
-
-#if defined(FMUGLUE_STATIC_LIBSTDCXX)
-// The statically linked libstdc++ allocates its exception emergency pool (72 704 bytes) when the
-// binary is loaded and never frees it, so an importer that loads and unloads the FMU repeatedly
-// lost that much every time. __gnu_cxx::__freeres(), libstdc++'s hook for memory checkers, frees
-// it when the binary is unloaded (the pool is private to this binary: its libstdc++ is hidden).
-namespace __gnu_cxx {
-void __freeres() noexcept;
-}
-__attribute__((destructor)) static void releaseStaticRuntime() { __gnu_cxx::__freeres(); }
-#endif
-
-#if defined(FMUGLUE_ZIG_RUNTIME)
-// zig links no crtbeginS.o, whose destructor calls __cxa_finalize(&__dso_handle) when the binary
-// is unloaded: the destructors of this binary's static objects (registered with __cxa_atexit)
-// then stayed in the process's exit list, and the process crashed at exit calling into the
-// unmapped binary after an importer's dlclose. This destructor does what crtbeginS.o does.
-extern "C" void __cxa_finalize(void* dso);
-extern "C" __attribute__((visibility("hidden"))) void* __dso_handle;
-__attribute__((destructor)) static void finalizeStaticObjects() { __cxa_finalize(&__dso_handle); }
-#endif
 
 #define CALLLOG(inst, ...) \
   do { if ((inst)->logEnabled(kLogCalls)) (inst)->log(kLogCalls, fmi2OK, __VA_ARGS__); } while (0)
@@ -208,15 +60,7 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
       delete inst;
       return nullptr;
     }
-    if (fmuGUID == nullptr || inst->guid != fmuGUID) {
-      inst->error("fmi2Instantiate: GUID \"%s\" does not match this FMU's \"%s\"", fmuGUID ? fmuGUID : "(null)",
-                  inst->guid.c_str());
-      delete inst;
-      return nullptr;
-    }
-    inst->model = createModel();
-    if (!inst->model) { inst->error("fmi2Instantiate: the model could not be created"); delete inst; return nullptr; }
-    inst->model->reset(inst->ctx);
+    if (!completeInstantiation(inst, "fmi2Instantiate", fmuGUID)) { delete inst; return nullptr; }
     CALLLOG(inst, "fmi2Instantiate(%s, GUID %s, loggingOn=%d)", name, fmuGUID, loggingOn);
     return inst;
   } catch (const std::exception& e) {
@@ -228,7 +72,7 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
 }
 
 void fmi2FreeInstance(fmi2Component c) {
-  Instance* inst = toInst(c);
+  Instance* inst = static_cast<Instance*>(c);
   if (inst == nullptr) return;
   try {
     CALLLOG(inst, "fmi2FreeInstance");
@@ -245,74 +89,36 @@ fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean toleranceDefined, fm
   return guarded(c, "fmi2SetupExperiment", [&](Instance* inst) {
     CALLLOG(inst, "fmi2SetupExperiment(tolDefined=%d, tol=%g, start=%g, stopDefined=%d, stop=%g)", toleranceDefined,
             tolerance, startTime, stopTimeDefined, stopTime);
-    if (!inst->allowed(kInst, "fmi2SetupExperiment")) return fmi2Error;
-    if (!std::isfinite(startTime)) return inst->error("fmi2SetupExperiment: startTime %g is not finite", startTime);
-    if (stopTimeDefined && !(stopTime >= startTime))
-      return inst->error("fmi2SetupExperiment: stopTime %g < startTime %g", stopTime, startTime);
-    if (toleranceDefined && !(tolerance > 0.0))
-      return inst->error("fmi2SetupExperiment: tolerance %g must be positive", tolerance);
-    inst->startTime = startTime;
-    inst->time = startTime;
-    inst->stopTimeDefined = stopTimeDefined != fmi2False;
-    inst->stopTime = stopTime;
-    inst->toleranceDefined = toleranceDefined != fmi2False;
-    inst->tolerance = tolerance;
-    return fmi2OK;
+    return setupExperiment(inst, "fmi2SetupExperiment", toleranceDefined != fmi2False, tolerance, startTime,
+                           stopTimeDefined != fmi2False, stopTime);
   });
 }
 
 fmi2Status fmi2EnterInitializationMode(fmi2Component c) {
   return guarded(c, "fmi2EnterInitializationMode", [&](Instance* inst) {
     CALLLOG(inst, "fmi2EnterInitializationMode");
-    if (!inst->allowed(kInst, "fmi2EnterInitializationMode")) return fmi2Error;
-    inst->state = State::InitializationMode;
-    inst->initDirty = true;
-    return fmi2OK;
+    return enterInitializationMode(inst, "fmi2EnterInitializationMode");
   });
 }
 
 fmi2Status fmi2ExitInitializationMode(fmi2Component c) {
   return guarded(c, "fmi2ExitInitializationMode", [&](Instance* inst) {
     CALLLOG(inst, "fmi2ExitInitializationMode");
-    if (!inst->allowed(kInit, "fmi2ExitInitializationMode")) return fmi2Error;
-    fmi2Status st = inst->model->exit_initialization(inst->ctx);
-    if (st == fmi2Error || st == fmi2Fatal || st == fmi2Discard || st == fmi2Pending) {
-      inst->state = st == fmi2Fatal ? State::Fatal : State::Error;
-      return inst->error("fmi2ExitInitializationMode: initialization failed (see the messages above); "
-                         "call fmi2Reset or fmi2FreeInstance");
-    }
-    inst->state = State::StepComplete;
-    inst->time = inst->startTime;
-    inst->lastSuccessfulTime = inst->startTime;
-    inst->terminatedFlag = false;
-    inst->initDirty = false;
-    return st;
+    return exitInitializationMode(inst, "fmi2ExitInitializationMode");
   });
 }
 
 fmi2Status fmi2Terminate(fmi2Component c) {
   return guarded(c, "fmi2Terminate", [&](Instance* inst) {
     CALLLOG(inst, "fmi2Terminate");
-    if (!inst->allowed(kComplete | kFailed | kCanceled, "fmi2Terminate")) return fmi2Error;
-    inst->model->terminate(inst->ctx);
-    inst->state = State::Terminated;
-    return fmi2OK;
+    return terminate(inst, "fmi2Terminate");
   });
 }
 
 fmi2Status fmi2Reset(fmi2Component c) {
   return guarded(c, "fmi2Reset", [&](Instance* inst) {
     CALLLOG(inst, "fmi2Reset");
-    if (!inst->allowed(kLive & ~kInProgress, "fmi2Reset")) return fmi2Error;
-    inst->resetStore();
-    inst->state = State::Instantiated;
-    inst->time = inst->startTime = 0.0;
-    inst->stopTimeDefined = inst->toleranceDefined = false;
-    inst->stopTime = inst->tolerance = 0.0;
-    inst->lastSuccessfulTime = 0.0;
-    inst->terminatedFlag = false;
-    inst->model->reset(inst->ctx);
-    return fmi2OK;
+    return reset(inst, "fmi2Reset");
   });
 }
 
@@ -320,45 +126,26 @@ fmi2Status fmi2Reset(fmi2Component c) {
 fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, fmi2Real value[]) {
   return guarded(c, "fmi2GetReal", [&](Instance* inst) {
     CALLLOG(inst, "fmi2GetReal(nvr=%zu)", nvr);
-    if (!inst->allowed(kMaskGet, "fmi2GetReal")) return fmi2Error;
-    std::vector<int>& idx = inst->scratch_idx;  // reused: no allocation per call
-    if (!resolve(inst, "fmi2GetReal", vr, nvr, value, Type::Real, idx)) return fmi2Error;
-    prepareGet(inst);
-    for (size_t k = 0; k < nvr; ++k) value[k] = inst->store[idx[k]].r;
-    return fmi2OK;
+    return get(inst, "fmi2GetReal", vr, nvr, value, Access::Real, [](const Value& x) { return x.r; });
   });
 }
 fmi2Status fmi2GetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, fmi2Integer value[]) {
   return guarded(c, "fmi2GetInteger", [&](Instance* inst) {
     CALLLOG(inst, "fmi2GetInteger(nvr=%zu)", nvr);
-    if (!inst->allowed(kMaskGet, "fmi2GetInteger")) return fmi2Error;
-    std::vector<int>& idx = inst->scratch_idx;  // reused: no allocation per call
-    if (!resolve(inst, "fmi2GetInteger", vr, nvr, value, Type::Integer, idx)) return fmi2Error;
-    prepareGet(inst);
-    for (size_t k = 0; k < nvr; ++k) value[k] = inst->store[idx[k]].i;
-    return fmi2OK;
+    return get(inst, "fmi2GetInteger", vr, nvr, value, Access::IntegerOrEnum, [](const Value& x) { return x.i; });
   });
 }
 fmi2Status fmi2GetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, fmi2Boolean value[]) {
   return guarded(c, "fmi2GetBoolean", [&](Instance* inst) {
     CALLLOG(inst, "fmi2GetBoolean(nvr=%zu)", nvr);
-    if (!inst->allowed(kMaskGet, "fmi2GetBoolean")) return fmi2Error;
-    std::vector<int>& idx = inst->scratch_idx;  // reused: no allocation per call
-    if (!resolve(inst, "fmi2GetBoolean", vr, nvr, value, Type::Boolean, idx)) return fmi2Error;
-    prepareGet(inst);
-    for (size_t k = 0; k < nvr; ++k) value[k] = inst->store[idx[k]].i ? fmi2True : fmi2False;
-    return fmi2OK;
+    return get(inst, "fmi2GetBoolean", vr, nvr, value, Access::Boolean,
+               [](const Value& x) { return x.i ? fmi2True : fmi2False; });
   });
 }
 fmi2Status fmi2GetString(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, fmi2String value[]) {
   return guarded(c, "fmi2GetString", [&](Instance* inst) {
     CALLLOG(inst, "fmi2GetString(nvr=%zu)", nvr);
-    if (!inst->allowed(kMaskGet, "fmi2GetString")) return fmi2Error;
-    std::vector<int>& idx = inst->scratch_idx;  // reused: no allocation per call
-    if (!resolve(inst, "fmi2GetString", vr, nvr, value, Type::String, idx)) return fmi2Error;
-    prepareGet(inst);
-    for (size_t k = 0; k < nvr; ++k) value[k] = inst->store[idx[k]].s.c_str();
-    return fmi2OK;
+    return get(inst, "fmi2GetString", vr, nvr, value, Access::String, [](const Value& x) { return x.s.c_str(); });
   });
 }
 
@@ -366,47 +153,25 @@ fmi2Status fmi2GetString(fmi2Component c, const fmi2ValueReference vr[], size_t 
 fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, const fmi2Real value[]) {
   return guarded(c, "fmi2SetReal", [&](Instance* inst) {
     CALLLOG(inst, "fmi2SetReal(nvr=%zu)", nvr);
-    if (!inst->allowed(kMaskSet, "fmi2SetReal")) return fmi2Error;
-    std::vector<int>& idx = inst->scratch_idx;  // reused: no allocation per call
-    if (!resolve(inst, "fmi2SetReal", vr, nvr, value, Type::Real, idx)) return fmi2Error;
-    if (!checkSettable(inst, "fmi2SetReal", idx)) return fmi2Error;
-    for (size_t k = 0; k < nvr; ++k)
-      if (!checkNumber(inst, "fmi2SetReal", idx[k], value[k])) return fmi2Error;
-    return commitSet(inst, "fmi2SetReal", idx, [&](Value& x, size_t k) { x.r = value[k]; });
+    return setNumbers(inst, "fmi2SetReal", vr, nvr, value, Access::Real);
   });
 }
 fmi2Status fmi2SetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, const fmi2Integer value[]) {
   return guarded(c, "fmi2SetInteger", [&](Instance* inst) {
     CALLLOG(inst, "fmi2SetInteger(nvr=%zu)", nvr);
-    if (!inst->allowed(kMaskSet, "fmi2SetInteger")) return fmi2Error;
-    std::vector<int>& idx = inst->scratch_idx;  // reused: no allocation per call
-    if (!resolve(inst, "fmi2SetInteger", vr, nvr, value, Type::Integer, idx)) return fmi2Error;
-    if (!checkSettable(inst, "fmi2SetInteger", idx)) return fmi2Error;
-    for (size_t k = 0; k < nvr; ++k)
-      if (!checkNumber(inst, "fmi2SetInteger", idx[k], static_cast<double>(value[k]))) return fmi2Error;
-    return commitSet(inst, "fmi2SetInteger", idx, [&](Value& x, size_t k) { x.i = value[k]; });
+    return setNumbers(inst, "fmi2SetInteger", vr, nvr, value, Access::IntegerOrEnum);
   });
 }
 fmi2Status fmi2SetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, const fmi2Boolean value[]) {
   return guarded(c, "fmi2SetBoolean", [&](Instance* inst) {
     CALLLOG(inst, "fmi2SetBoolean(nvr=%zu)", nvr);
-    if (!inst->allowed(kMaskSet, "fmi2SetBoolean")) return fmi2Error;
-    std::vector<int>& idx = inst->scratch_idx;  // reused: no allocation per call
-    if (!resolve(inst, "fmi2SetBoolean", vr, nvr, value, Type::Boolean, idx)) return fmi2Error;
-    if (!checkSettable(inst, "fmi2SetBoolean", idx)) return fmi2Error;
-    return commitSet(inst, "fmi2SetBoolean", idx, [&](Value& x, size_t k) { x.i = value[k] != fmi2False; });
+    return setBooleans(inst, "fmi2SetBoolean", vr, nvr, value);
   });
 }
 fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, const fmi2String value[]) {
   return guarded(c, "fmi2SetString", [&](Instance* inst) {
     CALLLOG(inst, "fmi2SetString(nvr=%zu)", nvr);
-    if (!inst->allowed(kMaskSet, "fmi2SetString")) return fmi2Error;
-    std::vector<int>& idx = inst->scratch_idx;  // reused: no allocation per call
-    if (!resolve(inst, "fmi2SetString", vr, nvr, value, Type::String, idx)) return fmi2Error;
-    if (!checkSettable(inst, "fmi2SetString", idx)) return fmi2Error;
-    for (size_t k = 0; k < nvr; ++k)
-      if (value[k] == nullptr) return inst->error("fmi2SetString: value %zu is NULL", k);
-    return commitSet(inst, "fmi2SetString", idx, [&](Value& x, size_t k) { x.s = value[k]; });
+    return setStrings(inst, "fmi2SetString", vr, nvr, value);
   });
 }
 
@@ -414,70 +179,36 @@ fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t 
 fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate* FMUstate) {
   return guarded(c, "fmi2GetFMUstate", [&](Instance* inst) {
     CALLLOG(inst, "fmi2GetFMUstate");
-    if (!inst->allowed(kMaskState, "fmi2GetFMUstate")) return fmi2Error;
-    if (FMUstate == nullptr) return inst->error("fmi2GetFMUstate: FMUstate pointer is NULL");
-    StateSnapshot* snap = nullptr;
-    if (*FMUstate != nullptr) {
-      snap = toSnap(inst, *FMUstate, "fmi2GetFMUstate");
-      if (!snap) return fmi2Error;
-    }
-    std::vector<std::uint8_t> bytes = encodeState(*inst);
-    if (!snap) snap = newSnap(inst);
-    snap->bytes = std::move(bytes);
-    *FMUstate = snap;
-    return fmi2OK;
+    return getState(inst, "fmi2GetFMUstate", FMUstate);
   });
 }
 
 fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate FMUstate) {
   return guarded(c, "fmi2SetFMUstate", [&](Instance* inst) {
     CALLLOG(inst, "fmi2SetFMUstate");
-    if (!inst->allowed(kMaskState | kErr, "fmi2SetFMUstate")) return fmi2Error;
-    StateSnapshot* snap = toSnap(inst, FMUstate, "fmi2SetFMUstate");
-    if (!snap) return fmi2Error;
-    std::string err;
-    if (!decodeState(*inst, snap->bytes.data(), snap->bytes.size(), err))
-      return inst->error("fmi2SetFMUstate: %s", err.c_str());
-    return fmi2OK;
+    return setState(inst, "fmi2SetFMUstate", FMUstate);
   });
 }
 
 fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate* FMUstate) {
   return guarded(c, "fmi2FreeFMUstate", [&](Instance* inst) {
     CALLLOG(inst, "fmi2FreeFMUstate");
-    if (FMUstate == nullptr) return inst->error("fmi2FreeFMUstate: FMUstate pointer is NULL");
-    if (*FMUstate == nullptr) return fmi2OK;
-    if (!toSnap(inst, *FMUstate, "fmi2FreeFMUstate")) return fmi2Error;
-    inst->states.erase(*FMUstate);
-    *FMUstate = nullptr;
-    return fmi2OK;
+    return freeState(inst, "fmi2FreeFMUstate", FMUstate);
   });
 }
 
 fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate FMUstate, size_t* size) {
   return guarded(c, "fmi2SerializedFMUstateSize", [&](Instance* inst) {
     CALLLOG(inst, "fmi2SerializedFMUstateSize");
-    if (!inst->allowed(kMaskState | kErr, "fmi2SerializedFMUstateSize")) return fmi2Error;
-    StateSnapshot* snap = toSnap(inst, FMUstate, "fmi2SerializedFMUstateSize");
-    if (!snap) return fmi2Error;
-    if (size == nullptr) return inst->error("fmi2SerializedFMUstateSize: size is NULL");
-    *size = snap->bytes.size();
-    return fmi2OK;
+    return serializedStateSize(inst, "fmi2SerializedFMUstateSize", FMUstate, size);
   });
 }
 
 fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate FMUstate, fmi2Byte serializedState[], size_t size) {
   return guarded(c, "fmi2SerializeFMUstate", [&](Instance* inst) {
     CALLLOG(inst, "fmi2SerializeFMUstate(size=%zu)", size);
-    if (!inst->allowed(kMaskState | kErr, "fmi2SerializeFMUstate")) return fmi2Error;
-    StateSnapshot* snap = toSnap(inst, FMUstate, "fmi2SerializeFMUstate");
-    if (!snap) return fmi2Error;
-    if (serializedState == nullptr) return inst->error("fmi2SerializeFMUstate: buffer is NULL");
-    if (size < snap->bytes.size())
-      return inst->error("fmi2SerializeFMUstate: buffer of %zu bytes is smaller than the state (%zu bytes)", size,
-                         snap->bytes.size());
-    std::memcpy(serializedState, snap->bytes.data(), snap->bytes.size());
-    return fmi2OK;
+    return serializeState(inst, "fmi2SerializeFMUstate", FMUstate, reinterpret_cast<std::uint8_t*>(serializedState),
+                          size);
   });
 }
 
@@ -485,33 +216,8 @@ fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte serializedSta
                                    fmi2FMUstate* FMUstate) {
   return guarded(c, "fmi2DeSerializeFMUstate", [&](Instance* inst) {
     CALLLOG(inst, "fmi2DeSerializeFMUstate(size=%zu)", size);
-    if (!inst->allowed(kMaskState | kErr, "fmi2DeSerializeFMUstate")) return fmi2Error;
-    if (FMUstate == nullptr) return inst->error("fmi2DeSerializeFMUstate: FMUstate pointer is NULL");
-    if (serializedState == nullptr) return inst->error("fmi2DeSerializeFMUstate: bytes are NULL");
-    const auto* p = reinterpret_cast<const std::uint8_t*>(serializedState);
-    // Check the blob completely (header, checksum, values and the model's part) by decoding it
-    // into this instance and restoring the instance's own state afterwards.
-    const State saved = inst->state;
-    if (saved == State::Error) inst->state = State::Instantiated;  // encodeState needs a non-error state to snapshot
-    std::vector<std::uint8_t> backup = encodeState(*inst);
-    inst->state = saved;
-    std::string err;
-    if (!decodeState(*inst, p, size, err)) return inst->error("fmi2DeSerializeFMUstate: %s", err.c_str());
-    std::string err2;
-    const bool restored = decodeState(*inst, backup.data(), backup.size(), err2);
-    inst->state = saved;
-    if (!restored)
-      return inst->error("fmi2DeSerializeFMUstate: internal error restoring the instance: %s", err2.c_str());
-    StateSnapshot* snap = nullptr;
-    if (*FMUstate != nullptr) {
-      snap = toSnap(inst, *FMUstate, "fmi2DeSerializeFMUstate");
-      if (!snap) return fmi2Error;
-    } else {
-      snap = newSnap(inst);
-    }
-    snap->bytes.assign(p, p + size);
-    *FMUstate = snap;
-    return fmi2OK;
+    return deserializeState(inst, "fmi2DeSerializeFMUstate", reinterpret_cast<const std::uint8_t*>(serializedState),
+                            size, FMUstate);
   });
 }
 
@@ -540,45 +246,7 @@ fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const fmi2ValueReferenc
 fmi2Status fmi2DoStep(fmi2Component c, fmi2Real t, fmi2Real h, fmi2Boolean noSetFMUStatePriorToCurrentPoint) {
   return guarded(c, "fmi2DoStep", [&](Instance* inst) {
     CALLLOG(inst, "fmi2DoStep(t=%.17g, h=%.17g)", t, h);
-    if (!inst->allowed(kComplete, "fmi2DoStep")) return fmi2Error;
-    if (!std::isfinite(t) || !std::isfinite(h) || !(h > 0.0))
-      return inst->error("fmi2DoStep: invalid communication point %g or step size %g (must be > 0)", t, h);
-    const double hmax = inst->model->max_step_size(inst->ctx);
-    if (h > hmax)
-      return inst->error("fmi2DoStep: communication step %.17g s is longer than this FMU's largest step %.17g s; "
-                         "split it into shorter steps", h, hmax);
-    if (t + h == t)
-      return inst->error("fmi2DoStep: step size %g is below the time resolution at t = %.17g", h, t);
-    double tol = 1e-9 * (1.0 + std::fabs(inst->time)) + 1e-6 * h;
-    if (std::fabs(t - inst->time) > tol)
-      return inst->error("fmi2DoStep: currentCommunicationPoint %.17g does not match the FMU time %.17g", t,
-                         inst->time);
-    if (inst->stopTimeDefined && t + h > inst->stopTime + 1e-9 * (1.0 + std::fabs(inst->stopTime)) + 1e-6 * h)
-      return inst->error("fmi2DoStep: step to %.17g goes beyond the stop time %.17g", t + h, inst->stopTime);
-    StepResult r = inst->model->do_step(inst->ctx, t, h, noSetFMUStatePriorToCurrentPoint != fmi2False);
-    switch (r.status) {
-      case fmi2OK:
-      case fmi2Warning:
-        inst->time = t + h;
-        inst->lastSuccessfulTime = inst->time;
-        inst->terminatedFlag = r.terminated;
-        return r.status;
-      case fmi2Discard:
-        inst->state = State::StepFailed;
-        inst->lastSuccessfulTime = r.last_successful_time;
-        inst->time = r.last_successful_time;
-        inst->terminatedFlag = r.terminated;
-        inst->log(kLogStatusDiscard, fmi2Discard, "fmi2DoStep: step discarded at t=%.17g (terminated=%d)",
-                  r.last_successful_time, r.terminated ? 1 : 0);
-        return fmi2Discard;
-      case fmi2Fatal:
-        inst->state = State::Fatal;
-        inst->log(kLogStatusFatal, fmi2Fatal, "fmi2DoStep: fatal error in the model");
-        return fmi2Fatal;
-      default:
-        inst->state = State::Error;
-        return inst->error("fmi2DoStep: the model failed in the step from %.17g (see the messages above)", t);
-    }
+    return doStep(inst, "fmi2DoStep", t, h, noSetFMUStatePriorToCurrentPoint != fmi2False);
   });
 }
 

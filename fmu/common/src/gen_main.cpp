@@ -1,9 +1,10 @@
 // Build-time generator: writes modelDescription.xml and documentation/index.html of one FMU
 // from its ModelInfo (the same table the FMU uses at run time).
-//   <Name>_gen <out-dir> [<source file>...]
+//   <Name>_gen [--fmi3] <out-dir> [<source file>...]
 //                               writes <out-dir>/modelDescription.xml, <out-dir>/documentation/index.html
 //                               and ModelInfo::resources into <out-dir>/resources/; source files
-//                               (names in sources/) make it a source FMU's description
+//                               (names in sources/) make it a source FMU's description; --fmi3:
+//                               the FMI 3.0 Co-Simulation description of the same table
 //   <Name>_gen --markdown       prints the variable table as Markdown (for docs/)
 #include <cmath>
 #include <cstdio>
@@ -54,12 +55,13 @@ std::string html(const std::string& s) {
 }
 
 void usage(std::ostream& o, const char* prog) {
-  o << "usage: " << prog << " <out-dir> [<source file>...]\n"
+  o << "usage: " << prog << " [--fmi3] <out-dir> [<source file>...]\n"
     << "       " << prog << " --markdown\n\n"
     << "Generates the FMU's description from its variable table (the table the binary uses at run time):\n"
     << "  <out-dir>       an existing folder: writes modelDescription.xml, documentation/index.html and\n"
     << "                  the model's resources/ files into it; <source file>s (names in sources/) make it\n"
     << "                  a source FMU's description. The build runs this when it packs the FMU.\n"
+    << "  --fmi3          the FMI 3.0 Co-Simulation twin's description (same table; default FMI 2.0)\n"
     << "  --markdown      prints the variable table as Markdown (docs/, scripts/update_docs.py)\n"
     << "  -h, --help      this text\n"
     << "SOURCE_DATE_EPOCH, when set, is the generationDateAndTime (reproducible builds).\n";
@@ -67,13 +69,19 @@ void usage(std::ostream& o, const char* prog) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  const char* prog = argv[0];
+  const bool fmi3 = argc >= 2 && std::string(argv[1]) == "--fmi3";
+  if (fmi3) {
+    --argc;
+    ++argv;
+  }
   if (argc >= 2 && (std::string(argv[1]) == "--help" || std::string(argv[1]) == "-h")) {
-    usage(std::cout, argv[0]);
+    usage(std::cout, prog);
     return 0;
   }
   if (argc < 2 || (argv[1][0] == '-' && std::string(argv[1]) != "--markdown")) {
-    if (argc >= 2) std::cerr << argv[0] << ": unknown option " << argv[1] << "\n";
-    usage(std::cerr, argv[0]);
+    if (argc >= 2) std::cerr << prog << ": unknown option " << argv[1] << "\n";
+    usage(std::cerr, prog);
     return 2;
   }
   const ModelInfo& info = modelInfo();
@@ -93,20 +101,21 @@ int main(int argc, char** argv) {
   }
   std::string dir = argv[1];
   if (!std::filesystem::is_directory(dir)) {
-    std::cerr << argv[0] << ": output folder " << dir << " does not exist\n";
+    std::cerr << prog << ": output folder " << dir << " does not exist\n";
     return 1;
   }
   const std::vector<std::string> source_files(argv + 2, argv + argc);
   {
     std::ofstream f(dir + "/modelDescription.xml", std::ios::binary);
-    f << modelDescriptionXml(info, source_files);
+    f << (fmi3 ? modelDescriptionXml3(info) : modelDescriptionXml(info, source_files));
     if (!f) { std::cerr << "cannot write " << dir << "/modelDescription.xml\n"; return 1; }
   }
   {
     std::ofstream f(dir + "/documentation/index.html", std::ios::binary);
     f << "<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>" << html(info.model_name)
       << "</title></head><body>\n<h1>" << html(info.model_name) << "</h1>\n<p>" << html(info.description)
-      << "</p>\n<p>FMI 2.0 co-simulation FMU, GUID " << modelGuid(info) << ". Default experiment: "
+      << "</p>\n<p>" << (fmi3 ? "FMI 3.0 Co-Simulation FMU, instantiation token " : "FMI 2.0 co-simulation FMU, GUID ")
+      << modelGuid(info) << ". Default experiment: "
       << g(info.default_experiment.start_time) << " to " << g(info.default_experiment.stop_time)
       << " s, step " << g(info.default_experiment.step_size) << " s.</p>\n"
       << "<p>Log categories: logEvents, logStatusWarning, logStatusDiscard, logStatusError, logStatusFatal, logCalls";

@@ -62,7 +62,7 @@ void Instance::resetStore() {
 
 bool Instance::logEnabled(int category) const {
   return category >= 0 && category < static_cast<int>(categoryOn_.size()) && categoryOn_[category] &&
-         callbacks.logger != nullptr;
+         (callbacks.logger != nullptr || sink);
 }
 
 static const char* categoryName(const ModelInfo& info, int category) {
@@ -79,6 +79,10 @@ void Instance::vlog(int category, fmi2Status status, const char* fmt, va_list ap
   int n = std::vsnprintf(buf, sizeof buf, fmt, aq);
   va_end(aq);
   std::string msg = n < 0 ? std::string("(log formatting error)") : std::string(buf);
+  if (sink) {
+    sink(status, categoryName(info, category), msg.c_str());
+    return;
+  }
   // The importer's logger treats the message as a printf format: escape '%'.
   std::string esc;
   esc.reserve(msg.size());
@@ -239,6 +243,7 @@ const std::string& Context::instance_name() const { return inst_.name; }
 const std::string& Context::resource_location() const { return inst_.resources; }
 double Context::start_time() const { return inst_.startTime; }
 double Context::time() const { return inst_.time; }
+double Context::last_step_size() const { return inst_.lastStepSize; }
 bool Context::stop_time_defined() const { return inst_.stopTimeDefined; }
 double Context::stop_time() const { return inst_.stopTime; }
 bool Context::tolerance_defined() const { return inst_.toleranceDefined; }

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <cstdarg>
+#include <functional>
 #include <memory>
 #include <string>
 #include <unordered_map>
@@ -66,6 +67,9 @@ class Instance {
   std::string name;
   std::string resources;
   fmi2CallbackFunctions callbacks{};
+  // The FMI 3.0 API's logMessage callback (fmi3_api.cpp): when set, messages go there (status,
+  // category, message; not a printf format) instead of callbacks.logger.
+  std::function<void(fmi2Status, const char*, const char*)> sink;
   std::string guid;
   State state = State::Instantiated;
   double time = 0.0;
@@ -75,6 +79,7 @@ class Instance {
   double tolerance = 0.0;
   bool toleranceDefined = false;
   double lastSuccessfulTime = 0.0;
+  double lastStepSize = 0.0;  // h of the last successful fmi2DoStep: the time rule's tolerance for a restored state
   bool terminatedFlag = false;
   bool initDirty = true;
   std::vector<Value> store;

@@ -110,6 +110,60 @@ bool hasStart(const Variable& v) {
   return i == Initial::Exact || i == Initial::Approx;
 }
 
+// <UnitDefinitions>: every unit of a Real variable with its SI base unit and display unit (the
+// same element in FMI 2.0 and 3.0).
+std::string unitDefinitions(const ModelInfo& info) {
+  std::ostringstream o;
+  std::set<std::string> units;
+  for (const auto& v : info.variables)
+    if (v.type == Type::Real && !v.unit.empty()) units.insert(v.unit);
+  if (!units.empty()) {
+    o << "  <UnitDefinitions>\n";
+    for (const auto& u : units) {
+      const BaseUnit* bu = baseUnit(u);  // validateModelInfo: every unit is known
+      o << "    <Unit name=\"" << esc(u) << "\"><BaseUnit";
+      if (bu->kg) o << " kg=\"" << bu->kg << "\"";
+      if (bu->m) o << " m=\"" << bu->m << "\"";
+      if (bu->s) o << " s=\"" << bu->s << "\"";
+      if (bu->rad) o << " rad=\"" << bu->rad << "\"";
+      o << "/>";
+      if (const DisplayUnit* du = displayUnit(u))
+        o << "<DisplayUnit name=\"" << du->name << "\" factor=\"" << num(du->factor) << "\"/>";
+      o << "</Unit>\n";
+    }
+    o << "  </UnitDefinitions>\n";
+  }
+
+  return o.str();
+}
+
+// <LogCategories>: the glue's and the model's; `api` names the function family (fmi2 / fmi3).
+std::string logCategories(const ModelInfo& info, const char* api) {
+  std::ostringstream o;
+  o << "  <LogCategories>\n"
+       "    <Category name=\"logEvents\" description=\"Discrete events (phase changes, contact changes, faults)\"/>\n"
+       "    <Category name=\"logStatusWarning\" description=\"Warnings\"/>\n"
+       "    <Category name=\"logStatusDiscard\" description=\"Discarded steps\"/>\n"
+       "    <Category name=\"logStatusError\" description=\"Errors (illegal calls, invalid values)\"/>\n"
+       "    <Category name=\"logStatusFatal\" description=\"Fatal errors\"/>\n"
+       "    <Category name=\"logCalls\" description=\"Every " << api << " function call\"/>\n";
+  for (const auto& c : info.extra_log_categories)
+    o << "    <Category name=\"" << esc(c.name) << "\" description=\"" << esc(c.description) << "\"/>\n";
+  o << "  </LogCategories>\n";
+
+  return o.str();
+}
+
+std::string defaultExperiment(const ModelInfo& info) {
+  std::ostringstream o;
+  const auto& de = info.default_experiment;
+  o << "  <DefaultExperiment startTime=\"" << num(de.start_time) << "\" stopTime=\"" << num(de.stop_time) << "\"";
+  if (de.tolerance > 0.0) o << " tolerance=\"" << num(de.tolerance) << "\"";
+  o << " stepSize=\"" << num(de.step_size) << "\"/>\n";
+
+  return o.str();
+}
+
 // The XML with a given GUID string (the GUID itself is a hash of the XML with an empty GUID and
 // no generation date, so that it identifies the model, not the build).
 std::string xmlWithGuid(const ModelInfo& info, const std::string& guid,
@@ -139,25 +193,7 @@ std::string xmlWithGuid(const ModelInfo& info, const std::string& guid,
     o << "    </SourceFiles>\n  </CoSimulation>\n";
   }
 
-  std::set<std::string> units;
-  for (const auto& v : info.variables)
-    if (v.type == Type::Real && !v.unit.empty()) units.insert(v.unit);
-  if (!units.empty()) {
-    o << "  <UnitDefinitions>\n";
-    for (const auto& u : units) {
-      const BaseUnit* bu = baseUnit(u);  // validateModelInfo: every unit is known
-      o << "    <Unit name=\"" << esc(u) << "\"><BaseUnit";
-      if (bu->kg) o << " kg=\"" << bu->kg << "\"";
-      if (bu->m) o << " m=\"" << bu->m << "\"";
-      if (bu->s) o << " s=\"" << bu->s << "\"";
-      if (bu->rad) o << " rad=\"" << bu->rad << "\"";
-      o << "/>";
-      if (const DisplayUnit* du = displayUnit(u))
-        o << "<DisplayUnit name=\"" << du->name << "\" factor=\"" << num(du->factor) << "\"/>";
-      o << "</Unit>\n";
-    }
-    o << "  </UnitDefinitions>\n";
-  }
+  o << unitDefinitions(info);
 
   if (!info.enumerations.empty()) {
     o << "  <TypeDefinitions>\n";
@@ -172,21 +208,8 @@ std::string xmlWithGuid(const ModelInfo& info, const std::string& guid,
     o << "  </TypeDefinitions>\n";
   }
 
-  o << "  <LogCategories>\n"
-       "    <Category name=\"logEvents\" description=\"Discrete events (phase changes, contact changes, faults)\"/>\n"
-       "    <Category name=\"logStatusWarning\" description=\"Warnings\"/>\n"
-       "    <Category name=\"logStatusDiscard\" description=\"Discarded steps\"/>\n"
-       "    <Category name=\"logStatusError\" description=\"Errors (illegal calls, invalid values)\"/>\n"
-       "    <Category name=\"logStatusFatal\" description=\"Fatal errors\"/>\n"
-       "    <Category name=\"logCalls\" description=\"Every fmi2 function call\"/>\n";
-  for (const auto& c : info.extra_log_categories)
-    o << "    <Category name=\"" << esc(c.name) << "\" description=\"" << esc(c.description) << "\"/>\n";
-  o << "  </LogCategories>\n";
-
-  const auto& de = info.default_experiment;
-  o << "  <DefaultExperiment startTime=\"" << num(de.start_time) << "\" stopTime=\"" << num(de.stop_time) << "\"";
-  if (de.tolerance > 0.0) o << " tolerance=\"" << num(de.tolerance) << "\"";
-  o << " stepSize=\"" << num(de.step_size) << "\"/>\n";
+  o << logCategories(info, "fmi2");
+  o << defaultExperiment(info);
 
   o << "  <ModelVariables>\n";
   int index = 0;
@@ -274,6 +297,122 @@ std::string xmlWithGuid(const ModelInfo& info, const std::string& guid,
   return o.str();
 }
 
+
+// The FMI 3.0 Co-Simulation description of the same table (modelDescriptionXml3).
+const char* xmlName3(const Variable& v) {
+  switch (v.type) {
+    case Type::Real: return "Float64";
+    case Type::Integer: return v.enumeration.empty() ? "Int32" : "Enumeration";
+    case Type::Boolean: return "Boolean";
+    case Type::String: return "String";
+  }
+  return "?";
+}
+
+std::string xml3(const ModelInfo& info, const std::string& token, const std::string& generated) {
+  std::ostringstream o;
+  o << "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n";
+  o << "<fmiModelDescription fmiVersion=\"3.0\" modelName=\"" << esc(info.model_name) << "\" instantiationToken=\""
+    << token << "\"";
+  if (!info.description.empty()) o << "\n  description=\"" << esc(info.description) << "\"";
+  if (!info.author.empty()) o << "\n  author=\"" << esc(info.author) << "\"";
+  if (!info.version.empty()) o << "\n  version=\"" << esc(info.version) << "\"";
+  if (!info.copyright.empty()) o << "\n  copyright=\"" << esc(info.copyright) << "\"";
+  if (!info.license.empty()) o << "\n  license=\"" << esc(info.license) << "\"";
+  o << "\n  generationTool=\"anklehip fmuglue " << kGlueInterfaceVersion << "\"";
+  if (!generated.empty()) o << "\n  generationDateAndTime=\"" << generated << "\"";
+  o << "\n  variableNamingConvention=\"structured\">\n";
+  o << "  <CoSimulation modelIdentifier=\"" << esc(info.model_name) << "\" needsExecutionTool=\"false\""
+    << " canBeInstantiatedOnlyOncePerProcess=\"false\" canGetAndSetFMUState=\"true\" canSerializeFMUState=\"true\""
+    << " providesDirectionalDerivatives=\"false\" providesAdjointDerivatives=\"false\""
+    << " providesPerElementDependencies=\"false\""
+    << " canHandleVariableCommunicationStepSize=\"" << (info.can_handle_variable_step ? "true" : "false") << "\"";
+  if (info.fixed_internal_step > 0.0) o << " fixedInternalStepSize=\"" << num(info.fixed_internal_step) << "\"";
+  o << " maxOutputDerivativeOrder=\"0\" providesIntermediateUpdate=\"false\" mightReturnEarlyFromDoStep=\"false\""
+    << " canReturnEarlyAfterIntermediateUpdate=\"false\" hasEventMode=\"false\""
+    << " providesEvaluateDiscreteStates=\"false\"/>\n";
+  o << unitDefinitions(info);
+  if (!info.enumerations.empty()) {
+    o << "  <TypeDefinitions>\n";
+    for (const auto& e : info.enumerations) {
+      o << "    <EnumerationType name=\"" << esc(e.name) << "\" description=\"" << esc(e.description) << "\">\n";
+      for (const auto& it : e.items)
+        o << "      <Item name=\"" << esc(it.name) << "\" value=\"" << it.value << "\" description=\""
+          << esc(it.description) << "\"/>\n";
+      o << "    </EnumerationType>\n";
+    }
+    o << "  </TypeDefinitions>\n";
+  }
+  o << logCategories(info, "fmi3");
+  o << defaultExperiment(info);
+
+  o << "  <ModelVariables>\n";
+  o << "    <Float64 name=\"time\" valueReference=\"" << kTimeValueReference
+    << "\" description=\"Simulation time\" causality=\"independent\" variability=\"continuous\"/>\n";
+  for (const auto& v : info.variables) {
+    const char* tag = xmlName3(v);
+    o << "    <" << tag << " name=\"" << esc(v.name) << "\" valueReference=\"" << v.vr << "\" description=\""
+      << esc(v.description) << "\" causality=\"" << xmlName(v.causality) << "\" variability=\""
+      << xmlName(v.variability) << "\"";
+    if (v.initial != Initial::Default && v.causality != Causality::Input && v.causality != Causality::Independent)
+      o << " initial=\"" << xmlName(v.initial) << "\"";
+    const bool st = hasStart(v);
+    switch (v.type) {
+      case Type::Real:
+        if (!v.unit.empty()) o << " unit=\"" << esc(v.unit) << "\"";
+        if (const DisplayUnit* du = displayUnit(v.unit)) o << " displayUnit=\"" << du->name << "\"";
+        if (!std::isnan(v.min)) o << " min=\"" << num(v.min) << "\"";
+        if (!std::isnan(v.max)) o << " max=\"" << num(v.max) << "\"";
+        if (st) o << " start=\"" << num(v.start) << "\"";
+        o << "/>\n";
+        break;
+      case Type::Integer:
+        if (!v.enumeration.empty()) o << " declaredType=\"" << esc(v.enumeration) << "\"";
+        if (!std::isnan(v.min)) o << " min=\"" << static_cast<long long>(v.min) << "\"";
+        if (!std::isnan(v.max)) o << " max=\"" << static_cast<long long>(v.max) << "\"";
+        if (st) o << " start=\"" << static_cast<long long>(v.start) << "\"";
+        o << "/>\n";
+        break;
+      case Type::Boolean:
+        if (st) o << " start=\"" << (v.start != 0.0 ? "true" : "false") << "\"";
+        o << "/>\n";
+        break;
+      case Type::String:
+        if (st) o << ">\n      <Start value=\"" << esc(v.start_string) << "\"/>\n    </String>\n";
+        else o << "/>\n";
+        break;
+    }
+  }
+  o << "  </ModelVariables>\n";
+
+  // <ModelStructure>: as the FMI 2.0 description's (xmlWithGuid), with value references.
+  std::map<std::string, fmi2ValueReference> input_vr;
+  std::vector<fmi2ValueReference> param_vrs;
+  for (const auto& v : info.variables) {
+    if (v.causality == Causality::Input) input_vr[v.name] = v.vr;
+    if (v.causality == Causality::Parameter && effectiveInitial(v) == Initial::Exact) param_vrs.push_back(v.vr);
+  }
+  o << "  <ModelStructure>\n";
+  for (const auto& v : info.variables)
+    if (v.causality == Causality::Output)
+      o << "    <Output valueReference=\"" << v.vr << "\"" << (info.outputs_depend_on_inputs ? "" : " dependencies=\"\"")
+        << "/>\n";
+  for (const auto& v : info.variables) {
+    const Initial ini = effectiveInitial(v);
+    if (!((v.causality == Causality::Output && (ini == Initial::Approx || ini == Initial::Calculated)) ||
+          v.causality == Causality::CalculatedParameter))
+      continue;
+    std::vector<fmi2ValueReference> deps = param_vrs;
+    for (const auto& n : v.initial_inputs) deps.push_back(input_vr.at(n));  // validated
+    std::sort(deps.begin(), deps.end());
+    o << "    <InitialUnknown valueReference=\"" << v.vr << "\" dependencies=\"";
+    for (size_t k = 0; k < deps.size(); ++k) o << (k ? " " : "") << deps[k];
+    o << "\"/>\n";
+  }
+  o << "  </ModelStructure>\n";
+  o << "</fmiModelDescription>\n";
+  return o.str();
+}
 }  // namespace
 
 Initial effectiveInitial(const Variable& v) {
@@ -384,6 +523,10 @@ std::string modelGuid(const ModelInfo& info) {
 
 std::string modelDescriptionXml(const ModelInfo& info, const std::vector<std::string>& source_files) {
   return xmlWithGuid(info, modelGuid(info), source_files, generationDateAndTime());
+}
+
+std::string modelDescriptionXml3(const ModelInfo& info) {
+  return xml3(info, modelGuid(info), generationDateAndTime());
 }
 
 const char* xmlName(Type t) {

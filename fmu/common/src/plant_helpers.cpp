@@ -49,7 +49,7 @@ StepResult plantStepResult(Context& ctx, PlantOutcome outcome, fmi2Status ok_sta
   return res;
 }
 
-bool plantMayStep(Context& ctx, bool initialized, double t, double plant_time, bool fallen, double fall_time,
+bool plantMayStep(Context& ctx, bool initialized, double t, double h, double plant_time, bool fallen, double fall_time,
                   StepResult& res) {
   res = StepResult();
   if (!initialized) {
@@ -57,8 +57,14 @@ bool plantMayStep(Context& ctx, bool initialized, double t, double plant_time, b
     res.status = fmi2Error;
     return false;
   }
-  if (std::fabs(t - plant_time) > 1e-9 * std::max(1.0, std::fabs(t))) {
-    ctx.log(kLogStatusError, fmi2Error, "doStep at t=%.12g but the plant is at t=%.12g", t, plant_time);
+  if (!timesMatch(t, plant_time, h)) {  // the glue's rule (glue.hpp): the plant's time is the summed steps
+    ctx.log(kLogStatusError, fmi2Error, "doStep at t=%.17g but the plant is at t=%.17g (tolerance %.3g s)", t,
+            plant_time, timeTolerance(plant_time, h));
+    res.status = fmi2Error;
+    return false;
+  }
+  if (!(plantStepTo(t, h, plant_time) > 0.0)) {
+    ctx.log(kLogStatusError, fmi2Error, "doStep(t=%.17g, h=%.17g) ends before the plant's time %.17g", t, h, plant_time);
     res.status = fmi2Error;
     return false;
   }
@@ -70,6 +76,20 @@ bool plantMayStep(Context& ctx, bool initialized, double t, double plant_time, b
     return false;
   }
   return true;
+}
+
+std::vector<double> initialKey(const Context& ctx) {
+  std::vector<double> key = {ctx.start_time(), ctx.tolerance_defined() ? 1.0 : 0.0, ctx.tolerance()};
+  for (const Variable& v : ctx.info().variables) {
+    if (v.causality != Causality::Parameter) continue;
+    switch (v.type) {
+      case Type::Real: key.push_back(ctx.real(v.vr)); break;
+      case Type::Integer: key.push_back(ctx.integer(v.vr)); break;
+      case Type::Boolean: key.push_back(ctx.boolean(v.vr) ? 1.0 : 0.0); break;
+      case Type::String: break;
+    }
+  }
+  return key;
 }
 
 }  // namespace fmuglue

@@ -8,7 +8,7 @@
 namespace fmuglue {
 
 static const char kMagic[8] = {'A', 'H', 'F', 'M', 'U', 'S', 'T', '1'};
-static const std::uint32_t kFormatVersion = 1;
+static const std::uint32_t kFormatVersion = 2;  // 2: the last communication step size (the time rule's h)
 
 std::uint64_t fnv1a64(const void* p, std::size_t n, std::uint64_t h) {
   const auto* b = static_cast<const std::uint8_t*>(p);
@@ -47,6 +47,7 @@ std::vector<std::uint8_t> encodeState(Instance& inst) {
     w.f64(inst.tolerance);
     w.u32(inst.toleranceDefined);
     w.f64(inst.lastSuccessfulTime);
+    w.f64(inst.lastStepSize);
     w.u32(inst.terminatedFlag);
     w.u32(inst.initDirty);
     for (size_t k = 0; k < inst.store.size(); ++k) {
@@ -114,9 +115,9 @@ bool decodeState(Instance& inst, const std::uint8_t* p, std::size_t n, std::stri
 
   // Decode the glue part into temporaries.
   std::uint32_t st = 0, stopDef = 0, tolDef = 0, term = 0, dirty = 0;
-  double time = 0, start = 0, stop = 0, tol = 0, lst = 0;
+  double time = 0, start = 0, stop = 0, tol = 0, lst = 0, lastStep = 0;
   bool ok = r.u32(st) && r.f64(time) && r.f64(start) && r.f64(stop) && r.u32(stopDef) && r.f64(tol) &&
-            r.u32(tolDef) && r.f64(lst) && r.u32(term) && r.u32(dirty);
+            r.u32(tolDef) && r.f64(lst) && r.f64(lastStep) && r.u32(term) && r.u32(dirty);
   const unsigned validStates = static_cast<unsigned>(State::Instantiated) |
                                static_cast<unsigned>(State::InitializationMode) |
                                static_cast<unsigned>(State::StepComplete) |
@@ -144,6 +145,7 @@ bool decodeState(Instance& inst, const std::uint8_t* p, std::size_t n, std::stri
   const bool stopOk = stopDef == 0 || (std::isfinite(stop) && stop >= start);
   const bool tolOk = tolDef == 0 || (std::isfinite(tol) && tol > 0.0);
   if (!std::isfinite(time) || !std::isfinite(start) || time < start || lst != time ||
+      !(lastStep >= 0.0 && lastStep <= time - start + timeTolerance(time, 0.0)) ||
       !stopOk || !tolOk || stopDef > 1 || tolDef > 1 || term > 1 || dirty > 1) {
     err = "corrupt state payload (experiment set-up or time)";
     return false;
@@ -169,7 +171,7 @@ bool decodeState(Instance& inst, const std::uint8_t* p, std::size_t n, std::stri
   // glue's part first, and put everything back if the model refuses its part.
   struct GluePart {
     State state;
-    double time, startTime, stopTime, tolerance, lastSuccessfulTime;
+    double time, startTime, stopTime, tolerance, lastSuccessfulTime, lastStepSize;
     bool stopTimeDefined, toleranceDefined, terminatedFlag, initDirty;
     std::vector<Value> store;
   };
@@ -180,13 +182,14 @@ bool decodeState(Instance& inst, const std::uint8_t* p, std::size_t n, std::stri
     std::swap(inst.stopTime, g.stopTime);
     std::swap(inst.tolerance, g.tolerance);
     std::swap(inst.lastSuccessfulTime, g.lastSuccessfulTime);
+    std::swap(inst.lastStepSize, g.lastStepSize);
     std::swap(inst.stopTimeDefined, g.stopTimeDefined);
     std::swap(inst.toleranceDefined, g.toleranceDefined);
     std::swap(inst.terminatedFlag, g.terminatedFlag);
     std::swap(inst.initDirty, g.initDirty);
     std::swap(inst.store, g.store);
   };
-  GluePart restored{static_cast<State>(st), time, start, stop, tol, lst, stopDef != 0, tolDef != 0, term != 0,
+  GluePart restored{static_cast<State>(st), time, start, stop, tol, lst, lastStep, stopDef != 0, tolDef != 0, term != 0,
                     dirty != 0, std::move(store)};
   swap(restored);  // `restored` now holds the instance's previous glue part
   const bool loaded = inst.model->load_state(inst.ctx, mr, merr);

@@ -60,11 +60,12 @@ class TestModel final : public Model {
     }
     return fmi2OK;
   }
-  void update_initial_outputs(Context& ctx) override {
+  fmi2Status update_initial_outputs(Context& ctx) override {
     ctx.set_real(vr::twice_k, 2.0 * ctx.real(vr::k));
     ctx.set_real(vr::y, y_);
     ctx.set_integer(vr::count, count_);
     ctx.set_string(vr::note, "initialized");
+    return fmi2OK;
   }
   fmi2Status tunable_parameters_changed(Context& ctx) override {
     if (ctx.real(vr::k) == 7.0) {

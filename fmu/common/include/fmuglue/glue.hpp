@@ -13,8 +13,10 @@
 // every instance owns its store, its model object and its logging settings.
 #pragma once
 
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <cstdio>
 #include <limits>
 #include <memory>
 #include <string>
@@ -37,7 +39,7 @@
 
 namespace fmuglue {
 
-inline constexpr unsigned kGlueInterfaceVersion = 1;  // bumped on incompatible API changes
+inline constexpr unsigned kGlueInterfaceVersion = 2;  // 2: update_initial_outputs returns a status  // bumped on incompatible API changes
 
 enum class Type { Real, Integer, Boolean, String };
 enum class Causality { Parameter, CalculatedParameter, Input, Output, Local, Independent };
@@ -46,6 +48,18 @@ enum class Variability { Constant, Fixed, Tunable, Discrete, Continuous };
 enum class Initial { Default, Exact, Approx, Calculated };
 
 inline constexpr double kNoBound = std::numeric_limits<double>::quiet_NaN();
+
+// FMI 3.0's independent variable `time` (the FMI 3.0 descriptions declare it; fmi3GetFloat64 reads
+// the instance's time there). Outside the value references a variable table may use (<= 2^20).
+inline constexpr fmi2ValueReference kTimeValueReference = 1000000000u;
+
+// The one rule for comparing times, everywhere the glue and the models compare a communication
+// point (or a restored snapshot's time) with an FMU's time (docs/fmu.md, "Time"): masters compute
+// their points as t_k = k*h (Simulink) or by summing t += h, and the two differ by round-off that
+// grows with k; both are legal. `h` is the communication step of the call (of the last step for a
+// restored state): a point within 1e-9*(1 + |time|) + 1e-6*h of the FMU's time is that time.
+inline double timeTolerance(double time, double h) { return 1e-9 * (1.0 + std::fabs(time)) + 1e-6 * std::fabs(h); }
+inline bool timesMatch(double t, double time, double h) { return std::fabs(t - time) <= timeTolerance(time, h); }
 
 // One FMU variable. Value references must be unique within the whole table (across types).
 // `start` is used for Real/Integer/Boolean (Boolean: 0 or 1), `start_string` for String.
@@ -117,6 +131,8 @@ struct ModelInfo {
   // dependencies="" (no direct feed-through), so masters see no algebraic loop.
   bool outputs_depend_on_inputs = false;
   bool can_handle_variable_step = true;
+  // FMI 3.0 <CoSimulation fixedInternalStepSize>: the model's own sample period (0: none declared).
+  double fixed_internal_step = 0.0;
   bool can_interpolate_inputs = false;
   // Files the generator writes into the FMU's resources/ folder: (file name, content).
   std::vector<std::pair<std::string, std::string>> resources;
@@ -230,6 +246,7 @@ class Context {
   const std::string& resource_location() const;  // fmuResourceLocation as given (may be "")
   double start_time() const;                     // from fmi2SetupExperiment
   double time() const;                           // the current communication point
+  double last_step_size() const;                 // h of the last successful fmi2DoStep (0 before the first)
   bool stop_time_defined() const;
   double stop_time() const;
   bool tolerance_defined() const;
@@ -251,7 +268,9 @@ void writePlantState(StateWriter& w, const Snap* snap, const double* last_in, in
   for (int i = 0; i < n; ++i) w.f64(last_in[i]);
 }
 // Reads what writePlantState wrote, validated; has = false when the state holds no plant. The
-// snapshot's time must be the instance's (ctx.time()). False with the reason in `err`.
+// snapshot's time must be the instance's (ctx.time()) by the glue's rule (timesMatch with the last
+// step: the plant sums its steps, the instance's time is the master's t + h). False with the
+// reason in `err`.
 template <class Snap>
 bool readPlantState(const Context& ctx, StateReader& r, bool& has, Snap& snap, double* last_in, int n,
                     std::string& err) {
@@ -263,7 +282,11 @@ bool readPlantState(const Context& ctx, StateReader& r, bool& has, Snap& snap, d
   visit_fields(snap, fr);
   for (int i = 0; i < n; ++i) fr("last_inputs", last_in[i]);
   if (!fr.ok()) return err = "plant snapshot: " + fr.error, false;
-  if (snap.t != ctx.time()) return err = "plant snapshot: its time is not the instance's", false;
+  if (!timesMatch(snap.t, ctx.time(), ctx.last_step_size())) {
+    char buf[160];
+    std::snprintf(buf, sizeof buf, "plant snapshot: its time %.17g s is not the instance's %.17g s", snap.t, ctx.time());
+    return err = buf, false;
+  }
   return true;
 }
 
@@ -282,9 +305,11 @@ class Model {
   // write the initial outputs into the store.
   virtual fmi2Status exit_initialization(Context& ctx) = 0;
 
-  // Called before a fmi2Get* in initialization mode if values were set since the last call, so
-  // calculated outputs/calculated parameters can be provided. Default: nothing.
-  virtual void update_initial_outputs(Context& /*ctx*/) {}
+  // Called before a fmi2Get* in initialization mode if values were set since the last call: write
+  // the calculated outputs and calculated parameters their <InitialUnknowns> promise (computed
+  // from the parameters and the inputs set so far). fmi2Error (logged) fails that fmi2Get* and is
+  // retried at the next one. Default: nothing to compute.
+  virtual fmi2Status update_initial_outputs(Context& /*ctx*/) { return fmi2OK; }
 
   // Called after tunable parameters were set in stepComplete state (once per fmi2Set* call that
   // touched a tunable parameter). Validate and apply; on fmi2Error the glue restores the previous
@@ -332,11 +357,20 @@ fmi2Status readFiniteInputs(Context& ctx, double t, int n, const fmi2ValueRefere
 enum class PlantOutcome { Ok, Fallen, Error };
 StepResult plantStepResult(Context& ctx, PlantOutcome outcome, fmi2Status ok_status, double fall_time,
                            const std::string& message);
-// Whether a plant may step from t: not without an initialized plant or at another time than the
-// plant's (fmi2Error), not after a fall (fmi2Discard, terminated, at the fall time). True: go on;
+// Whether a plant may step from t by h: not without an initialized plant or at another time than
+// the plant's by the glue's rule (timesMatch; fmi2Error), not after a fall (fmi2Discard, terminated, at the fall time). True: go on;
 // false: return `res`, filled and logged.
-bool plantMayStep(Context& ctx, bool initialized, double t, double plant_time, bool fallen, double fall_time,
+bool plantMayStep(Context& ctx, bool initialized, double t, double h, double plant_time, bool fallen, double fall_time,
                   StepResult& res);
+// The step a plant takes in fmi2DoStep(t, h): to the master's point t + h, so that the plant's
+// time follows the master's points as the instance's does (t = k*h masters and summing ones
+// alike; a master may use the time rule's slack). h itself when the plant is exactly at t.
+inline double plantStepTo(double t, double h, double plant_time) { return t == plant_time ? h : (t + h) - plant_time; }
+
+// The values a plant's initial state is computed from: every parameter (Real, Integer, Boolean),
+// the start time and the experiment's tolerance. A plant built in initialization mode for the
+// fmi2Get* of its initial outputs is kept for fmi2ExitInitializationMode when these are unchanged.
+std::vector<double> initialKey(const Context& ctx);
 
 // ---- Utilities used by the generator and the tests ------------------------------------------
 // Checks the table (unique names/vrs, legal causality/variability/initial combinations, start
@@ -348,6 +382,12 @@ std::string modelGuid(const ModelInfo& info);
 // <CoSimulation><SourceFiles> (FMI 2.0 section 4.3.1); they do not enter the GUID, which the
 // binary computes from its ModelInfo alone.
 std::string modelDescriptionXml(const ModelInfo& info, const std::vector<std::string>& source_files = {});
+// The FMI 3.0 Co-Simulation modelDescription.xml of the same table: the same variables, units,
+// types, categories and structure, in FMI 3.0's form (Float64/Int32/Enumeration/Boolean/String,
+// value references in <ModelStructure>, the independent variable `time`); the instantiation token
+// is modelGuid(info), so that states move between the two versions. Source files are listed in
+// sources/buildDescription.xml only (FMI 3.0 has no <SourceFiles>).
+std::string modelDescriptionXml3(const ModelInfo& info);
 // The modelDescription.xml spelling of each enum value ("" for Initial::Default): one table for the
 // XML, the generated documentation and log messages.
 const char* xmlName(Type t);
