@@ -108,7 +108,8 @@ def cmd_run(a) -> int:
     if a.record_steptest:
         check_output_folder(a.record_steptest, "--record-steptest")
     # the scenario, the overrides and the FMUs: loaded, checked, instantiated and initialized
-    prepared = prepare(a.scenario, plant=a.plant, engine=a.engine, controller_config=a.controller_config,
+    prepared = prepare(a.scenario, plant=a.plant, controller=a.controller_model, engine=a.engine,
+                       controller_config=a.controller_config,
                        parameters=_set(a.set), faults=_faults(a), stop_time=a.stop_time, fmu_dir=a.fmu_dir,
                        origins=ORIGINS, robot=a.robot, fmi=a.fmi)
     sc = prepared.scenario
