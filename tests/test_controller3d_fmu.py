@@ -183,3 +183,20 @@ def test_cli_refuses_the_3d_controller_on_the_sagittal_plant(tmp_path, capsys):
     assert main(["run", "ankle_small_push", "--controller-model", "3d", "--out", str(tmp_path / "o")]) == 2
     assert "3D controller needs the 3D plant" in capsys.readouterr().err
     assert not (tmp_path / "o").exists()
+
+
+def test_frontal_limits_script(tmp_path):
+    """scripts/frontal_limits.py (docs/controller.md §11.5): with the frontal layer off the 3D
+    controller stands the side push up to the static side-tipping force, as the sagittal controller
+    does (15 N); a scenario without a sideways push is refused (exit 2)."""
+    import subprocess
+    import sys
+
+    from conftest import REPO_ROOT
+    script = str(REPO_ROOT / "scripts" / "frontal_limits.py")
+    r = subprocess.run([sys.executable, script, "--from", "14", "--set", "frontal_enabled=0"],
+                       capture_output=True, text=True, timeout=300)
+    assert r.returncode == 0, r.stderr
+    assert r.stdout.strip().splitlines()[-1].split()[-1] == "15", r.stdout
+    r = subprocess.run([sys.executable, script, "ankle_small_push"], capture_output=True, text=True, timeout=60)
+    assert r.returncode == 2 and "push_y" in r.stderr and "Traceback" not in r.stderr
