@@ -105,7 +105,7 @@ def test_sagittal_variables_are_the_sagittal_fmus(fmu3d, controller_fmu):
 @pytest.mark.parametrize("frontal", [0, 1], ids=["frontal_off", "frontal_on"])
 def test_sagittal_outputs_bit_identical_to_the_sagittal_fmu(fmu3d, controller_fmu, tmp_path, frontal):
     u3, u2 = _unzip(fmu3d, tmp_path), _unzip(controller_fmu, tmp_path)
-    c3 = Inst(u3, {"frontal_enabled": frontal})
+    c3 = Inst(u3, {"frontal_enabled": frontal, "hip_strategy_enabled_y": 1})   # every frontal phase
     c2 = Inst(u2)
     outs = [v.name for v in c2.md.modelVariables if v.causality == "output"]
     legs = [f"q_{s}_{j}_ref" for s in SIDES for j in JOINTS]
@@ -187,16 +187,16 @@ def test_cli_refuses_the_3d_controller_on_the_sagittal_plant(tmp_path, capsys):
 
 def test_frontal_limits_script(tmp_path):
     """scripts/frontal_limits.py (docs/controller.md §11.5): with the frontal layer off the 3D
-    controller stands the side push up to the static side-tipping force, as the sagittal controller
-    does (15 N); a scenario without a sideways push is refused (exit 2)."""
+    controller stands the 1 s side push up to the static side-tipping force, as the sagittal
+    controller does (15 N); a malformed --set is refused (exit 2)."""
     import subprocess
     import sys
 
     from conftest import REPO_ROOT
     script = str(REPO_ROOT / "scripts" / "frontal_limits.py")
-    r = subprocess.run([sys.executable, script, "--from", "14", "--set", "frontal_enabled=0"],
+    r = subprocess.run([sys.executable, script, "--shape", "1s", "--from", "14", "--set", "frontal_enabled=0"],
                        capture_output=True, text=True, timeout=300)
     assert r.returncode == 0, r.stderr
     assert r.stdout.strip().splitlines()[-1].split()[-1] == "15", r.stdout
-    r = subprocess.run([sys.executable, script, "ankle_small_push"], capture_output=True, text=True, timeout=60)
-    assert r.returncode == 2 and "push_y" in r.stderr and "Traceback" not in r.stderr
+    r = subprocess.run([sys.executable, script, "--set", "Ka_y"], capture_output=True, text=True, timeout=60)
+    assert r.returncode == 2 and "--set Ka_y" in r.stderr and "Traceback" not in r.stderr

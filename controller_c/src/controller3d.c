@@ -44,6 +44,8 @@ void ahc3d_step(ahc3d *c, const ahc3d_sensors *s, ahc3d_outputs *out)
     /* 2. the frontal angles, measured on the pivot leg the frontal reference names */
     fs.zmp_y = s->zmp_y;
     fs.fz = s->sag.fz;
+    fs.fz_left = s->fz_left;
+    fs.fz_right = s->fz_right;
     fs.phi = fs.psi = NAN;
     {
         int finite = 1;
@@ -53,15 +55,18 @@ void ahc3d_step(ahc3d *c, const ahc3d_sensors *s, ahc3d_outputs *out)
     }
     /* 3. the frontal controller */
     ahc_frontal_step(&c->frontal, &fs, &out->frontal);
-    /* 4. the legs: both planes' references minus the sagittal ones alone */
+    /* 4. the legs: both planes' references minus the sagittal ones alone, which are the pitch
+     * angles th1, th2 on both legs (the straight legs' kinematics, leg_ik.h) */
     if (out->frontal.phi_ref != 0.0 || out->frontal.psi_ref != 0.0) {
-        double full[2][AHC_LEG_JOINTS], sag[2][AHC_LEG_JOINTS];
+        double full[2][AHC_LEG_JOINTS];
         const double th1 = out->sag.theta_ankle_ref, th2 = out->sag.theta_hip_ref;
         out->legs_out_of_reach = ahc_legs_from_planes(&c->legs, th1, th2, out->frontal.phi_ref,
                                                       out->frontal.psi_ref, full);
-        ahc_legs_from_planes(&c->legs, th1, th2, 0.0, 0.0, sag);
-        for (side = 0; side < 2; ++side)
-            for (j = 0; j < AHC_LEG_JOINTS; ++j) out->q_ref_offset[side][j] = full[side][j] - sag[side][j];
+        for (side = 0; side < 2; ++side) {
+            for (j = 0; j < AHC_LEG_JOINTS; ++j) out->q_ref_offset[side][j] = full[side][j];
+            out->q_ref_offset[side][AHC_LEG_ANKLE_PITCH] -= th1;
+            out->q_ref_offset[side][AHC_LEG_HIP_PITCH] -= th2;
+        }
     }
 }
 

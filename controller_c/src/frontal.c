@@ -17,12 +17,11 @@
 #include <string.h>
 
 #include "ahc/frontal.h"
+#include "frontal_pose.h"
 
 static double clampd(double v, double lo, double hi) { return v < lo ? lo : (v > hi ? hi : v); }
 
-/* Phase 3 -> 0 waits until the lean is back within this [m]; the lean holds its estimate while the
- * ZMP is this close to an outer edge [m] (as controller.c). */
-#define LEAN_RETURN_TOL 0.001
+/* The lean holds its estimate while the ZMP is this close to an outer edge [m] (as controller.c). */
 #define LEAN_EDGE 0.002
 
 /* ------------------------------------------------------------------------------------------- */
@@ -47,14 +46,16 @@ void ahc_frontal_params_default(ahc_frontal_params *f)
     f->knee_max = HOAP2_KNEE_MAX;
     /* The sagittal gains carried over at the same natural frequency and damping ratio on the
      * frontal inertias (docs/controller.md §11.3): K_y = K J_y / J, C_y = C J_y / J, with the
-     * erect sagittal inertias J = 0.505 (ankle) and 0.073 kg m^2 (hip). */
-    f->Ka_y = 19.0;
-    f->Ca_y = 4.75;
+     * erect sagittal inertias J = 0.505 (ankle) and 0.073 kg m^2 (hip): Ka_y 19, Ca_y 4.75 (the
+     * configuration "paper"); the default ankle is stiffer, on evidence (§11.5): 250 N m/rad at
+     * the same damping ratio. */
+    f->Ka_y = 250.0;
+    f->Ca_y = 17.1;
     f->Kh_y = 5.0;
     f->Ch_y = 1.25;
     f->Kpr_y = 100.0;
     f->Kp_psi = 15.0;
-    f->hip_strategy_enabled_y = 1;
+    f->hip_strategy_enabled_y = 0;  /* the lateral hip strategy stands smaller pushes (§11.5) */
     f->zmp_limit_y = 0.035;
     f->T_ah_y = 0.5;
     f->rz_band_low_y = -0.002;
@@ -66,9 +67,33 @@ void ahc_frontal_params_default(ahc_frontal_params *f)
     f->return_psi_rate_tol = 0.05;
     f->zmp_filter_tau_y = 0.0;
     f->zmp_fault_margin_y = 0.02;
+    f->lean_enabled_y = 1;
+    f->lean_tau_y = 0.2;
+    f->lean_margin_y = 0.01;
+    f->fz_rocking_y = 3.0;
+}
+
+void ahc_frontal_params_paper(ahc_frontal_params *f)
+{
+    ahc_frontal_params_default(f);
+    f->Ka_y = 19.0;
+    f->Ca_y = 4.75;
+    f->hip_strategy_enabled_y = 1;
     f->lean_enabled_y = 0;
-    f->lean_tau_y = 0.3;
-    f->lean_margin_y = 0.015;
+}
+
+int ahc_frontal_params_named(ahc_frontal_params *f, const char *name)
+{
+    if (name && strcmp(name, "default") == 0) {
+        ahc_frontal_params_default(f);
+        return AHC_OK;
+    }
+    if (name && strcmp(name, "paper") == 0) {
+        ahc_frontal_params_paper(f);
+        return AHC_OK;
+    }
+    ahc_frontal_params_default(f);
+    return AHC_ERR_UNKNOWN_NAME;
 }
 
 #define FD(field, unit, lo, hi, desc) \
@@ -114,6 +139,7 @@ static const ahc_param_info k_ftable[] = {
     FI(lean_enabled_y, 0.0, 1.0, "Frontal sustained-push lean: 1 the CoM reference of phases 1-3 leans against the low-passed lateral disturbance"),
     FD(lean_tau_y, "s", 0.01, 100.0, "Time constant of the lateral disturbance low-pass the lean follows"),
     FD(lean_margin_y, "m", 0.0, 1.0, "The leaned CoM reference stays this far inside the soles' outer edges"),
+    FD(fz_rocking_y, "N", 0.0, 1e4, "A sole with less normal load than this counts as lifted: the lateral lean holds"),
 };
 #define FTABLE_LEN (sizeof k_ftable / sizeof k_ftable[0])
 
@@ -363,8 +389,7 @@ static void phase_transitions(ahc_frontal *c, const fctx *k)
         if (zmp_beyond_limit(c, &sign)) {
             c->push_sign = sign;
             enter_hip(c);
-        } else if (fabs(c->psi) <= f->return_psi_tol && fabs(c->dpsi) <= f->return_psi_rate_tol &&
-                   fabs(c->lean) <= LEAN_RETURN_TOL) {
+        } else if (fabs(c->psi) <= f->return_psi_tol && fabs(c->dpsi) <= f->return_psi_rate_tol) {
             enter_ankle(c);
         }
         break;
@@ -377,10 +402,12 @@ static void phase_transitions(ahc_frontal *c, const fctx *k)
 /* ------------------------------------------------------------------------------------------- */
 /* The laws; each integrates the reference over one tick (as controller.c). */
 
-/* F11: phi'' = (d_y - Ca_y phi' - Ka_y phi) / J_phi (semi-implicit Euler). */
+/* F11: phi'' = (d_y - Ca_y phi' - Ka_y (phi - phi_lean)) / J_phi (semi-implicit Euler); phi_lean =
+ * lean / J[0], the lean of the legs that moves the CoM by the lateral lean (0 without it). */
 static void law_ankle_strategy(ahc_frontal *c, const fctx *k)
 {
-    const double acc = (k->d - c->f.Ca_y * c->dphi - c->f.Ka_y * c->phi) / c->Jphi;
+    const double phi_lean = fabs(k->J[0]) > 1e-9 ? c->lean / k->J[0] : 0.0;
+    const double acc = (k->d - c->f.Ca_y * c->dphi - c->f.Ka_y * (c->phi - phi_lean)) / c->Jphi;
     c->dphi += k->h * acc;
     c->phi += k->h * c->dphi;
 }
@@ -415,14 +442,14 @@ static void law_ankle_reactionless(ahc_frontal *c, const fctx *k)
  *     p_y f_z = g sum_i m_i y_i + D_y + dH,   dH = sum_i m_i (y_i z_i'' - z_i y_i'') - sum_i I_i lean_i'',
  * the lumps' accelerations by backward differences of their measured CoMs over the last three
  * ticks, z from the sole. Updates the history. */
-static double external_moment(ahc_frontal *c, const ahc_frontal_sensors *s)
+static double external_moment(ahc_frontal *c, const ahc_frontal_sensors *s, const ahc_frontal_pose *pm)
 {
     const double h = c->sp.sample_period, a = c->sp.ankle_height;
     const double mass[3] = {0.5 * c->sp.m1, 0.5 * c->sp.m1, c->sp.m2};
     const double inertia[3] = {0.5 * c->f.I1_roll, 0.5 * c->f.I1_roll, c->f.I2_roll};
-    double y[3], z[3], lean[3], grav = 0.0, dH = 0.0;
+    const double *y = pm->ly, *z = pm->lz, *lean = pm->lean;
+    double grav = 0.0, dH = 0.0;
     int i;
-    ahc_frontal_lumps(&c->f, &c->sp, s->phi, s->psi, y, z, lean);
     for (i = 0; i < 3; ++i) {
         grav += mass[i] * y[i];
         if (c->hist_n >= 2) {
@@ -442,21 +469,22 @@ static double external_moment(ahc_frontal *c, const ahc_frontal_sensors *s)
     return s->zmp_y * s->fz - c->sp.g * grav - dH;
 }
 
-/* The sagittal update_lean (controller.c) over the soles' width: -D_y/(m g) low-passed, bounded
- * lean_margin_y inside the outer edges, reset in phase 0, held at the edge the push drives the ZMP
- * to and released at the other. Returns the lean's rate this tick. */
-static double update_lean(ahc_frontal *c, double ext)
+/* The lateral lean (docs/controller.md §11.2): the sagittal update_lean's law (controller.c) over
+ * the soles' width, -D_y/(m g) low-passed and bounded lean_margin_y inside the outer edges, held
+ * while the ZMP is at the edge the push drives it to and released at the other; unlike the
+ * sagittal lean it acts in every phase (F11 leans the legs by it: the evidence of §11.5), and it
+ * holds while a sole is unloaded (the robot rocks on the other's edge: the moment balance assumes
+ * both soles flat). Returns the lean's rate this tick. */
+static double update_lean(ahc_frontal *c, double ext, double s_fz_min)
 {
     const ahc_frontal_params *f = &c->f;
     const double edge = f->ankle_y + 0.5 * f->sole_width, h = c->sp.sample_period;
     double next;
-    if (c->phase == AHC_PHASE_ANKLE) {
-        c->lean_f1 = c->lean_f = c->lean = 0.0;
-        return 0.0;
-    }
     {
         const int at_pos = c->zmp_f >= edge - LEAN_EDGE, at_neg = c->zmp_f <= -edge + LEAN_EDGE;
-        if (!((at_pos && c->lean_f > 0.0) || (at_neg && c->lean_f < 0.0))) {
+        /* one sole unloaded: the robot rocks on the other's edge, the balance means nothing (hold) */
+        const int rocking = !(s_fz_min >= f->fz_rocking_y);
+        if (!rocking && !((at_pos && c->lean_f > 0.0) || (at_neg && c->lean_f < 0.0))) {
             const double in = (at_pos || at_neg) ? 0.0 : ext;
             c->lean_f1 += c->lean_alpha * (in - c->lean_f1);
             c->lean_f += c->lean_alpha * (c->lean_f1 - c->lean_f);
@@ -509,15 +537,16 @@ static void write_outputs(ahc_frontal *c, const fctx *k, ahc_frontal_outputs *ou
 static int feasible(const ahc_frontal *c, double phi, double psi)
 {
     const ahc_frontal_params *f = &c->f;
-    double y[3], z[3], lean[3];
+    ahc_frontal_pose o;
+    const double *lean = o.lean;
     const double lmin = sqrt(f->thigh * f->thigh + f->shank * f->shank + 2.0 * f->thigh * f->shank * cos(f->knee_max));
     const int pivot = psi >= 0.0 ? 0 : 1, other = 1 - pivot;   /* lumps: 0 right leg, 1 left leg */
     const double sgn = psi >= 0.0 ? 1.0 : -1.0;
-    ahc_frontal_lumps(f, &c->sp, phi, psi, y, z, lean);
+    ahc_frontal_pose_at(f, &c->sp, phi, psi, &o);
     if (fabs(lean[0]) > f->ankle_roll_max || fabs(lean[1]) > f->ankle_roll_max) return 0;
     if (sgn * (psi - lean[pivot]) > f->hip_adduction_max) return 0;
     if (sgn * (psi - lean[other]) > f->hip_abduction_max) return 0;
-    if (ahc_frontal_other_leg_length(f, &c->sp, phi, psi) < lmin) return 0;
+    if (o.other_len < lmin) return 0;
     return 1;
 }
 
@@ -552,6 +581,7 @@ static unsigned clamp_references(ahc_frontal *c)
 void ahc_frontal_step(ahc_frontal *c, const ahc_frontal_sensors *s, ahc_frontal_outputs *out)
 {
     fctx k;
+    ahc_frontal_pose pm;
     unsigned fl;
     memset(&k, 0, sizeof k);
     if (!c->valid) {
@@ -605,14 +635,22 @@ void ahc_frontal_step(ahc_frontal *c, const ahc_frontal_sensors *s, ahc_frontal_
         c->zmp_f += c->zmp_alpha * (s->zmp_y - c->zmp_f);
     }
     /* kinematics: the laws on the reference angles, the disturbance on the measured ones */
-    ahc_frontal_com(&c->f, &c->sp, s->phi, s->psi, &k.ry_meas, &k.rz_meas);
-    ahc_frontal_com(&c->f, &c->sp, c->phi, c->psi, &k.ry, &k.rz);
-    ahc_frontal_com_jacobian(&c->f, &c->sp, c->phi, c->psi, k.J);
+    {
+        ahc_frontal_pose pr;
+        ahc_frontal_pose_at(&c->f, &c->sp, s->phi, s->psi, &pm);
+        ahc_frontal_pose_at(&c->f, &c->sp, c->phi, c->psi, &pr);
+        k.ry_meas = pm.y;
+        k.rz_meas = pm.z;
+        k.ry = pr.y;
+        k.rz = pr.z;
+        k.J[0] = pr.dy[0];
+        k.J[1] = pr.dy[1];
+    }
     k.ratio = fabs(k.J[0]) > 1e-12 ? -k.J[1] / k.J[0] : 0.0;
     k.d = c->m * c->sp.g * (c->zmp_f - k.ry_meas);   /* d_y = m g (p_y - r_y) */
     if (c->f.lean_enabled_y) {
-        const double ext = external_moment(c, s);
-        k.dlean = update_lean(c, ext);
+        const double ext = external_moment(c, s, &pm);
+        k.dlean = update_lean(c, ext, s->fz_left < s->fz_right ? s->fz_left : s->fz_right);
     } else {
         c->lean = 0.0;
     }

@@ -14,14 +14,9 @@
  */
 #include <math.h>
 
-#include "ahc/frontal.h"
+#include "frontal_pose.h"
 
-typedef struct {
-    double y, z;       /* the two-link body's CoM [m] */
-    double dy[2];      /* d y / d (phi, psi) */
-    double other_len;  /* the non-pivot leg's hip-ankle distance */
-    double ly[3], lz[3], lean[3];  /* the lumps (right leg, left leg, link 2): CoM and lean toward +y */
-} frontal_pose;
+typedef ahc_frontal_pose frontal_pose;
 
 /* The model for psi >= 0 (right leg the pivot), link 2's lateral CoM offset y2. */
 static void pose_right_pivot(const ahc_frontal_params *f, const ahc_params *sp, double phi, double psi,
@@ -62,7 +57,8 @@ static void pose_right_pivot(const ahc_frontal_params *f, const ahc_params *sp, 
     }
 }
 
-static void pose(const ahc_frontal_params *f, const ahc_params *sp, double phi, double psi, frontal_pose *o)
+void ahc_frontal_pose_at(const ahc_frontal_params *f, const ahc_params *sp, double phi, double psi,
+                         frontal_pose *o)
 {
     if (psi >= 0.0) {
         pose_right_pivot(f, sp, phi, psi, f->link2_com_y, o);
@@ -88,7 +84,7 @@ void ahc_frontal_lumps(const ahc_frontal_params *f, const ahc_params *sp, double
 {
     frontal_pose o;
     int i;
-    pose(f, sp, phi, psi, &o);
+    ahc_frontal_pose_at(f, sp, phi, psi, &o);
     for (i = 0; i < 3; ++i) {
         y[i] = o.ly[i];
         z[i] = o.lz[i];
@@ -100,7 +96,7 @@ void ahc_frontal_com(const ahc_frontal_params *f, const ahc_params *sp, double p
                      double *ry, double *rz)
 {
     frontal_pose o;
-    pose(f, sp, phi, psi, &o);
+    ahc_frontal_pose_at(f, sp, phi, psi, &o);
     if (ry) *ry = o.y;
     if (rz) *rz = o.z;
 }
@@ -109,7 +105,7 @@ void ahc_frontal_com_jacobian(const ahc_frontal_params *f, const ahc_params *sp,
                               double J[2])
 {
     frontal_pose o;
-    pose(f, sp, phi, psi, &o);
+    ahc_frontal_pose_at(f, sp, phi, psi, &o);
     J[0] = o.dy[0];
     J[1] = o.dy[1];
 }
@@ -135,6 +131,6 @@ double ahc_frontal_hip_inertia(const ahc_frontal_params *f, const ahc_params *sp
 double ahc_frontal_other_leg_length(const ahc_frontal_params *f, const ahc_params *sp, double phi, double psi)
 {
     frontal_pose o;
-    pose(f, sp, phi, psi, &o);
+    ahc_frontal_pose_at(f, sp, phi, psi, &o);
     return o.other_len;
 }

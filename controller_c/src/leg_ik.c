@@ -80,11 +80,19 @@ int ahc_leg_ik(const ahc_leg_geometry *g, const double hip[3], const double R[9]
     }
     knee = acos(ck);
     q[AHC_LEG_KNEE] = knee;
-    q[AHC_LEG_ANKLE_ROLL] = atan2(hip[1], hip[2]);
-    q[AHC_LEG_ANKLE_PITCH] = atan2(hip[0], sqrt(hip[1] * hip[1] + hip[2] * hip[2])) -
-                             atan2(-t * sin(knee), s + t * cos(knee));
-    /* the thigh's orientation R_S Ry(-knee), R_S = Rx(-ankle_roll) Ry(ankle) */
-    rot_x(-q[AHC_LEG_ANKLE_ROLL], Rs);
+    {
+        /* the roll from the hip's (y, z), the pitch from the angle between v and the hip */
+        const double ryz = sqrt(hip[1] * hip[1] + hip[2] * hip[2]), sk = sqrt(1.0 - ck * ck);
+        q[AHC_LEG_ANKLE_ROLL] = atan2(hip[1], hip[2]);
+        q[AHC_LEG_ANKLE_PITCH] = atan2(hip[0], ryz) - atan2(-t * sk, s + t * ck);
+        /* the thigh's orientation R_S Ry(-knee), R_S = Rx(-ankle_roll) Ry(ankle): cos and sin of
+         * the roll straight from the hip's (y, z) */
+        {
+            const double cr = ryz > 0.0 ? hip[2] / ryz : 1.0, sr = ryz > 0.0 ? hip[1] / ryz : 0.0;
+            const double r[9] = {1, 0, 0, 0, cr, sr, 0, -sr, cr};   /* Rx(-roll) */
+            memcpy(Rs, r, sizeof r);
+        }
+    }
     rot_y(q[AHC_LEG_ANKLE_PITCH] - knee, Ra);
     mul(Rs, Ra, Rs);
     mul_tn(R, Rs, M);   /* M = R^T R_thigh = Rz(yaw) Ry(-hip) Rx(hip_roll) */
@@ -136,6 +144,11 @@ int ahc_legs_from_planes(const ahc_leg_geometry *g, double th1, double th2, doub
     ho[1] = hp[1] + across[1] - side * 2.0 * g->ankle_y;
     ho[2] = hp[2] + across[2];
     out = ahc_leg_ik(g, hp, R, q[pivot]);
+    if (phi == 0.0 && psi == 0.0 && g->hip_y == g->ankle_y) {
+        /* both legs at the same pose relative to their ankles (ho = hp exactly): one leg's angles */
+        memcpy(q[other], q[pivot], sizeof q[pivot]);
+        return 2 * out;
+    }
     out += ahc_leg_ik(g, ho, R, q[other]);
     return out;
 }

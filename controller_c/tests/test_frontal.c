@@ -182,11 +182,12 @@ static void test_frontal_law(void)
     int i;
     double ry0;
     ahc_params_default(&sp);
-    ahc_frontal_params_default(&f);
+    ahc_frontal_params_paper(&f);   /* the paper's laws: F11, the four phases, no lean */
     CHECK(ahc_frontal_init(&c, &f, &sp) == AHC_OK, "init");
     ahc_frontal_com(&f, &sp, 0.0, 0.0, &ry0, NULL);
     memset(&s, 0, sizeof s);
     s.fz = 70.0;
+    s.fz_left = s.fz_right = 35.0;
     s.zmp_y = ry0;
     for (i = 0; i < 1000; ++i) ahc_frontal_step(&c, &s, &o);
     CHECK(o.phi_ref == 0.0 && o.psi_ref == 0.0 && o.phase == 0, "at rest stays at rest: %g %g", o.phi_ref, o.psi_ref);
@@ -251,6 +252,7 @@ static void test_controller3d_zero_offsets(void)
         s.sag.theta_hip = 0.1 * sin(0.002 * i);
         s.sag.zmp_x = 0.03 * sin(0.004 * i);
         s.sag.fz = 70.0;
+        s.fz_left = s.fz_right = 35.0;
         s.zmp_y = 0.02 * sin(0.005 * i);
         ahc3d_step(&c, &s, &o);
         ahc_step(&ref, &s.sag, &oref);
@@ -270,6 +272,7 @@ static void test_controller3d_zero_offsets(void)
         s.sag.theta_hip = 0.1 * sin(0.002 * i);
         s.sag.zmp_x = 0.03 * sin(0.004 * i);
         s.sag.fz = 70.0;
+        s.fz_left = s.fz_right = 35.0;
         s.zmp_y = 0.045 * sin(0.005 * i);
         ahc3d_step(&c, &s, &o);
         ahc_step(&ref, &s.sag, &oref);
@@ -279,12 +282,56 @@ static void test_controller3d_zero_offsets(void)
     CHECK(ahc3d_state_validate(&c, NULL, 0) == AHC_OK, "a running instance validates");
 }
 
+/* The lateral lean (defaults): under a constant external moment D about the ground line the CoM
+ * reference settles at -D/(m g) (within the 10 % F11's spring yields), opposite the push, with phi
+ * leaning the legs there (quasi-static robot: the ZMP from the moment balance); with one sole
+ * unloaded the lean holds. */
+static void test_lateral_lean(void)
+{
+    ahc_params sp;
+    ahc_frontal_params f;
+    ahc_frontal c;
+    ahc_frontal_sensors s;
+    ahc_frontal_outputs o;
+    int i;
+    const double D = 1.5, m = HOAP2_M1 + HOAP2_M2, mt = m + HOAP2_FEET_MASS;
+    double ry, lean_held;
+    ahc_params_default(&sp);
+    ahc_frontal_params_default(&f);
+    CHECK(f.lean_enabled_y == 1, "the lean is on by default");
+    CHECK(ahc_frontal_init(&c, &f, &sp) == AHC_OK, "init");
+    memset(&s, 0, sizeof s);
+    s.fz = mt * sp.g;
+    s.fz_left = s.fz_right = 0.5 * s.fz;
+    for (i = 0; i < 6000; ++i) {
+        s.phi = c.phi;
+        s.psi = c.psi;
+        ahc_frontal_com(&f, &sp, s.phi, s.psi, &ry, NULL);
+        s.zmp_y = (m * sp.g * ry + D) / s.fz;   /* at rest: p f_z = g m r_y + D (feet at y = 0) */
+        ahc_frontal_step(&c, &s, &o);
+    }
+    ahc_frontal_com(&f, &sp, c.phi, c.psi, &ry, NULL);
+    /* -D/(m g), less what F11's spring yields to the remaining d_y = m g (p_y - r_y): 10 % */
+    CHECK(ry < -0.9 * D / (m * sp.g) && ry > -1.1 * D / (m * sp.g), "the CoM leaned to -D/(m g): %g vs %g", ry,
+          -D / (m * sp.g));
+    CHECK(o.phase == 0 && o.psi_ref == 0.0, "phase 0, no hip motion (hip strategy off by default)");
+    /* a sole unloaded: the lean holds whatever the ZMP says */
+    lean_held = c.lean;
+    s.fz_left = 0.0;
+    for (i = 0; i < 500; ++i) {
+        s.zmp_y = 0.06;
+        ahc_frontal_step(&c, &s, &o);
+    }
+    CHECK(c.lean == lean_held, "the lean held while a sole is lifted: %g vs %g", c.lean, lean_held);
+}
+
 int main(void)
 {
     test_ik_fk();
     test_planes();
     test_frontal_model();
     test_frontal_law();
+    test_lateral_lean();
     test_controller3d_zero_offsets();
     TEST_MAIN_END();
 }

@@ -20,6 +20,7 @@ extern "C" {
 typedef struct {
     ahc_sensors sag;                   /* theta_ankle, theta_hip (both legs' mean), zmp_x, fz     */
     double zmp_y;                      /* lateral ZMP from the mid-point between the ankles [m]   */
+    double fz_left, fz_right;          /* each sole's normal load [N]                              */
     double q[2][AHC_LEG_JOINTS];       /* measured joint angles, [AHC_LEFT], [AHC_RIGHT] [rad]    */
 } ahc3d_sensors;
 

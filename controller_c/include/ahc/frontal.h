@@ -83,16 +83,26 @@ typedef struct {
     /* sensing and faults */
     double zmp_filter_tau_y;    /* first-order low-pass of zmp_y [s] (0 = off)                   */
     double zmp_fault_margin_y;  /* zmp_y beyond the outer sole edges by more than this: fault [m] */
-    /* the sustained-push lean in the frontal plane (docs/controller.md §11.3; the sagittal
-     * lean_enabled's law, §4.6, over the two soles' width) */
-    int lean_enabled_y;         /* 1: in phases 1-3 r_y_d leans the CoM against the low-passed
-                                   external moment, -D_y/(m g), bounded by the soles              */
+    /* the lateral lean (docs/controller.md §11.2: the sagittal lean_enabled's law, §4.6, over the
+     * two soles' width, in every phase) */
+    int lean_enabled_y;         /* 1: the CoM reference leans against the low-passed external
+                                   moment, -D_y/(m g), bounded by the soles: F11 around it in
+                                   phase 0, r_y_d in phases 1-3                                 */
     double lean_tau_y;          /* time constant of that low-pass (two stages of lean_tau_y/2) [s] */
     double lean_margin_y;       /* the leaned CoM reference stays this far inside the outer edges [m] */
+    double fz_rocking_y;        /* a sole loaded less than this is lifted: the lean holds [N]   */
 } ahc_frontal_params;
 
 /* HOAP-2 defaults (hoap2/nominal.h) and the frontal gains (docs/controller.md §11). */
 void ahc_frontal_params_default(ahc_frontal_params *f);
+
+/* The paper's strategies read in the frontal plane with none of our choices (§11.2-11.3): the
+ * sagittal gains carried over (Ka_y 19, Ca_y 4.75), the lateral hip strategy on, no lateral lean.
+ * The frontal part of the named configuration "paper". */
+void ahc_frontal_params_paper(ahc_frontal_params *f);
+/* The frontal part of the named configurations of ahc_params_named ("default", "paper"):
+ * AHC_OK, or AHC_ERR_UNKNOWN_NAME (f then the defaults). */
+int ahc_frontal_params_named(ahc_frontal_params *f, const char *name);
 
 /* Validate f against itself and the sagittal model sp. AHC_OK or AHC_ERR_*, message as
  * ahc_params_validate. */
@@ -110,6 +120,8 @@ typedef struct {
     double phi;     /* measured lean of the pivot leg [rad]                                      */
     double psi;     /* measured lean of link 2 [rad]                                             */
     double fz;      /* total normal force [N]                                                    */
+    double fz_left, fz_right; /* each sole's normal load [N]: the frontal moment balance holds only
+                                 with both soles on the ground                                  */
 } ahc_frontal_sensors;
 
 typedef struct {

@@ -11,6 +11,7 @@
 #include <string>
 
 #include "ahc/controller.h"
+#include "ahc/frontal.h"
 #include "fmuglue/glue.hpp"
 
 namespace ahcfmu {
@@ -61,14 +62,46 @@ inline void readParamVariables(fmuglue::Context& ctx, const ahc_param_info* tabl
   }
 }
 
-// resources/configurations.toml: every named configuration of the C library (ahc_params_named)
-// with the parameter values that differ from the defaults, for importers that select a
-// configuration by name (anklehip: `controller_config = "paper"`). Generated, never edited.
-inline std::string configurationsToml(const char* model) {
+// The rows of a parameter table whose values differ between p and def, as TOML lines.
+inline std::string differingRows(const ahc_param_info* table, size_t count, const void* p, const void* def) {
+  std::string s;
+  for (size_t i = 0; i < count; ++i) {
+    const char* a = static_cast<const char*>(p) + table[i].offset;
+    const char* b = static_cast<const char*>(def) + table[i].offset;
+    char line[160];
+    if (table[i].is_int) {
+      int x, y;
+      std::memcpy(&x, a, sizeof x);
+      std::memcpy(&y, b, sizeof y);
+      if (x == y) continue;
+      std::snprintf(line, sizeof line, "%s = %d\n", table[i].name, x);
+    } else {
+      double x, y;
+      std::memcpy(&x, a, sizeof x);
+      std::memcpy(&y, b, sizeof y);
+      if (x == y) continue;
+      // The shortest of %.15g / %.17g that reads back exactly.
+      std::snprintf(line, sizeof line, "%.15g", x);
+      const char* fmt = std::strtod(line, nullptr) == x ? "%s = %.15g\n" : "%s = %.17g\n";
+      std::snprintf(line, sizeof line, fmt, table[i].name, x);
+    }
+    s += line;
+  }
+  return s;
+}
+
+// resources/configurations.toml: every named configuration of the C library (ahc_params_named,
+// and with `frontal` ahc_frontal_params_named too) with the parameter values that differ from the
+// defaults, for importers that select a configuration by name (anklehip: `controller_config =
+// "paper"`). Generated, never edited.
+inline std::string configurationsToml(const char* model, bool frontal = false) {
   ahc_params def;
   ahc_params_default(&def);
-  size_t count = 0;
+  ahc_frontal_params fdef;
+  ahc_frontal_params_default(&fdef);
+  size_t count = 0, fcount = 0;
   const ahc_param_info* table = ahc_param_table(&count);
+  const ahc_param_info* ftable = ahc_frontal_param_table(&fcount);
   std::string s =
       std::string("# Named configurations of ") + model + ": parameter values that differ from the defaults.\n"
       "# Generated from controller_c (ahc_params_named); see documentation/ and docs/controller.md.\n";
@@ -76,27 +109,11 @@ inline std::string configurationsToml(const char* model) {
     ahc_params p;
     ahc_params_named(&p, ahc_config_name(c));
     s += std::string("\n[") + ahc_config_name(c) + "]\ndescription = \"" + ahc_config_description(c) + "\"\n";
-    for (size_t i = 0; i < count; ++i) {
-      const char* a = reinterpret_cast<const char*>(&p) + table[i].offset;
-      const char* b = reinterpret_cast<const char*>(&def) + table[i].offset;
-      char line[160];
-      if (table[i].is_int) {
-        int x, y;
-        std::memcpy(&x, a, sizeof x);
-        std::memcpy(&y, b, sizeof y);
-        if (x == y) continue;
-        std::snprintf(line, sizeof line, "%s = %d\n", table[i].name, x);
-      } else {
-        double x, y;
-        std::memcpy(&x, a, sizeof x);
-        std::memcpy(&y, b, sizeof y);
-        if (x == y) continue;
-        // The shortest of %.15g / %.17g that reads back exactly.
-        std::snprintf(line, sizeof line, "%.15g", x);
-        const char* fmt = std::strtod(line, nullptr) == x ? "%s = %.15g\n" : "%s = %.17g\n";
-        std::snprintf(line, sizeof line, fmt, table[i].name, x);
-      }
-      s += line;
+    s += differingRows(table, count, &p, &def);
+    if (frontal) {
+      ahc_frontal_params f;
+      ahc_frontal_params_named(&f, ahc_config_name(c));
+      s += differingRows(ftable, fcount, &f, &fdef);
     }
   }
   return s;
