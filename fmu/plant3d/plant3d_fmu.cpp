@@ -129,12 +129,13 @@ const char* kSideNames[kLegs] = {"left", "right"};
 // the output q_<side>_<joint> (docs/plant3d.md section 3; the same for both legs, not mirrored).
 const char* kBothLegsRef[kLegJoints] = {"theta_hip_yaw_ref", "theta_hip_ref",   "theta_hip_roll_ref",
                                         "theta_knee_ref",    "theta_ankle_ref", "theta_ankle_roll_ref"};
+const char* kJointWords[kLegJoints] = {"hip yaw", "hip pitch", "hip roll", "knee", "ankle pitch", "ankle roll"};
 const char* kJointSense[kLegJoints] = {
     "+ = toes turned to the left, about +z",
-    "sagittal sense: + = trunk pitched forward relative to the thigh (hip flexion)",
+    "sagittal sense, + = trunk pitched forward relative to the thigh: hip flexion",
     "+ = foot swung to the left relative to the trunk, about +x",
     "+ = flexed",
-    "sagittal sense: + = shank pitched forward relative to the foot",
+    "sagittal sense, + = shank pitched forward relative to the foot",
     "+ = the foot's left edge up relative to the shank, about +x"};
 std::string legRefName(int side, int k) { return std::string("q_") + kSideNames[side] + "_" + joint_name(k) + "_ref"; }
 
@@ -172,7 +173,7 @@ ModelInfo makeInfo() {
   for (int s = 0; s < kLegs; ++s)
     for (int k = 0; k < kLegJoints; ++k)
       add(legRefName(s, k), vr::first_leg_ref + s * kLegJoints + k, R, In, Cont, "rad",
-          std::string(kSideNames[s]) + " " + joint_name(k) + " set point of this leg alone, added to " +
+          std::string(s == Left ? "Left" : "Right") + " " + kJointWords[k] + " set point, this leg only: added to " +
               kBothLegsRef[k] + " (" + kJointSense[k] + ")",
           0.0);
 
