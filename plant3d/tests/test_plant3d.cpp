@@ -424,11 +424,15 @@ static void test_contact_study() {
 
 // Establishes: a snapshot restored into a fresh instance continues bit for bit like the original
 // (ODE world: bodies' positions, quaternions, rotation matrices and velocities; inputs, noise
-// generator, statistics), also with sensor noise on and during a rocking motion.
+// generator, statistics), also with sensor noise on, per-leg set points and during a rocking motion.
 static void test_snapshot() {
   Params P = default_params();
   P.sensor_noise = 0.5;
-  auto push = [](double t, Inputs& u) { u.push_x = (t >= 0.1 && t < 0.25) ? 13.0 : 0.0; };
+  auto push = [](double t, Inputs& u) {
+    u.push_x = (t >= 0.1 && t < 0.25) ? 13.0 : 0.0;
+    u.leg_ref[Left][HipRoll] = -0.05 * t;
+    u.leg_ref[Right][Knee] = 0.1 * t;
+  };
   Plant3D a(P);
   CHECK(a.initialize(0.0), "%s", a.message().c_str());
   run(a, 200, push);  // mid-push
@@ -601,7 +605,7 @@ static void test_per_leg_set_points() {
 
 // Establishes: the per-leg set points lift one foot, and the servo chain's statics on one leg.
 // Both legs roll in parallel (ankle roll +phi, hip roll -phi: the pelvis moves to the left over the
-// left sole), then the right leg alone flexes (hip +a, knee +2a, ankle +a: its sole lifts, level).
+// left sole), then the right leg alone flexes (hip +a, knee +2a, ankle +a: its sole lifts).
 // At rest on the left foot: the right sole carries nothing and hangs above the ground, the left
 // sole carries the weight with the ZMP under the CoM, and every servo torque of both legs is the
 // moment of gravity about its own axis: on the hanging right leg that of the bodies below the
