@@ -610,7 +610,7 @@ static void test_per_leg_set_points() {
 // sole carries the weight with the ZMP under the CoM, and every servo torque of both legs is the
 // moment of gravity about its own axis: on the hanging right leg that of the bodies below the
 // joint, on the standing left leg that of everything above it (the trunk and the hanging leg
-// included), within 0.5 % of the largest such moment.
+// included), within 1e-6 of the largest such moment (the servo torques as the motors apply them).
 static void test_one_leg_statics() {
   Params P = default_params();
   Plant3D p(P);
@@ -675,7 +675,7 @@ static void test_one_leg_statics() {
                   held.set_point(s, k));
     }
   }
-  CHECK(worst < 5e-3 * largest, "a servo torque is %g N m from gravity's moment (largest %g N m)", worst, largest);
+  CHECK(worst < 1e-6 * largest, "a servo torque is %g N m from gravity's moment (largest %g N m)", worst, largest);
   std::printf("  on the left foot (%.4f N of m g %.4f N), the right sole %.2f mm up; servo torques = gravity's "
               "moments within %.2g N m (largest %.4f N m)\n",
               o.fz_foot[Left], mg, 1e3 * rise, worst, largest);
