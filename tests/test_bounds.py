@@ -393,3 +393,19 @@ def test_pendulum_rates_are_the_3d_plants(plant3d):
     assert roll < 1e-8
     assert wy == pytest.approx(st.omega_y, rel=0.005)
     assert wx == pytest.approx(st.body.omega, rel=0.005)
+
+
+def test_docs_tables_are_the_modules():
+    """Establishes: the stance and per-direction tables of docs/capability.md section 7.5 are what
+    `python -m anklehip.analysis.bounds` prints for the 3D plant in the default controller's erect
+    posture (the numbers a sweep on it uses)."""
+    from anklehip.analysis.bounds import direction_table, stance_table
+    from anklehip.files.scenario import Scenario
+    from anklehip.running.master import Models
+    from anklehip.running.sweep import bounds_parameters_of
+    from conftest import REPO_ROOT
+    p = bounds_parameters_of(Models.load(plant_model="3d"), Scenario("bounds", None, plant_model="3d"))
+    st = stance_from_params(p, p["theta_ankle_erect"], p["theta_hip_erect"])
+    doc = (REPO_ROOT / "docs" / "capability.md").read_text()
+    assert stance_table(st) in doc
+    assert direction_table(st) in doc

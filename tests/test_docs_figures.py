@@ -48,3 +48,20 @@ def test_controller_tick_is_quoted_alike():
     source = re.search(r"The controller's tick\s+is (\d+) ns", perf)[1]
     quoted = [(p.name, m[1]) for p in DOCS for m in re.finditer(r"(\d+) ns (?:per tick|\(median\))", p.read_text())]
     assert quoted and all(q == source for _, q in quoted), (source, quoted)
+
+
+def test_polar_map_run_count_is_the_sweep_files():
+    """The number of runs of `anklehip sweep polar_3d` wherever it is quoted (README.md, docs/*.md,
+    the file's own comment) is the file's: variants x grid."""
+    from anklehip.running.sweepfile import load_sweep_file
+    f = REPO_ROOT / "scenarios" / "sweeps" / "polar_3d.toml"
+    n = len(load_sweep_file(f).specs(None, "native"))
+    quoted = []
+    for p in DOCS + [f]:
+        text = p.read_text()
+        for m in re.finditer(r"polar_3d[^\n]{0,80}?\(?(\d[\d ]*) (?:closed-loop )?runs", text):
+            quoted.append((p.name, int(m[1].replace(" ", ""))))
+        for m in re.finditer(r"\((\d+) runs", text) if p == f else []:
+            quoted.append((p.name, int(m[1])))
+    assert len(quoted) >= 3, quoted
+    assert all(q == n for _, q in quoted), (n, quoted)
