@@ -95,6 +95,20 @@ def test_bounds_scale_as_one_over_height():
         assert np.allclose(lip_force_limit(r2, [0.1, 1.0], 0.05, d), lip_force_limit(R, [0.1, 1.0], 0.05, d) / 2)
 
 
+def _rk4(deriv, n: int = 3000, dt: float = 1e-3) -> np.ndarray:
+    """x after n RK4 steps of x'' = deriv(t, x, v)[1] from rest at 0 (x, v: arrays of two runs)."""
+    x, v = np.zeros(2), np.zeros(2)
+    for k in range(n):
+        t = k * dt
+        k1 = deriv(t, x, v)
+        k2 = deriv(t + dt / 2, x + dt / 2 * k1[0], v + dt / 2 * k1[1])
+        k3 = deriv(t + dt / 2, x + dt / 2 * k2[0], v + dt / 2 * k2[1])
+        k4 = deriv(t + dt, x + dt * k3[0], v + dt * k3[1])
+        x = x + dt / 6 * (k1[0] + 2 * k2[0] + 2 * k3[0] + k4[0])
+        v = v + dt / 6 * (k1[1] + 2 * k2[1] + 2 * k3[1] + k4[1])
+    return x
+
+
 @pytest.mark.parametrize("direction", [+1, -1])
 def test_lip_limit_is_the_capture_threshold_of_the_pendulum(direction):
     """Establishes: the closed form is the threshold of the model it is derived from: integrating
@@ -111,15 +125,7 @@ def test_lip_limit_is_the_capture_threshold_of_the_pendulum(direction):
         u = F * float(prof.value(t)) * R.h / (R.m_b * R.g)
         return v, w * w * ((x - p) + mu * (R.x_f - p) + u)
 
-    dt, x, v = 1e-3, np.zeros(2), np.zeros(2)
-    for k in range(3000):                    # RK4 over 3 s
-        t = k * dt
-        k1 = deriv(t, x, v)
-        k2 = deriv(t + dt / 2, x + dt / 2 * k1[0], v + dt / 2 * k1[1])
-        k3 = deriv(t + dt / 2, x + dt / 2 * k2[0], v + dt / 2 * k2[1])
-        k4 = deriv(t + dt, x + dt * k3[0], v + dt * k3[1])
-        x = x + dt / 6 * (k1[0] + 2 * k2[0] + 2 * k3[0] + k4[0])
-        v = v + dt / 6 * (k1[1] + 2 * k2[1] + 2 * k3[1] + k4[1])
+    x = _rk4(deriv)
     assert direction * x[0] < 0        # 1 % below: swung back, the ZMP can come off the edge
     assert direction * x[1] > 0.1      # 1 % above: diverged over the edge
 
@@ -230,16 +236,7 @@ def test_lip_limit_3d_is_the_capture_threshold_of_both_pendulums(angle):
         def deriv(t, x, v):
             u = comp * F * float(prof.value(t)) * r.h / (r.m_b * r.g)
             return v, w * w * ((x - p) + mu * (xf - p) + u)
-        dt, x, v = 1e-3, np.zeros(2), np.zeros(2)
-        for k in range(3000):
-            t = k * dt
-            k1 = deriv(t, x, v)
-            k2 = deriv(t + dt / 2, x + dt / 2 * k1[0], v + dt / 2 * k1[1])
-            k3 = deriv(t + dt / 2, x + dt / 2 * k2[0], v + dt / 2 * k2[1])
-            k4 = deriv(t + dt, x + dt * k3[0], v + dt * k3[1])
-            x = x + dt / 6 * (k1[0] + 2 * k2[0] + 2 * k3[0] + k4[0])
-            v = v + dt / 6 * (k1[1] + 2 * k2[1] + 2 * k3[1] + k4[1])
-        ends.append(np.sign(p) * x)      # > 0: over the edge's side
+        ends.append(np.sign(p) * _rk4(deriv))      # > 0: over the edge's side
     below, above = [e[0] for e in ends], [e[1] for e in ends]
     assert all(e < 0 for e in below), below          # 1 % below: every axis swings back
     assert max(above) > 0.1, above                   # 1 % above: one axis diverges over its edge
