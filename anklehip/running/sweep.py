@@ -430,7 +430,7 @@ def bounds_parameters_of(models, sc, v: Variant | None = None) -> dict:
     import dataclasses
 
     from ..analysis.bounds import bounds_parameters, plant_header
-    from .fmu import FMUError
+    from ..errors import InputError
     from .master import ERECT, _erect, scenario_parameters
     over = {**sc.plant, **(v.plant if v else {})}
     out = bounds_parameters({**models.plant.start_values(), **over}, plant_header(models.plant.unzipdir))
@@ -438,6 +438,6 @@ def bounds_parameters_of(models, sc, v: Variant | None = None) -> dict:
         sc0 = dataclasses.replace(sc, controller_config=v.config) if v is not None and v.config else sc
         c_over, _ = scenario_parameters(sc0, models, v.controller if v else None, v.plant if v else None)
         out.update(zip(ERECT, _erect(models, c_over)))
-    except FMUError:     # a controller without an erect posture to read: the joints' zero
+    except InputError:   # no erect posture to read (e.g. a robot file's scenario): the joints' zero
         pass
     return out
