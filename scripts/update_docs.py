@@ -36,6 +36,7 @@ SETUP_HINT = "run `bash scripts/setup.sh` first (or point ANKLEHIP_BUILD_DIR at 
 REQUIRED = {
     "docs/fmu.md": ["AnkleHipController_gen --markdown", "AnkleHipController3D_gen --markdown"],
     "docs/plant.md": ["Hoap2Plant_gen --markdown"],
+    "docs/plant3d.md": ["Hoap2Plant3D_gen --markdown --causality input"],
     "docs/python-api.md": ["api_reference.py"],
 }
 

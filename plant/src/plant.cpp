@@ -628,12 +628,16 @@ bool Plant::restore(const Snapshot& s) {
     return false;
   if (!std::isfinite(s.t) || !std::isfinite(s.t_fall) || !std::isfinite(s.pivot[0]) || !std::isfinite(s.pivot[1]))
     return false;
-  for (double x : s.y)
-    if (!std::isfinite(x)) return false;
+  // every value within what a running plant can hold (a forged state must not reach the integrator:
+  // a position beyond 1e3 m or rad, a rate beyond 1e4 per s, an impulse beyond 1e12 N s, or a
+  // negative or non-finite first step is none a step produced)
+  for (int i = 0; i < 10; ++i)
+    if (!(std::fabs(s.y[i]) <= (i < 5 ? 1e3 : 1e4))) return false;
   for (double x : s.impulse)
-    if (!std::isfinite(x)) return false;
+    if (!(std::fabs(x) <= 1e12)) return false;
   for (double x : s.inputs)
     if (!std::isfinite(x)) return false;
+  if (!(s.h_next >= 0.0 && s.h_next <= 1e3)) return false;
   t_ = s.t;
   std::memcpy(y_, s.y, sizeof y_);
   std::memcpy(impulse_, s.impulse, sizeof impulse_);
