@@ -6,7 +6,7 @@ point): a short pulse (0.2 s, 50 ms ramps), a 1 s pulse (0.3 s ramps: the scenar
 slow push (5 s, 1 s ramps). Each is scaled in 1 N steps upward from --from until the first fall;
 the last force that stood is printed per configuration: the sagittal controller (its roll servos
 hold the legs still), the 3D controller with its defaults, and the defaults with one setting
-changed at a time. Runs on the native engine (about 10 minutes for the whole table).
+changed at a time. Runs on the native engine (about 6 minutes for the whole table).
 
     .venv/bin/python scripts/frontal_limits.py [--from 6] [--shape 0.2s|1s|slow ...] [--set NAME=VALUE ...]
 

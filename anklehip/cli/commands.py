@@ -398,7 +398,7 @@ def cmd_robustness(a) -> int:
     except ValueError as e:
         return _err(str(e))
     out = check_output_folder(a.out if a.out else Path("results") / f"robustness_{sc.name}", "--out")
-    models = Models.load(a.fmu_dir, plant_model=sc.plant_model)
+    models = Models.for_scenario(sc, a.fmu_dir)
     with output_lock(out):
         res = run_studies(str(path), plan, a.fmu_dir, workers=a.workers, scheduler=a.scheduler,
                           journal=out / "points.jsonl", key=sweep_key(path, models), restart=a.restart)

@@ -97,6 +97,11 @@ class Models:
         p = Path(plant) if plant else find_fmu(PLANT_FMUS[plant_model], fmu_dir, fmi)
         return cls(FMUInfo.load(c), FMUInfo.load(p))
 
+    @classmethod
+    def for_scenario(cls, scenario, fmu_dir=None, fmi: int = 2) -> "Models":
+        """The FMUs a scenario names (its plant_model and controller_model)."""
+        return cls.load(fmu_dir, plant_model=scenario.plant_model, controller_model=scenario.controller_model, fmi=fmi)
+
 
 def check_overrides(models: Models, controller: dict, plant: dict, origin: str = "") -> None:
     models.controller.check_overrides(controller, origin and f"{origin} [controller]")
@@ -219,8 +224,7 @@ class ClosedLoop:
                  log_categories: list[str] | None = None, engine: str = "fmpy", check_load: bool = True):
         if engine not in ENGINES:
             raise InputError(f"engine {engine!r}: one of {', '.join(ENGINES)}")
-        models = models or Models.load(fmu_dir, plant_model=scenario.plant_model,
-                                       controller_model=scenario.controller_model)
+        models = models or Models.for_scenario(scenario, fmu_dir)
         if engine == "native" and 3 in (models.controller.fmi_version, models.plant.fmi_version):
             raise ScenarioError(f"{scenario.path or scenario.name}: the native engine runs FMI 2.0 FMUs only; "
                                 "run the FMI 3.0 twins with the FMPy engine (--engine fmpy)")

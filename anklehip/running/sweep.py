@@ -62,10 +62,10 @@ def parse_variant(spec: str) -> Variant:
 
 
 @functools.lru_cache(maxsize=4)
-def cached_models(fmu_dir: str | None, plant_model: str):
+def cached_models(fmu_dir: str | None, plant_model: str, controller_model: str = "sagittal"):
     """The FMUs, loaded (unpacked) once per worker process and reused by its runs."""
     from .master import Models
-    return Models.load(fmu_dir, plant_model=plant_model)
+    return Models.load(fmu_dir, plant_model=plant_model, controller_model=controller_model)
 
 
 def _one(scenario_path: str, fmu_dir: str | None, peak: float, variant: Variant, engine: str = "fmpy") -> dict[str, Any]:
@@ -77,7 +77,7 @@ def _one(scenario_path: str, fmu_dir: str | None, peak: float, variant: Variant,
     base = sc.push.peak()
     if base == 0:
         raise ValueError(f"{scenario_path}: the scenario has no push to scale")
-    res = simulate(sc, cached_models(fmu_dir, sc.plant_model), controller_overrides=variant.controller,
+    res = simulate(sc, cached_models(fmu_dir, sc.plant_model, sc.controller_model), controller_overrides=variant.controller,
                    plant_overrides=variant.plant, push=sc.push.scaled(peak / base), progress=False, engine=engine, check_load=False)
     d = res.data
     return {"variant": variant.name, "peak_force": peak, "outcome": res.outcome,
@@ -296,7 +296,7 @@ def _force_sweep(scenario, forces, variants, fmu_dir, name):
     if not forces or not all(np.isfinite(forces)):
         raise InputError(f"{name['forces']}: finite numbers, got {forces!r}")
     variants = [v if isinstance(v, Variant) else parse_variant(v) for v in (variants or ["default"])]
-    models = Models.load(fmu_dir, plant_model=sc.plant_model)
+    models = Models.for_scenario(sc, fmu_dir)
     for v in variants:    # a bad variant is an error here, not a traceback in every worker
         models.controller.configuration(v.config or sc.controller_config, f"{name['variants']} {v.name}")
         check_overrides(models, v.controller, v.plant, f"{name['variants']} {v.name}")
@@ -314,7 +314,7 @@ def _sweep_file(name_or_path, fmu_dir):
     path = find_sweep_file(str(name_or_path))
     sf = load_sweep_file(path)
     sc = load_scenario(sf.scenario)
-    models = Models.load(fmu_dir, plant_model=sc.plant_model)
+    models = Models.for_scenario(sc, fmu_dir)
     where = str(path)
     for k, vals in list(sf.axes.items()) + [(k, list(r)) for k, r in sf.ranges.items()]:
         group, _, name = k.partition(".")

@@ -286,7 +286,7 @@ def sweepfile_point(spec: dict) -> dict[str, Any]:
     faults = faults_from(f, sc.faults, f"{sf.path}: faults") if f else sc.faults
     engine = spec["engine"] if not (faults.sensor_active or faults.transition_push) else "fmpy"
     stop = sf.stop_time or sc.stop_time
-    res = simulate(sc, cached_models(spec["fmu_dir"], sc.plant_model), controller_overrides={**var["controller"], **c},
+    res = simulate(sc, cached_models(spec["fmu_dir"], sc.plant_model, sc.controller_model), controller_overrides={**var["controller"], **c},
                    plant_overrides={**var["plant"], **p}, push=pt.push, faults=faults, stop_time=stop,
                    progress=False, engine=engine, check_load=False)
     d = res.data

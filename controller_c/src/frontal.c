@@ -136,7 +136,7 @@ static const ahc_param_info k_ftable[] = {
     FD(return_psi_rate_tol, "rad/s", 1e-6, 10.0, "... and |psi reference rate| below this"),
     FD(zmp_filter_tau_y, "s", 0.0, 10.0, "Time constant of the zmp_y low-pass filter (0 = off)"),
     FD(zmp_fault_margin_y, "m", 0.0, 1.0, "zmp_y beyond the soles' outer edges by more than this is a sensor fault"),
-    FI(lean_enabled_y, 0.0, 1.0, "Frontal sustained-push lean: 1 the CoM reference of phases 1-3 leans against the low-passed lateral disturbance"),
+    FI(lean_enabled_y, 0.0, 1.0, "Frontal sustained-push lean: 1 the CoM reference leans against the low-passed lateral disturbance, in every phase"),
     FD(lean_tau_y, "s", 0.01, 100.0, "Time constant of the lateral disturbance low-pass the lean follows"),
     FD(lean_margin_y, "m", 0.0, 1.0, "The leaned CoM reference stays this far inside the soles' outer edges"),
     FD(fz_rocking_y, "N", 0.0, 1e4, "A sole with less normal load than this counts as lifted: the lateral lean holds"),
