@@ -38,8 +38,10 @@ CONFIGURATIONS = [
     ("Ka_y 19 (Ca_y 4.75, the sagittal gains')", "3d", {"Ka_y": 19.0, "Ca_y": 4.75}),
     ("Ka_y 160 (Ca_y 13.7)", "3d", {"Ka_y": 160.0, "Ca_y": 13.7}),
     ("Ka_y 400 (Ca_y 21.6)", "3d", {"Ka_y": 400.0, "Ca_y": 21.6}),
-    ("lean_tau_y 0.15 s", "3d", {"lean_tau_y": 0.15}),
-    ("lean_tau_y 0.3 s (the sagittal lean's)", "3d", {"lean_tau_y": 0.3}),
+    ("lean_tau_y 0.05 s", "3d", {"lean_tau_y": 0.05}),
+    ("lean_tau_y 0.2 s", "3d", {"lean_tau_y": 0.2}),
+    ("lean_margin_y 0 (the lean up to the edges)", "3d", {"lean_margin_y": 0.0}),
+    ("lean_margin_y 5 mm", "3d", {"lean_margin_y": 0.005}),
     ("lean_margin_y 15 mm (the sagittal lean's)", "3d", {"lean_margin_y": 0.015}),
     ("fz_rocking_y 0 (the lean never holds)", "3d", {"fz_rocking_y": 0.0}),
 ]
