@@ -11,7 +11,6 @@
 #include <string>
 
 #include "ahc/controller.h"
-#include "ahc/frontal.h"
 #include "fmuglue/glue.hpp"
 
 namespace ahcfmu {
@@ -90,18 +89,15 @@ inline std::string differingRows(const ahc_param_info* table, size_t count, cons
   return s;
 }
 
-// resources/configurations.toml: every named configuration of the C library (ahc_params_named,
-// and with `frontal` ahc_frontal_params_named too) with the parameter values that differ from the
-// defaults, for importers that select a configuration by name (anklehip: `controller_config =
-// "paper"`). Generated, never edited.
-inline std::string configurationsToml(const char* model, bool frontal = false) {
+// resources/configurations.toml: every named configuration of the C library (ahc_params_named)
+// with the parameter values that differ from the defaults, for importers that select a
+// configuration by name (anklehip: `controller_config = "paper"`); `more_rows`, when given, adds an
+// FMU's own rows per configuration name (the 3D controller's frontal ones). Generated, never edited.
+inline std::string configurationsToml(const char* model, std::string (*more_rows)(const char* config) = nullptr) {
   ahc_params def;
   ahc_params_default(&def);
-  ahc_frontal_params fdef;
-  ahc_frontal_params_default(&fdef);
-  size_t count = 0, fcount = 0;
+  size_t count = 0;
   const ahc_param_info* table = ahc_param_table(&count);
-  const ahc_param_info* ftable = ahc_frontal_param_table(&fcount);
   std::string s =
       std::string("# Named configurations of ") + model + ": parameter values that differ from the defaults.\n"
       "# Generated from controller_c (ahc_params_named); see documentation/ and docs/controller.md.\n";
@@ -110,11 +106,7 @@ inline std::string configurationsToml(const char* model, bool frontal = false) {
     ahc_params_named(&p, ahc_config_name(c));
     s += std::string("\n[") + ahc_config_name(c) + "]\ndescription = \"" + ahc_config_description(c) + "\"\n";
     s += differingRows(table, count, &p, &def);
-    if (frontal) {
-      ahc_frontal_params f;
-      ahc_frontal_params_named(&f, ahc_config_name(c));
-      s += differingRows(ftable, fcount, &f, &fdef);
-    }
+    if (more_rows) s += more_rows(ahc_config_name(c));
   }
   return s;
 }
