@@ -68,7 +68,7 @@ void ahc_frontal_params_default(ahc_frontal_params *f)
     f->zmp_filter_tau_y = 0.0;
     f->zmp_fault_margin_y = 0.02;
     f->lean_enabled_y = 1;
-    f->lean_tau_y = 0.1;
+    f->lean_tau_y = 0.2;
     f->lean_margin_y = 0.01;
     f->fz_rocking_y = 3.0;
 }
