@@ -118,14 +118,21 @@ def _data_top(ax, default: float) -> float:
     return min(hi, max(tops) + 0.03 * (hi - lo))
 
 
+def _phase_axes(d: np.ndarray, t: np.ndarray, n: int, figsize, height_ratios, phase: str = "phase"):
+    """n stacked axes sharing time, the phases of the column `phase` shaded on each (one phase
+    legend below the panels)."""
+    fig, ax = plt.subplots(n, 1, figsize=figsize, sharex=True, gridspec_kw={"height_ratios": height_ratios})
+    for i, x in enumerate(ax):
+        if _has(d, phase):
+            shade_phases(x, t, d[phase], legend=i == 0)
+        x.grid(alpha=0.3)
+    return fig, ax
+
+
 def _phase_axes_with_angles(d: np.ndarray, t: np.ndarray, figsize, height_ratios):
     """Four stacked axes sharing time, the phases shaded on each (one phase legend below the
     panels), the joint angles in the first."""
-    fig, ax = plt.subplots(4, 1, figsize=figsize, sharex=True, gridspec_kw={"height_ratios": height_ratios})
-    for i, x in enumerate(ax):
-        if _has(d, "phase"):
-            shade_phases(x, t, d["phase"], legend=i == 0)
-        x.grid(alpha=0.3)
+    fig, ax = _phase_axes(d, t, 4, figsize, height_ratios)
     ax[0].plot(t, np.degrees(d["theta_ankle"]), color="tab:blue", label="ankle θ1")
     ax[0].plot(t, np.degrees(d["theta_hip"]), color="tab:red", label="hip θ2")
     return fig, ax
@@ -166,17 +173,19 @@ def fig4(d: np.ndarray, out: Path, title: str = "") -> Path:
     return _save(fig4_figure(d, title), out)
 
 
-def first_cycle_window(d: np.ndarray, pad_before: float = 0.5, pad_after: float = 1.5) -> tuple[float, float]:
-    """From just before the first push until the controller is back in phase 0 (plus a margin)."""
+def first_cycle_window(d: np.ndarray, pad_before: float = 0.5, pad_after: float = 1.5,
+                       force: str = "push_force", phase: str = "phase") -> tuple[float, float]:
+    """From just before the first push (column `force`) until the controller is back in phase 0
+    (column `phase`; 2 s after the push when it never left it), plus a margin."""
     t = d["time"]
-    f = d["push_force"] if _has(d, "push_force") else np.zeros(len(t))
+    f = d[force] if _has(d, force) else np.zeros(len(t))
     nz = np.flatnonzero(f != 0)
     if not len(nz):
         return float(t[0]), float(t[-1])
     a = float(t[nz[0]])
     end = None
-    if _has(d, "phase"):
-        ph = d["phase"]
+    if _has(d, phase):
+        ph = d[phase]
         left = np.flatnonzero((ph != 0) & (t >= a))
         if len(left):
             back = np.flatnonzero((ph == 0) & (t > t[left[0]]))
