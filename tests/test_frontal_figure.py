@@ -133,3 +133,55 @@ def test_no_edges_without_the_stance_numbers_and_no_shading_in_phase_0():
         assert (t[0], t[-1]) == pytest.approx((0.51, 5.5), abs=1e-9)
     finally:
         plots.plt.close(fig)
+
+
+# ----------------------------------------------------------------------------------------------
+# the animation's rear view: each leg from its own joint angles
+
+def _rear_row(**q):
+    names = ["time", "foot_roll", "zmp_y", "com_y", "imu_roll"] + [f"q_{s}_{j}" for s in ("left", "right")
+                                                                      for j in plots.LEG_JOINTS]
+    d = np.zeros(1, [(n, float) for n in names])
+    for k, v in q.items():
+        d[k] = v
+    return d
+
+
+def test_rear_view_draws_the_parallelogram_of_the_lateral_ankle_strategy():
+    """Ankle roll φ and hip roll −φ on both legs (docs/controller.md §11.1): both hips move by
+    l1 sin φ toward +y at the same height (the pelvis level), the legs straight."""
+    g = plots.Geometry()
+    phi = 0.1
+    p = plots._frontal_pose(_rear_row(q_left_ankle_roll=phi, q_right_ankle_roll=phi, q_left_hip_roll=-phi,
+                                      q_right_hip_roll=-phi), 0, g, 0.0)
+    for side, ya in (("left", g.hip_half_width), ("right", -g.hip_half_width)):
+        _, _, ank, hip, knee = p[side]
+        assert ank == pytest.approx((ya, g.ankle_height))
+        assert hip == pytest.approx((ya + g.l1 * np.sin(phi), g.ankle_height + g.l1 * np.cos(phi)))
+        assert knee == pytest.approx((ya + g.l1 / 2 * np.sin(phi), g.ankle_height + g.l1 / 2 * np.cos(phi)))
+    _, _, R = plots.leg_chain({"ankle_roll": phi, "hip_roll": -phi}, 0.0, 0.1, 0.1)
+    assert np.allclose(R, np.eye(3))
+
+
+def test_rear_view_draws_the_pelvis_tilt_of_the_lateral_hip_strategy():
+    """The left knee flexed by κ with its ankle and hip pitch κ/2 (the trunk upright): the left hip
+    drops to l1 cos(κ/2) and the knee shows; the pelvis between the hips tilts down to the left."""
+    g = plots.Geometry()
+    kappa = 0.6
+    p = plots._frontal_pose(_rear_row(q_left_knee=kappa, q_left_ankle=kappa / 2, q_left_hip=kappa / 2), 0, g, 0.0)
+    _, _, ank, hip, knee = p["left"]
+    assert hip == pytest.approx((g.hip_half_width, g.ankle_height + g.l1 * np.cos(kappa / 2)))
+    assert p["right"][3] == pytest.approx((-g.hip_half_width, g.ankle_height + g.l1))
+    _, _, R = plots.leg_chain({"knee": kappa, "ankle": kappa / 2, "hip": kappa / 2}, 0.0, 0.1, 0.1)
+    assert np.allclose(R, np.eye(3))
+
+
+def test_gif_of_a_3d_controller_run(tmp_path):
+    """animate() draws the rear view of a result with the 3D plant's columns and per-leg angles."""
+    from PIL import Image
+    d = frontal_synthetic(t_end=1.0)
+    from numpy.lib import recfunctions as rf
+    d = rf.append_fields(d, ["foot_roll", "imu_roll"], [np.zeros(len(d)), np.zeros(len(d))], usemask=False)
+    out = plots.animate(d, tmp_path / "f.gif", fps=5, progress=False)
+    with Image.open(out) as im:
+        assert im.n_frames == 6 and im.size == (640, 400)     # two views: side and rear
