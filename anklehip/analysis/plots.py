@@ -612,6 +612,8 @@ def animate(d: np.ndarray, out: Path, geom: Geometry | None = None, fps: float =
         arrow.set_visible(abs(f) > 1e-9)
         ph = int(d["phase"][k]) if "phase" in names else -1
         extra = f"\npush y {float(d['push_force_y'][k]):+4.1f} N" if frontal and "push_force_y" in names else ""
+        if "phase_y" in names:          # the 3D controller's lateral phase
+            extra += f"\nlateral {PHASE_LABELS.get(int(d['phase_y'][k]), '?')}"
         txt.set_text(f"t = {t[k]:6.2f} s\nphase {PHASE_LABELS.get(ph, '?')}\npush {f:+6.1f} N{extra}")
         if frontal:
             update_frontal(k)
