@@ -67,7 +67,7 @@ def frontal_cycle_figure(d: np.ndarray, window: tuple[float, float] | None = Non
     t = d["time"]
     names = d.dtype.names
     fig, ax = _phase_axes(d, t, 5, (9, 11), [2.2, 2.2, 3, 1.6, 1.2], phase="phase_y")
-    # 1: the frontal references (and F23's weight k_w, which blends the lateral hip strategy in)
+    # 1: the frontal references (F11, F16 and the transitions F23-F25)
     ax[0].plot(t, np.degrees(d["phi_ref"]), color="tab:blue", label="φ ref (pivot leg's lean)")
     ax[0].plot(t, np.degrees(d["psi_ref"]), color="tab:red", label="ψ ref (link 2's lean)")
     ax[0].set_ylabel("frontal ref [deg]")
