@@ -185,3 +185,28 @@ def test_gif_of_a_3d_controller_run(tmp_path):
     out = plots.animate(d, tmp_path / "f.gif", fps=5, progress=False)
     with Image.open(out) as im:
         assert im.n_frames == 6 and im.size == (640, 400)     # two views: side and rear
+
+
+# ----------------------------------------------------------------------------------------------
+# a run of the 3D controller (FMUs)
+
+def test_run_and_plot_of_a_3d_controller_result(tmp_path):
+    """`anklehip run side_push_frontal --plots` writes the frontal Fig. 5 with the outer sole edges
+    of the 3D plant's robot header, and `anklehip plot` of its CSV redraws it byte for byte (the
+    same numbers from the plant FMU); a sagittal controller's 3D run gets none."""
+    from anklehip.cli import main
+    from anklehip.running.run import run
+    out = tmp_path / "o"
+    assert main(["run", "side_push_frontal", "--out", str(out), "--plots", "--no-progress"]) == 0
+    png = out / "side_push_frontal_fig5_frontal.png"
+    assert png.stat().st_size > 10000
+    again = tmp_path / "p"
+    assert main(["plot", str(out / "side_push_frontal.csv"), "--out", str(again), "--no-progress"]) == 0
+    assert (again / png.name).read_bytes() == png.read_bytes()
+    from anklehip import figures
+    r = run("side_push_frontal")
+    fig = figures.frontal_cycle(r)
+    edges = sorted(float(ln.get_ydata()[0]) for ln in fig.axes[2].get_lines() if ln.get_linestyle() == ":")
+    assert edges == pytest.approx([-1000 * _edge(), 1000 * _edge()], abs=1e-9)
+    assert main(["run", "side_push_3d", "--out", str(tmp_path / "s"), "--plots", "--no-progress"]) == 0
+    assert not (tmp_path / "s" / "side_push_3d_fig5_frontal.png").exists()
