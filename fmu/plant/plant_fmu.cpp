@@ -52,6 +52,8 @@ struct RealParam {
 
 // The relative tolerances the integrators are used with (the parameter rtol, or the importer's).
 constexpr double kMinRtol = 1e-14, kMaxRtol = 1e-2;
+// The smallest servo velocity gain other than 0 (the 3D plant's minimum).
+constexpr double kMinServoKd = 1e-6;
 
 const RealParam kParams[] = {
     {"g", &Params::g, "m/s2", "Gravitational acceleration", 0.0, 100.0},
@@ -186,6 +188,11 @@ bool paramsFromStore(const Context& ctx, Params& p, std::string& why) {
   if (!(p.rtol >= kMinRtol && p.rtol <= kMaxRtol)) {
     std::snprintf(buf, sizeof buf, "relative tolerance %g (%s) is outside [%g, %g]", p.rtol,
                   rtol_is_parameter ? "parameter rtol" : "fmi2SetupExperiment's tolerance", kMinRtol, kMaxRtol);
+  } else if ((p.kd_ankle > 0.0 && p.kd_ankle < kMinServoKd) || (p.kd_hip > 0.0 && p.kd_hip < kMinServoKd)) {
+    // the servo's position loop commands kp / kd times the error as a rate: a denormal kd made it
+    // infinite and the right-hand side NaN (found by forging states within the ranges)
+    std::snprintf(buf, sizeof buf, "kd_ankle = %g, kd_hip = %g N.m.s/rad: a servo velocity gain is 0 (no velocity "
+                  "loop) or at least %g", p.kd_ankle, p.kd_hip, kMinServoKd);
   } else if (!(p.toe_x > p.heel_x)) {
     std::snprintf(buf, sizeof buf, "toe_x (%g) must be > heel_x (%g)", p.toe_x, p.heel_x);
   } else if (p.h_push <= p.ankle_height + p.l1) {
