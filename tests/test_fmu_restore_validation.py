@@ -19,7 +19,11 @@ the checksum catches accidents, not forgeries. What this establishes, through th
   and from a run started at t0 = 5 s with non-multiple steps are all accepted, and continue bit
   for bit;
 - the checksum is FNV-1a-64 with its published offset basis 14695981039346656037 (the state format
-  is version 3; versions 1-2 used 1469598103934665603, one digit short).
+  is version 3; versions 1-2 used 1469598103934665603, one digit short);
+- the sagittal plant refuses snapshots a simulation cannot have, each of which made the next step
+  fail with fmi2Error before (a negative or denormal ERK step, a speed of 1e300 or 1e5 rad/s), a
+  state whose time is past its stop time, and a servo velocity gain of 5e-324 (kp / kd overflowed
+  and the right-hand side was NaN): found by 18 000 re-signed random forgeries.
 """
 from __future__ import annotations
 
@@ -239,3 +243,52 @@ def test_checksum_is_fnv1a64(raw_controller):
     inst.free()
     assert int.from_bytes(data[8:12], "little") == 3  # format version 3: this checksum
     assert int.from_bytes(data[-8:], "little") == _fnv1a64(data[:-8])
+
+
+# ---------------------------------------------------------------------------------------------
+# The sagittal plant: forgeries within the variables' ranges that made the next step fail (found
+# by re-signed random forgeries while fixing the above; each refused now, with its reason)
+
+@pytest.fixture(scope="module")
+def raw_plant(plant_unzipped):
+    from conftest import RawModel
+    return RawModel(plant_unzipped)
+
+
+def _plant_blob(raw):
+    inst = _running(raw)
+    for k in range(30):
+        assert inst.fmi2DoStep(k * 1e-3, 1e-3, 0) == fmi2OK
+    blob = Blob(raw, _snapshot_bytes(inst))
+    inst.free()
+    return blob
+
+
+# the plant snapshot's fields after the presence flag (visit_fields): t, y[10], impulse[3], mode,
+# fallen, pivot[2], t_fall, inputs[3], rng, h_next
+_T, _Y, _H_NEXT = 4, 12, 180
+
+
+@pytest.mark.parametrize("field, value", [("h_next", -1e-3), ("h_next", 5e-324), ("y", 1e300), ("y9", 1e5)])
+def test_plant_snapshot_a_simulation_cannot_have_is_refused(raw_plant, field, value):
+    blob = _plant_blob(raw_plant)
+    assert blob.f64(blob.model + _T) == pytest.approx(0.03)
+    pos = {"h_next": _H_NEXT, "y": _Y + 8 * 7, "y9": _Y + 8 * 9}[field]
+    blob.set_f64(blob.model + pos, value)
+    _refused(raw_plant, blob, "invalid plant snapshot")
+
+
+def test_state_past_its_stop_time_is_refused(raw_plant):
+    blob = _plant_blob(raw_plant)
+    struct.pack_into("<I", blob.b, blob.payload + 28, 1)  # stopTimeDefined, with stopTime 0 < time 0.03
+    _refused(raw_plant, blob, "experiment set-up or time")
+
+
+def test_plant_servo_gain_below_its_least_is_refused_at_initialization(raw_plant):
+    inst = raw_plant.instance()
+    inst.set_real({"kd_ankle": 5e-324})
+    assert inst.fmi2SetupExperiment(0, 0.0, 0.0, 0, 0.0) == fmi2OK
+    assert inst.fmi2EnterInitializationMode() == fmi2OK
+    assert inst.fmi2ExitInitializationMode() == fmi2Error
+    assert any("kd_ankle = 4.94066e-324" in m and "at least 1e-06" in m for m in inst.errors()), inst.log
+    inst.free()
