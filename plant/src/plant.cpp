@@ -205,6 +205,13 @@ int Plant::solver_advance(double tout, double& tret) {
     if (flag == CV_ROOT_RETURN) return 1;
   } else {
     ERKStepSetStopTime(solver_, tout);
+    if (max_steps_per_call > 0) {  // what is left of this communication step's budget
+      long int n = 0;
+      ERKStepGetNumSteps(solver_, &n);
+      const long int left = max_steps_per_call - (n - call_steps0_);
+      if (left < 1) return ARK_TOO_MUCH_WORK;
+      ERKStepSetMaxNumSteps(solver_, left);
+    }
     flag = ERKStepEvolve(solver_, tout, y, &tret, ARK_NORMAL);
     ERKStepGetCurrentStep(solver_, &h_next_);
     if (flag == ARK_ROOT_RETURN) return 1;
@@ -340,9 +347,9 @@ bool Plant::ensure_solver() {
       ERKStepSetUserData(solver_, this);
       ERKStepRootInit(solver_, kNumRoots, solver_roots);
       ERKStepSetNoInactiveRootWarn(solver_);
-      // No step-count limit: at rest the explicit method takes stability-limited steps (about
-      // 3 / 423 s with the default servos), so a long communication step needs many; the work per
-      // call stays bounded by the step's length.
+      // No step-count limit per ERKStepEvolve call: at rest the explicit method takes
+      // stability-limited steps (about 3 / 423 s with the default servos), so a long communication
+      // step needs many; the whole communication step's count is bounded by max_steps_per_call.
       ERKStepSetMaxNumSteps(solver_, -1);
     }
   }
@@ -498,6 +505,7 @@ Plant::Result Plant::do_step(double h) {
   step_started_ = true;
   if (restart_) resolve_mode("inputs changed");
   if (restart_ && !solver_restart()) return msg_ = "integrator restart failed", Result::Error;
+  if (model_.P.integrator == Integrator::Erk) ERKStepGetNumSteps(solver_, &call_steps0_);
   N_Vector y = static_cast<N_Vector>(nv_);
   int guard = 0;
   while (true) {
@@ -505,9 +513,16 @@ Plant::Result Plant::do_step(double h) {
     const int flag = solver_advance(tout, tret);
     if (flag < 0) {
       accumulate_stats();
-      char buf[120];
-      std::snprintf(buf, sizeof buf, "%s failed with flag %d at t=%.9f",
-                    model_.P.integrator == Integrator::Bdf ? "CVode" : "ERKStepEvolve", flag, tret);
+      char buf[400];
+      if (model_.P.integrator == Integrator::Erk && flag == ARK_TOO_MUCH_WORK && max_steps_per_call > 0)
+        std::snprintf(buf, sizeof buf,
+                      "the explicit integrator took %ld steps in the communication step from t=%.9f to %.9f without "
+                      "reaching its end, the most one step may take: the equations are stiff for it (servo gains "
+                      "far above the HOAP-2's?); use the BDF integrator or shorter communication steps",
+                      max_steps_per_call, step_t0_, tout);
+      else
+        std::snprintf(buf, sizeof buf, "%s failed with flag %d at t=%.9f",
+                      model_.P.integrator == Integrator::Bdf ? "CVode" : "ERKStepEvolve", flag, tret);
       msg_ = buf;
       return Result::Error;
     }

@@ -125,6 +125,9 @@ class Plant {
   std::function<void(const std::string&)> logger;  // events (mode switches, falls)
   std::vector<ModeEvent> history;  // diagnostics (the first history_limit switches), not in the snapshot
   std::size_t history_limit = 100000;
+  // The explicit integrator's steps one do_step may take (0: no limit); beyond, the step fails with
+  // the reason (stiff equations). Not in the snapshot: a setting of the owner (the FMU: 1e6).
+  long max_steps_per_call = 0;
 
   // integrator callbacks
   int rhs(double t, const double* y, double* ydot);
@@ -170,6 +173,7 @@ class Plant {
   bool event_ = false;  // a mode switch or impact since the last restart (plant.cpp, solver_restart)
   long int solver_steps_counted_ = 0;  // the integrator's step count already in stats_.steps
   double h_next_ = 0;  // ERK: the step size its controller proposed last (0: estimate one)
+  long int call_steps0_ = 0;  // ERK's step count when the current do_step began
   // SUNDIALS
   void* sunctx_ = nullptr;
   void* solver_ = nullptr;  // CVODE (Integrator::Bdf) or ARKODE ERKStep (Integrator::Erk) memory
