@@ -67,7 +67,9 @@ const char* mode_name(ContactMode m) {
 
 Plant::Plant(const Params& p) : model_(p) {}
 
-Plant::~Plant() {
+Plant::~Plant() { free_solver(); }
+
+void Plant::free_solver() {
   if (solver_ && model_.P.integrator == Integrator::Bdf) CVodeFree(&solver_);
   if (solver_ && model_.P.integrator == Integrator::Erk) ERKStepFree(&solver_);
   if (ls_) SUNLinSolFree(static_cast<SUNLinearSolver>(ls_));
@@ -78,6 +80,8 @@ Plant::~Plant() {
     SUNContext ctx = static_cast<SUNContext>(sunctx_);
     SUNContext_Free(&ctx);
   }
+  solver_ = ls_ = mat_ = nv_ = atol_ = sunctx_ = nullptr;
+  solver_steps_counted_ = 0;
 }
 
 Vec5 Plant::q() const { return Eigen::Map<const Vec5>(y_); }
@@ -503,6 +507,14 @@ Plant::Result Plant::do_step(double h) {
   step_t0_ = t_;
   std::memcpy(step_impulse0_, impulse_, sizeof impulse_);
   step_started_ = true;
+  if (fresh_solver_) {
+    // after a snapshot: the integrator a restored copy has, built anew (a reset one keeps its step
+    // count, which sets how far its first step may grow: ARKODE's etamx1 vs growth)
+    accumulate_stats();
+    free_solver();
+    if (!ensure_solver()) return Result::Error;
+    fresh_solver_ = false;
+  }
   if (restart_) resolve_mode("inputs changed");
   if (restart_ && !solver_restart()) return msg_ = "integrator restart failed", Result::Error;
   if (model_.P.integrator == Integrator::Erk) ERKStepGetNumSteps(solver_, &call_steps0_);
@@ -619,7 +631,8 @@ void Plant::evaluate_outputs() {
 }
 
 Snapshot Plant::snapshot() const {
-  restart_ = true;  // the original restarts at its next step exactly as a restored copy will
+  // the original restarts at its next step exactly as a restored copy will: with a new integrator
+  restart_ = fresh_solver_ = true;
   Snapshot s;
   s.t = t_;
   std::memcpy(s.y, y_, sizeof y_);

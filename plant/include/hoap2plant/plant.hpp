@@ -143,6 +143,7 @@ class Plant {
   bool solver_restart();
   int solver_advance(double tout, double& tret);
   bool ensure_solver();
+  void free_solver();
   void accumulate_stats();
   void log(const std::string& s) {
     if (logger) logger(s);
@@ -170,6 +171,10 @@ class Plant {
   // Restart the integrator at the next step: the RHS jumped or the state changed from outside. Mutable:
   // taking a snapshot marks a restart point (const snapshot(), bit-for-bit restores).
   mutable bool restart_ = true;
+  // Build the integrator anew at the next step (after a snapshot, as a restored copy does): one that
+  // is only reset keeps state the snapshot does not carry (its step count, which bounds how far
+  // its first step may grow), and the copies parted by 1e-11 rad.
+  mutable bool fresh_solver_ = false;
   bool event_ = false;  // a mode switch or impact since the last restart (plant.cpp, solver_restart)
   long int solver_steps_counted_ = 0;  // the integrator's step count already in stats_.steps
   double h_next_ = 0;  // ERK: the step size its controller proposed last (0: estimate one)
