@@ -248,27 +248,46 @@ class PreparedRun:
 
     def _write(self, out: Path, figures: bool, animate: bool, animation, record_steptest, compare_reference: bool,
                progress) -> ScenarioResult:
-        from ..files.output import atomic_write_csv, clear_previous, result_paths, write_summary_json
+        """Run, then write the files into a hidden staging folder and publish them together
+        (anklehip.files.output.publish): an earlier run's files are replaced only by a whole new set,
+        its summary last. An interruption while the figures are drawn keeps the run (its data and
+        summary are published without the missing figures, with a warning) and is raised again."""
+        from ..files.output import atomic_write_csv, publish, remove_stale_temporaries, result_paths, staging, \
+            write_summary_json
         sc = self.scenario
+        remove_stale_temporaries(out, sc.name)     # what a killed run left hidden (we hold the lock)
         paths = result_paths(out, sc.name)
         res = self.loop.run(progress)
         csv = paths["csv"] if res.complete else paths["incomplete_csv"]
-        atomic_write_csv(csv, res.data)
-        # only now that this run's data are in place: the previous run's files go (its complete CSV
-        # must not sit next to this run's incomplete one), the new summary is written last
-        clear_previous(out, sc.name, keep=(csv,))
-        result = self._result(res, compare_reference, out)
-        result.files = {"csv": csv, "summary": paths["summary"], **result.files}
-        # figures and the step-test case must not lose the summary of a run that has been computed
-        if figures or animate:
-            try:
-                for p in make_figures(sc.name, res.data, out, res, animate=animate, anim_args=dict(animation or {}),
-                                      figures=figures, progress=progress):
+        interrupted: BaseException | None = None
+        with staging(out, sc.name) as stage:
+            atomic_write_csv(stage / csv.name, res.data)
+            result = self._result(res, compare_reference, stage)
+            staged = [stage / csv.name] + [Path(p) for p in result.files.values()]
+            # figures and the step-test case must not lose the summary of a run that has been computed
+            if figures or animate:
+                drawn: list[Path] = []
+                try:
+                    make_figures(sc.name, res.data, stage, res, animate=animate, anim_args=dict(animation or {}),
+                                 figures=figures, progress=progress, files=drawn)
+                except KeyboardInterrupt as e:
+                    interrupted = e
+                    result.warnings.append("figures interrupted: the data and the summary are written without "
+                                           "the figures not yet drawn")
+                except Exception as e:
+                    result.warnings.append(f"figures failed: {type(e).__name__}: {e}")
+                for p in drawn:
                     result.files[p.stem] = p
-            except Exception as e:
-                result.warnings.append(f"figures failed: {type(e).__name__}: {e}")
-        self._record(result, res, record_steptest)
-        write_summary_json(paths["summary"], result.summary())
+                staged += drawn
+            self._record(result, res, record_steptest)
+            # the files as they will be named once published
+            result.files = {"csv": csv, "summary": paths["summary"],
+                            **{k: (out / Path(v).name if Path(v).parent == stage else Path(v))
+                               for k, v in result.files.items()}}
+            write_summary_json(stage / paths["summary"].name, result.summary())
+            publish(out, sc.name, staged, stage / paths["summary"].name)
+        if interrupted is not None:
+            raise interrupted
         return result
 
     def _record(self, result: ScenarioResult, res: RunResult, folder) -> None:
@@ -401,11 +420,12 @@ def zmp_limits(params: dict[str, Any]) -> tuple[float, ...] | None:
 
 def make_figures(sc_name: str, data: np.ndarray, out: Path, res: RunResult | None = None, animate: bool = False,
                  anim_args: dict | None = None, figures: bool = True, params: dict | None = None,
-                 progress: bool | None = None) -> list[Path]:
+                 progress: bool | None = None, files: list[Path] | None = None) -> list[Path]:
     """The standard figures of a result (and the 3D plant's frontal one), the animation if asked;
     geometry from the run's plant parameters, or `params` for a CSV read back. `progress` as in
     master.simulate: on a terminal a bar of the figures, then one of the GIF's frames, and a line per
-    file written; nothing with False (`--no-progress`) or when stderr is not a terminal."""
+    file written; nothing with False (`--no-progress`) or when stderr is not a terminal. `files`: a
+    list the files are appended to as each is written (what was done when an interruption stops it)."""
     import time
 
     from ..analysis import plots
@@ -420,7 +440,7 @@ def make_figures(sc_name: str, data: np.ndarray, out: Path, res: RunResult | Non
         if plots._has(data, "zmp_y", "com_y", "foot_roll"):   # the 3D plant's results
             jobs.append((f"{sc_name}_frontal.png",
                          lambda p: plots.frontal(data, p, title=f"{sc_name}: frontal plane and feet")))
-    files = []
+    files = [] if files is None else files
     bar = plots.progress_bar(len(jobs), "figures", "fig", progress) if jobs else None
     try:
         for name, draw in jobs:
