@@ -9,6 +9,8 @@ falls, fails or is interrupted returns a result that says so (and, with ``out``,
 """
 from __future__ import annotations
 
+import contextlib
+
 import copy
 import os
 from dataclasses import dataclass, field
@@ -179,6 +181,23 @@ def resolve(scenario: str | os.PathLike | Scenario, *, plant: str | None = None,
 # ----------------------------------------------------------------------------------------------
 # the run
 
+def _as_published(e: OSError, stage: Path, out: Path) -> OSError:
+    """`e` naming the file as it is published in `out` rather than in the staging folder."""
+    if e.filename is not None and Path(e.filename).parent == stage:
+        return OSError(e.errno, e.strerror or str(e), str(out / Path(e.filename).name))
+    return e
+
+
+@contextlib.contextmanager
+def _named_in(stage: Path, out: Path):
+    """OSErrors raised inside name the published file (a full disk: "out/run.csv: No space left on
+    device"), not the staging folder's."""
+    try:
+        yield
+    except OSError as e:
+        raise _as_published(e, stage, out) from e
+
+
 class PreparedRun:
     """A scenario run whose input has been checked and whose FMUs are instantiated and initialized
     (ClosedLoop): nothing can be wrong with the input any more. `run()` runs it once and, with
@@ -252,15 +271,15 @@ class PreparedRun:
         (anklehip.files.output.publish): an earlier run's files are replaced only by a whole new set,
         its summary last. An interruption while the figures are drawn keeps the run (its data and
         summary are published without the missing figures, with a warning) and is raised again."""
-        from ..files.output import atomic_write_csv, publish, remove_stale_temporaries, result_paths, staging, \
-            write_summary_json
+        from ..files.output import atomic_write_csv, os_error_message, publish, remove_stale_temporaries, \
+            result_paths, staging, write_summary_json
         sc = self.scenario
         remove_stale_temporaries(out, sc.name)     # what a killed run left hidden (we hold the lock)
         paths = result_paths(out, sc.name)
         res = self.loop.run(progress)
         csv = paths["csv"] if res.complete else paths["incomplete_csv"]
         interrupted: BaseException | None = None
-        with staging(out, sc.name) as stage:
+        with staging(out, sc.name) as stage, _named_in(stage, out):
             atomic_write_csv(stage / csv.name, res.data)
             result = self._result(res, compare_reference, stage)
             staged = [stage / csv.name] + [Path(p) for p in result.files.values()]
@@ -274,6 +293,8 @@ class PreparedRun:
                     interrupted = e
                     result.warnings.append("figures interrupted: the data and the summary are written without "
                                            "the figures not yet drawn")
+                except OSError as e:
+                    result.warnings.append(f"figures failed: {os_error_message(_as_published(e, stage, out))}")
                 except Exception as e:
                     result.warnings.append(f"figures failed: {type(e).__name__}: {e}")
                 for p in drawn:
@@ -447,7 +468,13 @@ def make_figures(sc_name: str, data: np.ndarray, out: Path, res: RunResult | Non
             if bar is not None:
                 bar.set_postfix_str(name)
             t0 = time.perf_counter()
-            files.append(draw(out / name))
+            try:
+                files.append(draw(out / name))
+            except OSError as e:        # a full disk: name the figure
+                if e.filename is None:
+                    from ..files.output import named
+                    raise named(e, out / name) from e
+                raise
             if bar is not None:
                 bar.update(1)
             plots.say_written(bar, files[-1], time.perf_counter() - t0)
