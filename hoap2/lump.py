@@ -140,6 +140,15 @@ def lump(bodies: list[Body]) -> Lump:
     return Lump(m, c, iyy)
 
 
+def roll_inertia(bodies: list[Body]) -> tuple[float, np.ndarray, float]:
+    """Mass, CoM and roll (x) inertia about the own CoM of a group of bodies (parallel axes in the
+    frontal y-z plane)."""
+    m = sum(b.mass for b in bodies)
+    c = sum(b.mass * b.com for b in bodies) / m
+    ixx = sum(b.inertia[0, 0] + b.mass * ((b.com[1] - c[1]) ** 2 + (b.com[2] - c[2]) ** 2) for b in bodies)
+    return m, c, ixx
+
+
 def pitch_limits(joint: dict) -> tuple[float, float]:
     """A pitch joint's (min, max) as the sagittal angle theta = -q (axis . y) (docs/controller.md
     conventions): for HOAP-2's axes (0 1 0) the proto's hip pitch range -1.431..+1.239 rad is
@@ -178,6 +187,7 @@ def lumped(data: dict | None = None) -> dict:
     ankle_lim, hip_lim = lim["lleg_joint_5"], lim["lleg_joint_3"]
     if ankle_lim != lim["rleg_joint_5"] or hip_lim != lim["rleg_joint_3"]:
         raise ValueError("left and right pitch limits differ in the proto data")
+    frontal = frontal_numbers(bodies)
     return {
         "g": G,
         "m1": l1.mass, "l1": float(hip[2] - ankle[2]), "lg1": float(l1.com[2] - ankle[2]), "I1": l1.Iyy,
@@ -190,7 +200,39 @@ def lumped(data: dict | None = None) -> dict:
         # neglected by the sagittal models (their links carry the CoM on the joint line), reported:
         "link1_com_x": float(l1.com[0] - ankle[0]), "link2_com_x": float(l2.com[0] - hip[0]),
         "total_mass": sum(b.mass for b in bodies.values()),
+        **frontal,
     }
+
+
+def frontal_numbers(bodies: dict[str, Body]) -> dict:
+    """The frontal plane's numbers (docs/controller.md, the frontal plane): where the hips and ankles
+    are across, the leg's segments, each leg's link-1 part and link 2 in roll, and the roll and knee
+    limits. Lateral positions are given outward from the robot's mid-plane (left and right alike;
+    the proto is mirror-symmetric to the digits checked here)."""
+    def anchor(side, part):
+        return np.array(bodies[f"{side}_{part}"].joint["anchor"])
+    out = {}
+    for name, part in (("hip_y", "hip_roll"), ("ankle_y", "foot")):
+        ys = [abs(anchor(s, part)[1]) for s in ("lleg", "rleg")]
+        if abs(ys[0] - ys[1]) > 1e-9:
+            raise ValueError(f"left and right {part} axes are not symmetric: {ys}")
+        out[name] = ys[0]
+    out["thigh"] = float(anchor("lleg", "hip_roll")[2] - anchor("lleg", "knee")[2])
+    out["shank"] = float(anchor("lleg", "knee")[2] - anchor("lleg", "foot")[2])
+    legs = [roll_inertia([b for b in bodies.values() if b.name.startswith(s) and group_of(b.name) == "link1"])
+            for s in ("lleg_", "rleg_")]
+    (ml, cl, il), (mr, cr, ir) = legs
+    out["link1_com_y"] = float(cl[1] - anchor("lleg", "foot")[1])      # the left leg's, outward +
+    out["I1_roll"] = il + ir
+    m2, c2, i2 = roll_inertia([b for b in bodies.values() if group_of(b.name) == "link2"])
+    out["link2_com_y"] = float(c2[1])
+    out["I2_roll"] = i2
+    j = {b.joint["name"]: b.joint for b in bodies.values() if b.joint}
+    out["ankle_roll_max"] = j["lleg_joint_6"]["max"]
+    # the left hip roll turns the thigh about +x: + moves the foot outward (abduction)
+    out["hip_abduction_max"], out["hip_adduction_max"] = j["lleg_joint_2"]["max"], -j["lleg_joint_2"]["min"]
+    out["knee_min"], out["knee_max"] = j["lleg_joint_4"]["min"], j["lleg_joint_4"]["max"]
+    return out
 
 
 # ------------------------------------------------------------------------------------------------
@@ -225,6 +267,21 @@ MACROS = [
     ("LINK2_COM_X", "link2_com_x", "Informational, not used by the sagittal models: CoM of link 2 forward of the hip axis\n"
                                    " * in the proto posture [m]."),
     ("SAMPLE_PERIOD", "sample_period", "Control period of the HOAP-2 [s] (not from the proto)."),
+    # the frontal plane (docs/controller.md, the frontal plane; lateral positions outward from the mid-plane)
+    ("HIP_Y", "hip_y", "Frontal plane: the hip joints (their yaw, roll and pitch axes meet) across from the mid-plane [m]."),
+    ("ANKLE_Y", "ankle_y", "Frontal plane: the ankle joints (pitch and roll axes meet) across from the mid-plane [m];\n"
+                           " * the stance width is twice this, each sole centred under its ankle."),
+    ("THIGH", "thigh", "Hip axes -> knee axis [m] (knee straight)."),
+    ("SHANK", "shank", "Knee axis -> ankle axes [m]; THIGH + SHANK = L1."),
+    ("LINK1_COM_Y", "link1_com_y", "Frontal plane: each leg's link-1 CoM outward of its ankle-hip line [m]."),
+    ("I1_ROLL", "I1_roll", "Roll inertia of link 1 [kg m^2]: each leg's about its own CoM, both legs summed."),
+    ("LINK2_COM_Y", "link2_com_y", "Frontal plane: CoM of link 2 left of the mid-plane [m] (arms hanging)."),
+    ("I2_ROLL", "I2_roll", "Roll inertia of link 2 about its own CoM [kg m^2] (arms hanging)."),
+    ("ANKLE_ROLL_MAX", "ankle_roll_max", "Ankle roll limit [rad], either way (lleg/rleg_joint_6)."),
+    ("HIP_ABDUCTION_MAX", "hip_abduction_max", "Hip roll limit outward (the foot away from the mid-plane) [rad]."),
+    ("HIP_ADDUCTION_MAX", "hip_adduction_max", "Hip roll limit inward [rad]."),
+    ("KNEE_MIN", "knee_min", "Knee lower limit [rad] (+ = flexed; the proto's lleg_joint_4)."),
+    ("KNEE_MAX", "knee_max", "Knee upper limit [rad]."),
 ]
 
 

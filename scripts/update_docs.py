@@ -34,8 +34,9 @@ SETUP_HINT = "run `bash scripts/setup.sh` first (or point ANKLEHIP_BUILD_DIR at 
 
 # Sections that must exist; a doc that lost its markers is an error, not "up to date".
 REQUIRED = {
-    "docs/fmu.md": ["AnkleHipController_gen --markdown"],
+    "docs/fmu.md": ["AnkleHipController_gen --markdown", "AnkleHipController3D_gen --markdown"],
     "docs/plant.md": ["Hoap2Plant_gen --markdown"],
+    "docs/plant3d.md": ["Hoap2Plant3D_gen --markdown --causality input"],
     "docs/python-api.md": ["api_reference.py"],
 }
 

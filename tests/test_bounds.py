@@ -95,6 +95,20 @@ def test_bounds_scale_as_one_over_height():
         assert np.allclose(lip_force_limit(r2, [0.1, 1.0], 0.05, d), lip_force_limit(R, [0.1, 1.0], 0.05, d) / 2)
 
 
+def _rk4(deriv, n: int = 3000, dt: float = 1e-3) -> np.ndarray:
+    """x after n RK4 steps of x'' = deriv(t, x, v)[1] from rest at 0 (x, v: arrays of two runs)."""
+    x, v = np.zeros(2), np.zeros(2)
+    for k in range(n):
+        t = k * dt
+        k1 = deriv(t, x, v)
+        k2 = deriv(t + dt / 2, x + dt / 2 * k1[0], v + dt / 2 * k1[1])
+        k3 = deriv(t + dt / 2, x + dt / 2 * k2[0], v + dt / 2 * k2[1])
+        k4 = deriv(t + dt, x + dt * k3[0], v + dt * k3[1])
+        x = x + dt / 6 * (k1[0] + 2 * k2[0] + 2 * k3[0] + k4[0])
+        v = v + dt / 6 * (k1[1] + 2 * k2[1] + 2 * k3[1] + k4[1])
+    return x
+
+
 @pytest.mark.parametrize("direction", [+1, -1])
 def test_lip_limit_is_the_capture_threshold_of_the_pendulum(direction):
     """Establishes: the closed form is the threshold of the model it is derived from: integrating
@@ -111,14 +125,284 @@ def test_lip_limit_is_the_capture_threshold_of_the_pendulum(direction):
         u = F * float(prof.value(t)) * R.h / (R.m_b * R.g)
         return v, w * w * ((x - p) + mu * (R.x_f - p) + u)
 
-    dt, x, v = 1e-3, np.zeros(2), np.zeros(2)
-    for k in range(3000):                    # RK4 over 3 s
-        t = k * dt
-        k1 = deriv(t, x, v)
-        k2 = deriv(t + dt / 2, x + dt / 2 * k1[0], v + dt / 2 * k1[1])
-        k3 = deriv(t + dt / 2, x + dt / 2 * k2[0], v + dt / 2 * k2[1])
-        k4 = deriv(t + dt, x + dt * k3[0], v + dt * k3[1])
-        x = x + dt / 6 * (k1[0] + 2 * k2[0] + 2 * k3[0] + k4[0])
-        v = v + dt / 6 * (k1[1] + 2 * k2[1] + 2 * k3[1] + k4[1])
+    x = _rk4(deriv)
     assert direction * x[0] < 0        # 1 % below: swung back, the ZMP can come off the edge
     assert direction * x[1] > 0.1      # 1 % above: diverged over the edge
+
+
+# ---------------------------------------------------------------------------------------------
+# every horizontal direction: the robot on both feet (docs/capability.md section 7)
+
+from anklehip.analysis.bounds import (HEADER_NAMES, bounds_parameters, lip_force_limit_3d,  # noqa: E402
+                                      lip_impulse_limit_3d, plant_header, push_direction, stance_from_params,
+                                      static_tipping_force_3d, sustained_push_limit_3d, tipping_edge)
+
+FRONTAL = {k: NOMINAL[m] for k, m in HEADER_NAMES.items() if k not in PARAMS}
+ST = stance_from_params({**PARAMS, **FRONTAL})           # the sagittal model on two feet: x_b = 0
+ST3 = dataclasses.replace(ST, x_b=0.003, y_b=0.0004, y_f=-0.0002)   # CoMs off the centre: the general case
+ANGLES = np.arange(0.0, 360.0, 7.5)
+
+
+def test_on_the_x_axis_the_bounds_are_the_sagittal_ones():
+    """Establishes: pushes at 0 deg (on the back) and 180 deg (on the chest), also written as 360,
+    -180 or 540 deg, give exactly (bit for bit) the sagittal functions' bounds for the robot whose
+    body CoM stands over the ankles, and the direction's components are exact on the axes."""
+    assert [tuple(map(float, push_direction(a))) for a in (0, 90, 180, 270, 360, -90)] == \
+        [(1.0, 0.0), (0.0, 1.0), (-1.0, 0.0), (0.0, -1.0), (1.0, 0.0), (0.0, -1.0)]
+    D = np.array([0.1, 0.2, 0.5, 1.0, 4.0, math.inf])
+    for a, d in ((0, 1), (360, 1), (180, -1), (-180, -1), (540, -1)):
+        assert static_tipping_force_3d(ST, a) == static_tipping_force(R, d)
+        assert sustained_push_limit_3d(ST, a) == sustained_push_limit(R, d)
+        assert lip_impulse_limit_3d(ST, a) == lip_impulse_limit(R, d)
+        assert np.array_equal(lip_force_limit_3d(ST, a, D, 0.05), lip_force_limit(R, D, 0.05, d))
+
+
+def _soles_hull(st):
+    """The support polygon computed independently: scipy's convex hull of the two soles' 8 corners, as
+    half-planes A z + b <= 0."""
+    from scipy.spatial import ConvexHull
+    b, half = st.body, st.sole_width / 2
+    corners = [(x, s * st.ankle_y + e) for s in (-1, 1) for e in (-half, half) for x in (b.x_heel, b.x_toe)]
+    eq = ConvexHull(np.array(corners)).equations
+    return eq[:, :2], eq[:, 2]
+
+
+@pytest.mark.parametrize("st", [ST, ST3], ids=["centred", "off-centre"])
+def test_static_and_sustained_bounds_are_the_linear_programs(st):
+    """Establishes: in every direction (every 7.5 deg) the static tipping force is the largest push whose
+    centre of pressure c + F h u/(M g) still lies in the convex hull of the two soles, and the
+    sustained-push limit the largest F with M g p = m_b g c_b + m_f g c_f + F h u for some centre of
+    pressure p and body CoM c_b both in the hull: each solved as a linear program by scipy (HiGHS)
+    on the hull scipy computes, against the closed forms, to 1e-9."""
+    from scipy.optimize import linprog
+    A, b0 = _soles_hull(st)
+    r = st.body
+    c = np.array(st.com)
+    cf = np.array([r.x_f, st.y_f])
+    for a in ANGLES:
+        u = np.array([float(x) for x in push_direction(a)])
+        # static: max F, A (c + F k u) + b <= 0 with k = h/(M g)
+        k = r.h / (r.m_tot * r.g)
+        lp = linprog([-1.0], A_ub=(A @ u)[:, None] * k, b_ub=-(A @ c + b0), bounds=[(0, None)])
+        assert lp.status == 0 and static_tipping_force_3d(st, a) == pytest.approx(-lp.fun, rel=1e-9), a
+        # sustained: variables p (2), c_b (2), F; M p - m_b c_b - F (h/g) u = m_f c_f; p, c_b in the hull
+        n = len(b0)
+        A_ub = np.zeros((2 * n, 5))
+        A_ub[:n, 0:2], A_ub[n:, 2:4] = A, A
+        A_eq = np.hstack([r.m_tot * np.eye(2), -r.m_b * np.eye(2), -(r.h / r.g) * u[:, None]])
+        lp = linprog([0, 0, 0, 0, -1.0], A_ub=A_ub, b_ub=np.concatenate([-b0, -b0]), A_eq=A_eq, b_eq=r.m_f * cf,
+                     bounds=[(None, None)] * 4 + [(0, None)])
+        assert lp.status == 0 and sustained_push_limit_3d(st, a) == pytest.approx(-lp.fun, rel=1e-9), a
+
+
+def test_the_edge_the_robot_tips_over():
+    """Establishes: tipping_edge names the edge the ray from the CoM meets: toe, left, heel, right on the
+    axes, and the corner exactly in the corner's direction (with the CoM off the centre)."""
+    assert [tipping_edge(ST3, a) for a in (0, 90, 180, 270)] == ["toe edge", "left edge", "heel edge", "right edge"]
+    cx, cy = ST3.com
+    corner = math.degrees(math.atan2(ST3.y_edge - cy, ST3.body.x_toe - cx))
+    assert tipping_edge(ST3, corner) == "toe-left corner"
+    assert tipping_edge(ST3, corner - 0.5) == "toe edge" and tipping_edge(ST3, corner + 0.5) == "left edge"
+    assert static_tipping_force_3d(ST3, corner) == pytest.approx(
+        ST3.body.m_tot * ST3.body.g * math.hypot(ST3.body.x_toe - cx, ST3.y_edge - cy) / ST3.body.h, rel=1e-12)
+
+
+def test_constant_push_lip_limit_is_static_tipping_in_every_direction():
+    """Establishes: for a push that never ends and starts as a step, the LIP bound is the static tipping
+    force in every direction (each axis' e(0) = -Delta and steady state meet)."""
+    for st in (ST, ST3):
+        assert np.allclose(lip_force_limit_3d(st, ANGLES, math.inf, 0.0), static_tipping_force_3d(st, ANGLES),
+                           rtol=1e-12, atol=0)
+
+
+@pytest.mark.parametrize("angle", [40.0, 75.0, 130.0, 250.0, 300.0])
+def test_lip_limit_3d_is_the_capture_threshold_of_both_pendulums(angle):
+    """Establishes: the bound in an oblique direction is the threshold of the model it is derived from:
+    integrating the sagittal pendulum (omega_x) and the lateral one (omega_y) together, each with the
+    centre of pressure at the edge its push component points at (the corner), from rest erect, a
+    push 1 % below the bound leaves both axes swinging back and 1 % above tips at least one over."""
+    st, dur, rise = ST3, 0.3, 0.05
+    r = st.body
+    cx, cy = (float(x) for x in push_direction(angle))
+    mu = r.m_f / r.m_b
+    # per axis, from the erect body CoM: omega, the edge the push component points at, the feet's CoM, the component
+    axes = [(r.omega, (r.x_toe if cx > 0 else r.x_heel) - st.x_b, r.x_f - st.x_b, cx),
+            (st.omega_y, (st.y_edge if cy > 0 else -st.y_edge) - st.y_b, st.y_f - st.y_b, cy)]
+    prof = PushProfile.from_segments([PushSegment("pulse", t=0, force=1.0, duration=dur, rise=rise)])
+    fmax = float(lip_force_limit_3d(st, angle, dur, rise))
+    F = np.array([0.99, 1.01]) * fmax
+    ends = []
+    for w, p, xf, comp in axes:
+        def deriv(t, x, v):
+            u = comp * F * float(prof.value(t)) * r.h / (r.m_b * r.g)
+            return v, w * w * ((x - p) + mu * (xf - p) + u)
+        ends.append(np.sign(p) * _rk4(deriv))      # > 0: over the edge's side
+    below, above = [e[0] for e in ends], [e[1] for e in ends]
+    assert all(e < 0 for e in below), below          # 1 % below: every axis swings back
+    assert max(above) > 0.1, above                   # 1 % above: one axis diverges over its edge
+
+
+def test_nominal_numbers_in_every_direction():
+    """Establishes: the HOAP-2 numbers of docs/capability.md section 7 and issue 29: the soles span
+    +-71.5 mm; a side push tips the erect robot at 14.97 N (m g 71.5 mm / h = 14.9 N in the issue, the
+    feet's own mass counted exactly) and a flat-footed strategy holds at most 28.6 N sideways (the
+    issue's ~29 N); the lateral pendulum is faster than the sagittal one and slower than a point mass;
+    the parallelogram alone carries the body CoM 67 mm sideways within the hip's adduction limit."""
+    assert ST.y_edge == pytest.approx(0.0715, abs=1e-12)
+    assert static_tipping_force_3d(ST, 90) == pytest.approx(14.97, abs=0.005)
+    assert sustained_push_limit_3d(ST, 90) == pytest.approx(28.61, abs=0.005)
+    assert ST.body.omega < ST.omega_y < ST.body.omega_point
+    assert ST.omega_y == pytest.approx(5.614, abs=5e-4)
+    assert ST.parallelogram_reach == pytest.approx(0.0671, abs=5e-5)
+    assert ST.roll_max == NOMINAL["HIP_ADDUCTION_MAX"]
+
+
+def test_the_3d_plants_numbers(fmu_path):
+    """Establishes: the numbers the bounds read for Hoap2Plant3D are the generated header's (which the
+    source FMU carries) with the plant's link CoM offsets: the body CoM stands 3 mm ahead of the
+    ankles with the joints at zero, and over them (to 1e-12 m) in the controller's erect posture,
+    which is how a sweep on the plant sees it (anklehip.running.sweep.bounds_parameters_of). For
+    Hoap2Plant, whose links carry their CoMs on the joint lines, the stance at 0 deg gives the
+    sagittal bounds of its own parameters."""
+    from anklehip.files.scenario import Scenario
+    from anklehip.running.fmu import FMUInfo
+    from anklehip.running.master import Models
+    from anklehip.running.sweep import bounds_parameters_of
+    p3 = FMUInfo.load(fmu_path("Hoap2Plant3D"))
+    header = plant_header(p3.unzipdir)
+    assert header == NOMINAL
+    st0 = stance_from_params(bounds_parameters(p3.start_values(), header))
+    m1, m2 = NOMINAL["M1"], NOMINAL["M2"]
+    assert st0.x_b == pytest.approx((m1 * NOMINAL["LINK1_COM_X"] + m2 * NOMINAL["LINK2_COM_X"]) / (m1 + m2), rel=1e-12)
+    p = bounds_parameters_of(Models.load(plant_model="3d"), Scenario("bounds", None, plant_model="3d"))
+    assert p["theta_ankle_erect"] < 0 and p["theta_hip_erect"] < 0
+    st = stance_from_params(p, p["theta_ankle_erect"], p["theta_hip_erect"])
+    assert abs(st.x_b) < 1e-12 and st.body == ST.body
+    sag = FMUInfo.load(fmu_path("Hoap2Plant"))
+    ps = bounds_parameters(sag.start_values(), plant_header(sag.unzipdir))
+    assert static_tipping_force_3d(stance_from_params(ps), 0) == static_tipping_force(robot_from_plant_params(ps))
+
+
+# the bounds against the 3D plant (Hoap2Plant3D, docs/plant3d.md)
+
+HELD = ("ankle", "hip", "knee", "ankle_roll", "hip_roll", "hip_yaw")
+STIFF = {**{f"kp_{j}": 1e4 for j in HELD}, **{f"kd_{j}": 200.0 for j in HELD}}    # the joints held: a rigid robot
+
+
+@pytest.fixture(scope="module")
+def plant3d(fmu_path, tmp_path_factory):
+    """The unzipped Hoap2Plant3D and the Stance its numbers give with the joints at zero (the posture
+    the plant holds without a controller)."""
+    import zipfile
+
+    from anklehip.running.fmu import FMUInfo
+    path = fmu_path("Hoap2Plant3D")
+    d = tmp_path_factory.mktemp("plant3d_bounds")
+    with zipfile.ZipFile(path) as z:
+        z.extractall(d)
+    info = FMUInfo.load(path)
+    return d, stance_from_params(bounds_parameters(info.start_values(), plant_header(info.unzipdir)))
+
+
+def _tipping_force_3d(unzipped, st, angle: float, rate: float = 1.0, edge: float = 1e-4):
+    """A slow push ramp (rate N/s) toward `angle` on the plant with its joints held stiff at zero: the
+    force at which the contacts' centre of pressure comes within `edge` of the support polygon's
+    boundary (the robot starts to turn about that edge), and the centre of pressure then."""
+    from conftest import Slave
+    s = Slave(unzipped, STIFF)
+    cx, cy = (float(x) for x in push_direction(angle))
+    (toe, _), _, (heel, w), _ = st.polygon()
+    try:
+        while s.t < 40.0:
+            f = rate * s.t
+            s.set("push_force", f * cx)
+            s.set("push_force_y", f * cy)
+            s.step()
+            px, py = s.get("zmp_true"), s.get("zmp_true_y")
+            if min(toe - px, px - heel, w - py, py + w) < edge:
+                return f, px, py
+    finally:
+        s.free()
+    raise AssertionError(f"no tipping toward {angle} deg up to {f:g} N")
+
+
+def test_static_tipping_force_holds_on_the_3d_plant(plant3d):
+    """Establishes: the static tipping force in every direction is the 3D plant's: with the joints held
+    stiff (a rigid robot standing at the joints' zero, its CoM 3.1 mm ahead of the ankles as the
+    bounds compute it from the plant's link CoM offsets), a slow push ramp tips the robot -- its
+    centre of pressure reaches the support polygon's boundary -- at the bound's force within 2 %,
+    on the edge the bound names: to the side (90 and 270 deg: over the outer sole edge, after the
+    other sole has unloaded), and obliquely onto the toes (45 deg), the left edge (60 deg) and the
+    heels (150, 225 deg)."""
+    unzipped, st = plant3d
+    (toe, _), _, (heel, w), _ = st.polygon()
+    rows = []
+    for angle in (45.0, 60.0, 90.0, 150.0, 225.0, 270.0):
+        f, px, py = _tipping_force_3d(unzipped, st, angle)
+        bound = static_tipping_force_3d(st, angle)
+        edge = tipping_edge(st, angle)
+        dist = {"toe edge": toe - px, "heel edge": px - heel, "left edge": w - py, "right edge": py + w}[edge]
+        rows.append(f"{angle:5.0f} deg: tips at {f:6.3f} N, bound {bound:6.3f} N ({100 * (f / bound - 1):+.2f} %), "
+                    f"over the {edge}, centre of pressure ({1000 * px:.1f}, {1000 * py:.1f}) mm")
+        assert f == pytest.approx(bound, rel=0.02), rows[-1]
+        assert dist < 1e-4, rows[-1]
+    print("\n" + "\n".join(rows))
+
+
+def _free_fall_rate(unzipped, free: tuple[str, ...], com: str, zmp: str, window: tuple[float, float]) -> tuple[float, float]:
+    """The robot on the plant with the joints in `free` passive (no servo, no damping) and the others
+    held stiff, falling from rest: omega from a least-squares fit of com'' = omega^2 (com - zmp) over
+    the samples with |com| in `window` (the linear range), and the largest trunk roll meanwhile."""
+    from conftest import Slave
+    params = {**STIFF, "settle_time": 0.0}
+    for j in free:
+        params.update({f"kp_{j}": 0.0, f"kd_{j}": 1e-6, f"damping_{j}": 0.0})
+    s = Slave(unzipped, params)
+    c, p, roll = [], [], []
+    for _ in range(700):
+        s.step()
+        c.append(s.get(com))
+        p.append(s.get(zmp))
+        roll.append(s.get("imu_roll"))
+    s.free()
+    c, p = np.array(c), np.array(p)
+    acc = (c[2:] - 2 * c[1:-1] + c[:-2]) / 1e-6
+    pm = 0.5 * (p[1:-1] + p[2:])          # the zmp outputs are step means: centred on the sample
+    m = (np.abs(c[1:-1]) > window[0]) & (np.abs(c[1:-1]) < window[1])
+    x = (c[1:-1] - pm)[m]
+    assert m.sum() > 100
+    return math.sqrt(float(np.dot(x, acc[m]) / np.dot(x, x))), float(np.max(np.abs(roll)))
+
+
+def test_pendulum_rates_are_the_3d_plants(plant3d):
+    """Establishes: the LIP rates the bounds use are the 3D plant's. Released with its ankle and hip roll
+    joints passive (the rest held), the robot falls sideways in the double-support parallelogram:
+    the trunk does not roll (below 1e-8 rad) and the whole-robot CoM obeys
+    y'' = omega_y^2 (y - p_y) with the contacts' centre of pressure p_y, omega_y = Stance.omega_y
+    within 0.5 % (the upper body's roll inertia does not enter). Released with its ankle pitch
+    passive, it falls forward as a rigid body about the ankles, omega_x = the sagittal omega within
+    0.5 %."""
+    unzipped, st = plant3d
+    wy, roll = _free_fall_rate(unzipped, ("ankle_roll", "hip_roll"), "com_y", "zmp_true_y", (5e-4, 5e-3))
+    wx, _ = _free_fall_rate(unzipped, ("ankle",), "com_x", "zmp_true", (3.5e-3, 8e-3))
+    print(f"\nomega_y {wy:.4f} 1/s (plant) vs {st.omega_y:.4f} (bounds); trunk roll < {roll:.1e} rad; "
+          f"omega_x {wx:.4f} vs {st.body.omega:.4f}")
+    assert roll < 1e-8
+    assert wy == pytest.approx(st.omega_y, rel=0.005)
+    assert wx == pytest.approx(st.body.omega, rel=0.005)
+
+
+def test_docs_tables_are_the_modules():
+    """Establishes: the stance and per-direction tables of docs/capability.md section 7.5 are what
+    `python -m anklehip.analysis.bounds` prints for the 3D plant in the default controller's erect
+    posture (the numbers a sweep on it uses)."""
+    from anklehip.analysis.bounds import direction_table, stance_table
+    from anklehip.files.scenario import Scenario
+    from anklehip.running.master import Models
+    from anklehip.running.sweep import bounds_parameters_of
+    from conftest import REPO_ROOT
+    p = bounds_parameters_of(Models.load(plant_model="3d"), Scenario("bounds", None, plant_model="3d"))
+    st = stance_from_params(p, p["theta_ankle_erect"], p["theta_hip_erect"])
+    doc = (REPO_ROOT / "docs" / "capability.md").read_text()
+    assert stance_table(st) in doc
+    assert direction_table(st) in doc

@@ -1,8 +1,8 @@
 """A figure the docs quote in several places has one source, and every place agrees with it:
 
-- the number of runs of the committed capability map `anklehip sweep force_duration`: computed from
-  scenarios/sweeps/force_duration.toml (variants x grid), in README.md, docs/*.md and the file's own
-  comment;
+- the number of runs of the committed capability maps `anklehip sweep force_duration` and
+  `anklehip sweep polar_3d`: computed from their files in scenarios/sweeps/ (variants x grid), in
+  README.md, docs/*.md and the file's own comment;
 - the benchmark figures of README.md: each is the one docs/performance.md states (bench/run.sh
   measures them there);
 - the controller's time per tick, wherever it is quoted.
@@ -12,23 +12,26 @@ from __future__ import annotations
 
 import re
 
+import pytest
+
 from conftest import REPO_ROOT
 
 DOCS = [REPO_ROOT / "README.md", *sorted((REPO_ROOT / "docs").glob("*.md"))]
 
 
-def test_capability_map_run_count_is_the_sweep_files():
+@pytest.mark.parametrize("name,least", [("force_duration", 4), ("polar_3d", 3)])
+def test_capability_map_run_count_is_the_sweep_files(name, least):
     from anklehip.running.sweepfile import load_sweep_file
-    f = REPO_ROOT / "scenarios" / "sweeps" / "force_duration.toml"
+    f = REPO_ROOT / "scenarios" / "sweeps" / f"{name}.toml"
     n = len(load_sweep_file(f).specs(None, "native"))
     quoted = []
     for p in DOCS + [f]:
         text = p.read_text()
-        for m in re.finditer(r"force_duration[^\n]{0,80}?\(?(\d[\d ]*) (?:closed-loop )?runs", text):
+        for m in re.finditer(name + r"[^\n]{0,80}?\(?(\d[\d ]*) (?:closed-loop )?runs", text):
             quoted.append((p.name, int(m[1].replace(" ", ""))))
         for m in re.finditer(r"\((\d+) runs", text) if p == f else []:
             quoted.append((p.name, int(m[1])))
-    assert len(quoted) >= 4, quoted
+    assert len(quoted) >= least, quoted
     assert all(q == n for _, q in quoted), (n, quoted)
 
 
@@ -48,3 +51,4 @@ def test_controller_tick_is_quoted_alike():
     source = re.search(r"The controller's tick\s+is (\d+) ns", perf)[1]
     quoted = [(p.name, m[1]) for p in DOCS for m in re.finditer(r"(\d+) ns (?:per tick|\(median\))", p.read_text())]
     assert quoted and all(q == source for _, q in quoted), (source, quoted)
+

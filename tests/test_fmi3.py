@@ -77,9 +77,13 @@ def _inputs(name):
     t = np.arange(2001) * 1e-3
     if name == "AnkleHipController":
         return sensor_signals(t, peak=9.0)
-    rows = np.zeros(len(t), dtype=[("time", float), ("push_force", float)])
+    # the 3D plant: a per-leg set point too (its value reference is one of those appended in issue 29)
+    legs = [("q_right_knee_ref", float)] if name == "Hoap2Plant3D" else []
+    rows = np.zeros(len(t), dtype=[("time", float), ("push_force", float)] + legs)
     rows["time"] = t
     rows["push_force"] = push_force(t, peak=4.0)
+    if legs:
+        rows["q_right_knee_ref"] = 0.1 * np.sin(np.pi * t)
     return rows
 
 

@@ -752,6 +752,23 @@ def test_generator_help_and_bad_arguments(native_tool, tmp_path):
     assert r.returncode == 1 and "does not exist" in r.stderr and "missing" in r.stderr
 
 
+def test_generator_markdown_of_one_causality(native_tool):
+    """`<Model>_gen --markdown --causality C` prints the rows of the variables of causality C only,
+    in table order, with the full table's header (docs/plant3d.md's table of the 3D plant's
+    inputs); a causality no variable has, or a stray argument, is refused (exit 2)."""
+    gen = str(native_tool("AnkleHipController_gen"))
+    full = subprocess.run([gen, "--markdown"], capture_output=True, text=True, check=True).stdout.splitlines()
+    inputs = subprocess.run([gen, "--markdown", "--causality", "input"], capture_output=True, text=True,
+                            check=True).stdout.splitlines()
+    assert inputs[:2] == full[:2]
+    assert inputs[2:] == [row for row in full[2:] if row.split(" | ")[3] == "input"]
+    assert [row.split("`")[1] for row in inputs[2:]] == ["theta_ankle", "theta_hip", "zmp_x", "fz"]
+    r = subprocess.run([gen, "--markdown", "--causality", "inputs"], capture_output=True, text=True)
+    assert r.returncode == 2 and "no variable of causality inputs" in r.stderr
+    r = subprocess.run([gen, "--markdown", "extra"], capture_output=True, text=True)
+    assert r.returncode == 2 and "usage:" in r.stderr
+
+
 def test_packed_fmu_alone_in_empty_dir(controller_fmu, tmp_path):
     """Copy only the .fmu into an empty folder and simulate it from a clean process."""
     lone = tmp_path / "lone"

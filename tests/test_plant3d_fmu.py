@@ -20,6 +20,11 @@ from fmpy.validation import validate_fmu
 from conftest import NOMINAL, REPO_ROOT, Slave
 
 PLANT3D = "Hoap2Plant3D"
+SIDES = ("left", "right")
+JOINTS = ("hip_yaw", "hip", "hip_roll", "knee", "ankle", "ankle_roll")   # the proto's chain order
+BOTH_LEGS = {"hip_yaw": "theta_hip_yaw_ref", "hip": "theta_hip_ref", "hip_roll": "theta_hip_roll_ref",
+             "knee": "theta_knee_ref", "ankle": "theta_ankle_ref", "ankle_roll": "theta_ankle_roll_ref"}
+LEG_REFS = [f"q_{s}_{j}_ref" for s in SIDES for j in JOINTS]   # input_fault bits 8...19, in this order
 
 
 @pytest.fixture(scope="module")
@@ -107,6 +112,108 @@ def test_fmu_validates_and_names_the_sagittal_signals(fmu3d, plant_fmu):
         assert float(md3[name].start) == float(md2[name].start), name
 
 
+def test_per_leg_set_points_are_appended_and_pair_with_the_joint_outputs(fmu3d):
+    """Establishes the per-leg inputs' place in the variable table (docs/plant3d.md section 3): one
+    Real input `q_<side>_<joint>_ref` [rad] per joint output `q_<side>_<joint>` (the same names, so
+    output and input pair), start 0, continuous; their value references are appended (200 + 6 side
+    + joint) and every variable of before keeps its own (the eight inputs 0-7, input_fault 31, the
+    joint outputs 80-91), so importers keep their wiring; input_fault names the new bits."""
+    md = {v.name: v for v in read_model_description(str(fmu3d)).modelVariables}
+    for i, name in enumerate(LEG_REFS):
+        v = md[name]
+        assert (v.causality, v.type, v.variability, v.unit, float(v.start)) == ("input", "Real", "continuous", "rad", 0.0)
+        assert v.valueReference == 200 + i, name
+        assert md[name[:-len("_ref")]].causality == "output"
+        assert BOTH_LEGS[name.split("_", 2)[2][:-len("_ref")]] in v.description, v.description
+    before = ["theta_ankle_ref", "theta_hip_ref", "push_force", "push_force_y", "theta_ankle_roll_ref",
+              "theta_hip_roll_ref", "theta_hip_yaw_ref", "theta_knee_ref"]
+    assert [md[n].valueReference for n in before] == list(range(8))
+    assert md["input_fault"].valueReference == 31
+    assert [md[n[:-len("_ref")]].valueReference for n in LEG_REFS] == list(range(80, 92))
+    assert sorted(n for n, v in md.items() if v.causality == "input") == sorted(before + LEG_REFS)
+    vrs = [v.valueReference for v in md.values()]
+    assert len(vrs) == len(set(vrs))
+    assert "bit 8 + 6 side + joint = q_<side>_<joint>_ref" in md["input_fault"].description
+
+
+# ------------------------------------------------------------------------------------------------
+# the per-leg set points (docs/plant3d.md section 3)
+
+def test_per_leg_inputs_drive_their_own_joints(unzipped3d):
+    """Establishes the FMU's mapping of all twelve per-leg inputs and the rule: with gravity off, no
+    friction and the feet not held (the robot floats, as in CTest plant3d.per_leg_set_points), the both-legs inputs and
+    a different per-leg value on every one of the twelve joints; each output q_<side>_<joint> reaches
+    its both-legs input plus its own per-leg input, within 1e-4 rad."""
+    both = {"hip_yaw": 0.12, "hip": 0.2, "hip_roll": 0.07, "knee": 0.4, "ankle": -0.15, "ankle_roll": -0.06}
+    leg = {"left": (-0.25, -0.3, -0.2, 0.3, 0.1, 0.15), "right": (0.1, 0.15, -0.05, -0.2, -0.1, 0.05)}
+    # two held feet would close the chain; floating, the robot tilts but cannot fall
+    s = Slave(unzipped3d, {"g": 0.0, "mu": 0.0, "flat_foot_weld": False, "fall_foot_pitch": 1.5,
+                           "fall_body_pitch": 1.5})
+    for _ in range(1000):
+        for j in JOINTS:
+            s.set(BOTH_LEGS[j], both[j])
+        for side in SIDES:
+            for j, x in zip(JOINTS, leg[side]):
+                s.set(f"q_{side}_{j}_ref", x)
+        assert s.step() == 0
+    worst = 0.0
+    for side in SIDES:
+        for j, x in zip(JOINTS, leg[side]):
+            worst = max(worst, abs(s.get(f"q_{side}_{j}") - (both[j] + x)))
+    s.free()
+    assert worst < 1e-4, worst
+
+
+def _leg_run(unzipped: Path, inputs, steps: int = 1500) -> np.ndarray:
+    """Every Real output after each step, the inputs set by inputs(k, set) before step k; the
+    master's points t_k = k h."""
+    s = Slave(unzipped)
+    rows = []
+    for k in range(steps):
+        s.set("push_force", 7.0 if 300 <= k < 700 else 0.0)
+        s.set("push_force_y", 5.0 if 500 <= k < 900 else 0.0)
+        s.set("theta_hip_ref", 0.1 * np.sin(2 * np.pi * k * 1e-3))
+        inputs(k, s.set)
+        s.fmu.doStep(currentCommunicationPoint=k * 1e-3, communicationStepSize=1e-3)
+        rows.append(s.outputs())
+    s.free()
+    return np.array(rows)
+
+
+def test_zero_per_leg_inputs_leave_the_plant_bit_for_bit(unzipped3d):
+    """Establishes: per-leg inputs at 0 change nothing. A run with a push forward, a push sideways
+    and a moving hip set point, the per-leg inputs never set, equals bit for bit the same run with
+    all twelve set to 0 every step, and the run that drives both knees by the per-leg inputs
+    (q_left_knee_ref = q_right_knee_ref = 0.05, theta_knee_ref = 0) equals the run that drives them
+    by theta_knee_ref = 0.05 (the rule's sum: 0 + x = x + 0 = x). With both, the knees' set point
+    is the sum: 0.05 + 0.02 differs from 0.05."""
+    plain = _leg_run(unzipped3d, lambda k, set_: None)
+    zeros = _leg_run(unzipped3d, lambda k, set_: [set_(n, 0.0) for n in LEG_REFS])
+    assert np.array_equal(plain, zeros)
+    by_both = _leg_run(unzipped3d, lambda k, set_: set_("theta_knee_ref", 0.05))
+    by_legs = _leg_run(unzipped3d, lambda k, set_: [set_(f"q_{side}_knee_ref", 0.05) for side in SIDES])
+    assert np.array_equal(by_both, by_legs)
+    assert not np.array_equal(plain, by_both)
+    summed = _leg_run(unzipped3d, lambda k, set_: [set_("theta_knee_ref", 0.05)] +
+                      [set_(f"q_{side}_knee_ref", 0.02) for side in SIDES])
+    assert not np.array_equal(summed, by_both)
+
+
+def test_per_leg_input_moves_its_leg_in_double_support(unzipped3d):
+    """Establishes: on the ground, a per-leg input moves its own leg's joint and the other leg's
+    same joint far less. The left knee flexed by 0.2 rad alone, both feet down: the left knee
+    follows, the right knee stays within a tenth of it, and the robot stands."""
+    s = Slave(unzipped3d)
+    for k in range(2000):
+        s.set("q_left_knee_ref", 0.2 * min(1.0, k / 1000))
+        assert s.step() == 0
+    left, right = s.get("q_left_knee"), s.get("q_right_knee")
+    fallen = s.get("fallen")
+    s.free()
+    assert not fallen
+    assert left > 0.1 and abs(right) < 0.1 * left, (left, right)
+
+
 # ------------------------------------------------------------------------------------------------
 # FMI behaviour: state, bad input, falls
 
@@ -118,23 +225,26 @@ def test_state_restored_bit_for_bit_into_a_fresh_instance(unzipped3d):
     a = Slave(unzipped3d, params, "a")
     for k in range(300):
         a.set("push_force", 13.0 if 100 <= k < 250 else 0.0)
+        a.set("q_left_hip_roll_ref", -0.0002 * k)       # per-leg set points in the state
+        a.set("q_right_knee_ref", 0.0003 * k)
         assert a.step() == 0
     blob = a.fmu.serializeFMUstate(a.fmu.getFMUstate())
     t_snap = a.t   # the restored instance continues from the state's time with the same master
-    ref = []
-    for _ in range(300):
-        a.set("push_force", 0.0)
-        a.step()
-        ref.append(a.outputs())
+
+    def after(s):
+        # the right knee's input goes bad: both hold its last finite value, which the state carries
+        s.set("push_force", 0.0)
+        s.set("q_right_knee_ref", float("nan"))
+        s.step()
+        assert s.get("input_fault") == 1 << (8 + LEG_REFS.index("q_right_knee_ref"))
+        return s.outputs()
+    ref = [after(a) for _ in range(300)]
     b = Slave(unzipped3d, params, "b")
     b.fmu.setFMUstate(b.fmu.deSerializeFMUstate(blob))
     b.t = t_snap
-    got = []
-    for _ in range(300):
-        b.set("push_force", 0.0)
-        b.step()
-        got.append(b.outputs())
+    got = [after(b) for _ in range(300)]
     assert np.array_equal(np.array(ref), np.array(got))
+    assert a.get("q_right_knee") > 0.05       # held at 0.0897, not dropped to 0
     a.free()
     b.free()
 
@@ -154,6 +264,43 @@ def test_non_finite_input_is_contained_and_logged(unzipped3d):
     outs = [n for n, v in inst.md.vars.items() if v.causality == "output" and v.type == "Real"]
     st, vals = inst.get_real(outs)
     assert st == fmi2OK and all(np.isfinite(vals))
+    inst.free()
+
+
+def test_non_finite_per_leg_input_is_held_with_its_own_bit(unzipped3d):
+    """Establishes: a per-leg input that goes NaN or Inf is treated as the other inputs are: the
+    step returns fmi2Warning, one warning names the input and its input_fault bit (8 + 6 side +
+    joint), the joint keeps its last finite set point, and the bit clears when the input is finite
+    again. The bits of before keep their meaning (push_force: bit 2)."""
+    from conftest import RawModel, fmi2OK, fmi2Warning
+    raw = RawModel(unzipped3d)
+    inst = raw.instance(name="nan")
+    assert inst.fmi2SetupExperiment(0, 0.0, 0.0, 0, 0.0) == fmi2OK
+    assert inst.fmi2EnterInitializationMode() == fmi2OK
+    assert inst.fmi2ExitInitializationMode() == fmi2OK
+    h, k = 1e-3, 0
+
+    def step():
+        nonlocal k
+        st = inst.fmi2DoStep(ctypes.c_double(k * h), ctypes.c_double(h), 1)
+        k += 1
+        return st
+    assert inst.set_real({"q_right_knee_ref": 0.1}) == fmi2OK
+    for _ in range(500):
+        assert step() == fmi2OK
+    bit = 8 + LEG_REFS.index("q_right_knee_ref")
+    assert bit == 17
+    for bad in (float("nan"), float("inf")):
+        assert inst.set_real({"q_right_knee_ref": bad, "push_force": float("nan")}) == fmi2OK
+        for _ in range(300):
+            assert step() == fmi2Warning
+        assert inst.get_integer(["input_fault"]) == (fmi2OK, [(1 << bit) | (1 << 2)])
+        assert inst.set_real({"q_right_knee_ref": 0.1, "push_force": 0.0}) == fmi2OK
+        assert step() == fmi2OK and inst.get_integer(["input_fault"]) == (fmi2OK, [0])
+    warnings = [m for st, _, m in inst.log if st == fmi2Warning and "q_right_knee_ref" in m]
+    assert len(warnings) == 2 and "input_fault bit 17" in warnings[0], warnings
+    st, (q,) = inst.get_real(["q_right_knee"])
+    assert st == fmi2OK and abs(q - 0.1) < 0.02, q   # held at 0.1 throughout, never driven to 0 or Inf
     inst.free()
 
 
@@ -368,3 +515,59 @@ def test_side_and_diagonal_push_limits(scenario, force, falls):
     res = simulate(sc, Models.load(plant_model="3d"), progress=False)
     assert res.outcome == ("fell" if falls else "completed"), (res.outcome, res.fell_at)
     print(f"{scenario} at {force:g} N: {res.outcome}, |zmp_y| up to {1e3 * np.max(np.abs(res.data['zmp_y'])):.1f} mm")
+
+
+# ------------------------------------------------------------------------------------------------
+# the master connects a controller's per-leg outputs by name
+
+def _stand_in_controller(controller_fmu: Path, folder: Path, old: str, new: str) -> Path:
+    """A stand-in for a controller with per-leg outputs: the controller FMU with its output `old`
+    renamed `new` in modelDescription.xml (the binary serves the value reference, whatever its name)."""
+    out = folder / "StandInController.fmu"
+    with zipfile.ZipFile(controller_fmu) as zin, zipfile.ZipFile(out, "w", zipfile.ZIP_DEFLATED) as zout:
+        for item in zin.infolist():
+            data = zin.read(item.filename)
+            if item.filename == "modelDescription.xml":
+                text = data.decode()
+                assert text.count(f'name="{old}"') == 1
+                data = text.replace(f'name="{old}"', f'name="{new}"').encode()
+            zout.writestr(item, data)
+    return out
+
+
+@pytest.mark.parametrize("engine", ["fmpy", "native"])
+def test_master_connects_a_controller_output_to_the_per_leg_input_of_its_name(controller_fmu, fmu3d, unzipped3d,
+                                                                             tmp_path, engine):
+    """Establishes: the master (both engines) connects every controller output to the plant input
+    of the same name, so a frontal controller's outputs q_<side>_<joint>_ref reach the per-leg
+    set points without any wiring. A stand-in controller whose output com_x_desired is renamed
+    q_left_hip_roll_ref runs the main job's first push on the 3D plant; the result carries the
+    column, and the plant alone, replayed at the same points with the recorded set points, pushes
+    and that column as its inputs, computes every recorded plant output bit for bit (so the plant
+    received exactly that signal on that input in the closed loop)."""
+    from anklehip.running.master import Models, simulate
+    from anklehip.files.paths import scenarios_dir
+    from anklehip.files.scenario import load_scenario
+
+    stand_in = _stand_in_controller(controller_fmu, tmp_path, "com_x_desired", "q_left_hip_roll_ref")
+    sc = load_scenario(scenarios_dir() / "paper_five_pushes_3d.toml")
+    res = simulate(sc, Models.load(controller=stand_in, plant=fmu3d), stop_time=4.0, progress=False, engine=engine)
+    assert res.outcome == "completed", res.message
+    d = res.data
+    assert res.controller_columns["q_left_hip_roll_ref"] == "q_left_hip_roll_ref"
+    signal = d["q_left_hip_roll_ref"]
+    assert np.max(np.abs(signal)) > 1e-3 and np.ptp(signal) > 1e-3, (signal.min(), signal.max())
+    s = Slave(unzipped3d)
+    inputs = ["theta_ankle_ref", "theta_hip_ref", "push_force", "push_force_y", "q_left_hip_roll_ref"]
+    outs = [v.name for v in s.md.modelVariables if v.causality == "output" and v.type == "Real"
+            and v.variability != "constant" and v.name in d.dtype.names]
+    assert "q_left_hip_roll" in outs and len(outs) > 50
+    h = sc.step
+    for k in range(len(d) - 1):
+        for n in inputs:
+            s.set(n, d[n][k])
+        s.fmu.doStep(currentCommunicationPoint=k * h, communicationStepSize=h)
+        got = s.fmu.getReal([s.var[n].valueReference for n in outs])
+        want = [d[n][k + 1] for n in outs]
+        assert got == want, (k, [(n, a, b) for n, a, b in zip(outs, got, want) if a != b][:3])
+    s.free()

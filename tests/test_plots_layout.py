@@ -169,3 +169,35 @@ def test_sweep_figure_has_a_legend_inside_the_figure():
     assert fb.x0 <= lb.x0 and lb.x1 <= fb.x1 and fb.y0 <= lb.y0 and lb.y1 <= fb.y1
     assert not _intersect(lb, ax.get_window_extent(r))
     plots.plt.close(fig)
+
+
+def test_polar_capability_map_legend_and_titles_clear_of_the_panels(tmp_path):
+    """The polar capability map (anklehip/analysis/capability.py: polar_figure): one polar panel per
+    duration, the legend (variants and the three bounds) inside the figure and clear of every panel,
+    the panel titles inside the figure."""
+    from anklehip.analysis.bounds import HEADER_NAMES
+    from anklehip.analysis.capability import polar_figure
+    from anklehip.running.sweepfile import load_sweep_file
+    from conftest import NOMINAL
+    p = tmp_path / "polar.toml"
+    p.write_text('scenario = "paper_five_pushes_3d"\n[push]\nrise = 0.05\n[[variant]]\nname = "a"\n[[variant]]\n'
+                 'name = "b"\n[grid]\n"push.angle" = "0:330:30"\n"push.force" = [4, 8, 12]\n"push.duration" = [1.0, 0.2]\n')
+    sf = load_sweep_file(p)
+    rows = [{"variant": v, "push.angle": a, "push.force": f, "push.duration": d,
+             "outcome": "completed" if f <= lim + (4 if d < 1 else 0) else "fell"}
+            for v, lim in (("a", 8), ("b", 4)) for a in range(0, 360, 30) for f in (4, 8, 12) for d in (1.0, 0.2)]
+    params = {k: NOMINAL[m] for k, m in HEADER_NAMES.items()} | {"h_push": 0.335}
+    fig = polar_figure(sf, rows, params)
+    fig.canvas.draw()
+    r = fig.canvas.get_renderer()
+    panels = [ax for ax in fig.axes if ax.name == "polar"]
+    assert len(panels) == 2 and [ax.get_title() for ax in panels] == ["1 s pushes", "0.2 s pushes"]
+    (leg,) = fig.legends
+    assert [t.get_text() for t in leg.get_texts()][:2] == ["a", "b"] and len(leg.get_texts()) == 5
+    lb, fb = leg.get_window_extent(r), fig.bbox
+    assert fb.x0 <= lb.x0 and lb.x1 <= fb.x1 and fb.y0 <= lb.y0 and lb.y1 <= fb.y1
+    for ax in panels:
+        assert not _intersect(lb, ax.get_tightbbox(r))
+        tb = ax.title.get_window_extent(r)
+        assert fb.y0 <= tb.y0 and tb.y1 <= fb.y1
+    plots.plt.close(fig)

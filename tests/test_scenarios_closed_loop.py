@@ -25,8 +25,8 @@ def models():
 @pytest.mark.parametrize("name", SCENARIOS)
 def test_scenario(models, name):
     sc = load_scenario(scenarios_dir() / f"{name}.toml")
-    if sc.plant_model != "sagittal":
-        models = Models.load(plant_model=sc.plant_model)
+    if (sc.plant_model, sc.controller_model) != ("sagittal", "sagittal"):
+        models = Models.for_scenario(sc)
     res = simulate(sc, models, progress=False)
     assert res.outcome in ("completed", "fell"), res.message
     failed = [f"{c.name}: {c.detail}" for c in check_expect(res, sc.expect) if not c.ok]

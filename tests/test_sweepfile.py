@@ -51,9 +51,11 @@ def test_grid_and_random_points(tmp_path):
 
 def test_point_values_become_the_push_and_parameters(tmp_path):
     sf = load_sweep_file(_write(tmp_path, BASE + '[grid]\n"push.force" = [6]\n'))
-    prof, c, p, f = point_setup(sf, {"push.force": 6.0, "push.duration": 0.4, "push.direction": -1,
-                                     "push.height": 0.3, "controller.Ka": 20.0, "faults.zmp_noise": 0.001}, None)
+    prof, prof_y, along, c, p, f = point_setup(sf, {"push.force": 6.0, "push.duration": 0.4, "push.direction": -1,
+                                                    "push.height": 0.3, "controller.Ka": 20.0,
+                                                    "faults.zmp_noise": 0.001}, None)
     assert prof.peak() == -6.0 and prof.events()[0][0] == pytest.approx(1.0)
+    assert prof_y.peak() == 0.0 and along.peak() == -6.0
     assert p == {"h_push": 0.3} and c == {"Ka": 20.0} and f == {"zmp_noise": 0.001}
 
 
@@ -195,3 +197,144 @@ def test_sweep_writes_the_capability_map(tmp_path, capsys):
     assert main(["sweep", str(p), "--workers", "1", "--engine", "native", "--out", str(out)]) == 0
     assert (out / "capability.png").stat().st_size > 1000
     assert f"figure {out / 'capability.png'}" in capsys.readouterr().out
+
+
+# ---------------------------------------------------------------------------------------------
+# push.angle: the push's direction in the horizontal plane; the polar capability map
+
+BASE3D = BASE.replace('scenario = "hip_saves_push"', 'scenario = "paper_five_pushes_3d"')
+
+
+def test_push_angle_splits_the_force_into_x_and_y(tmp_path):
+    """Establishes: push.angle splits the peak force F into F cos(angle) along x (the scenario's push)
+    and F sin(angle) along y (its push_y), exactly on the axes (180 deg has no y push at all); the
+    push along its own direction peaks at F; a fixed [push] angle works like a swept one."""
+    sf = load_sweep_file(_write(tmp_path, BASE3D + '[grid]\n"push.angle" = [0, 90, 135, 180, 270]\n"push.force" = [8]\n'))
+    assert sf.values()[0] == {"push.angle": 0.0, "push.force": 8.0}
+    got = {}
+    for a in (0, 90, 135, 180, 270):
+        pt = point_setup(sf, {"push.angle": float(a), "push.force": 8.0})
+        got[a] = (pt.push.peak(), pt.push_y.peak(), pt.along.peak())
+        assert pt.push.events() == ([] if a in (90, 270) else [(1.0, 1.5)])
+    r = 8.0 / 2 ** 0.5
+    assert got[0] == (8.0, 0.0, 8.0) and got[90] == (0.0, 8.0, 8.0) and got[180] == (-8.0, 0.0, 8.0)
+    assert got[270] == (0.0, -8.0, 8.0)
+    assert got[135][0] == pytest.approx(-r, rel=1e-15) and got[135][1] == pytest.approx(r, rel=1e-15)
+    fixed = load_sweep_file(_write(tmp_path, BASE3D.replace("rise = 0.05", "rise = 0.05\nangle = 90")
+                                   + '[grid]\n"push.force" = [8]\n'))
+    pt = point_setup(fixed, {"push.force": 8.0})
+    assert (pt.push.peak(), pt.push_y.peak()) == (0.0, 8.0)
+
+
+@pytest.mark.parametrize("text,match", [
+    (BASE + '[grid]\n"push.angle" = [0, 90]\n"push.force" = [6]\n',
+     r"s\.toml: grid\.push\.angle: 90 deg: a push off the x axis .*3D plant.*hip_saves_push"),
+    (BASE.replace("rise = 0.05", "rise = 0.05\nangle = 45") + '[grid]\n"push.force" = [6]\n',
+     r"s\.toml: push\.angle: 45 deg: .*sagittal plant"),
+    (BASE + '[random]\nn = 3\n"push.angle" = [0, 30]\n',
+     r"s\.toml: random\.push\.angle: 0 deg: .*3D plant"),
+    (BASE3D.replace("rise = 0.05", "rise = 0.05\ndirection = -1") + '[grid]\n"push.angle" = [0, 90]\n',
+     r"s\.toml: push\.direction: give the push's direction once: grid\.push\.angle or push\.direction"),
+    (BASE3D + '[grid]\n"push.angle" = [0, 90]\n"push.direction" = [1, -1]\n',
+     r"s\.toml: grid\.push\.direction: give the push's direction once"),
+])
+def test_push_angle_refused_where_it_cannot_act(tmp_path, text, match):
+    """Establishes: a push off the x axis on a sagittal base scenario, and an angle together with
+    push.direction, are refused naming the file and the key (a random range of angles is always off
+    the axis)."""
+    with pytest.raises(ScenarioError, match=match):
+        load_sweep_file(_write(tmp_path, text))
+
+
+def test_push_angle_on_the_x_axis_runs_on_the_sagittal_plant(tmp_path):
+    """Establishes: angles on the x axis (0, 180, 360, -180 deg) are accepted on a sagittal base and are
+    pushes on the back and on the chest, with no sideways push."""
+    sf = load_sweep_file(_write(tmp_path, BASE + '[grid]\n"push.angle" = [0, 180, 360, -180]\n"push.force" = [6]\n'))
+    peaks = [(pt.push.peak(), pt.push_y.peak()) for pt in (point_setup(sf, v) for v in sf.values())]
+    assert peaks == [(6.0, 0.0), (-6.0, 0.0), (6.0, 0.0), (-6.0, 0.0)]
+
+
+def test_cli_refuses_an_angle_on_the_sagittal_plant_before_running(tmp_path, capsys):
+    p = _write(tmp_path, BASE + '[grid]\n"push.angle" = [0, 90]\n"push.force" = [6]\n')
+    assert main(["sweep", str(p), "--workers", "1", "--out", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err
+    assert "grid.push.angle" in err and "s.toml" in err and not (tmp_path / "out" / "points.jsonl").exists()
+
+
+POLAR = BASE3D.replace("stop_time = 4.0", "stop_time = 3.0").split("[[variant]]")[0] + '[[variant]]\nname = "default"\n'
+
+
+def test_polar_sweep_end_to_end(tmp_path, capsys):
+    """Establishes: `anklehip sweep FILE` on the 3D plant over push.angle x push.force pushes from the
+    side (a side push moves the lateral ZMP: peak_zmp_y; on the x axis it stays near the middle),
+    writes the polar capability map as capability.png and prints each direction's boundary with the
+    bounds in that direction; a 40 N push of 0.5 s fells the robot in every direction, 4 N in none."""
+    p = _write(tmp_path, POLAR + '[grid]\n"push.angle" = [0, 90, 180, 270]\n"push.force" = [4, 40]\n')
+    out = tmp_path / "out"
+    assert main(["sweep", str(p), "--workers", "1", "--engine", "native", "--out", str(out)]) == 0
+    with open(out / "points.csv", newline="") as f:
+        rows = {(float(r["push.angle"]), float(r["push.force"])): r for r in csv.DictReader(f)}
+    assert len(rows) == 8
+    assert all(rows[(a, 4.0)]["outcome"] == "completed" and rows[(a, 40.0)]["outcome"] == "fell"
+               for a in (0, 90, 180, 270))
+    zy = {a: float(rows[(a, 4.0)]["peak_zmp_y"]) for a in (0, 90, 180, 270)}
+    assert zy[90] > 0.01 and zy[270] < -0.01 and abs(zy[0]) < 0.002 and abs(zy[180]) < 0.002, zy
+    assert float(rows[(90, 4.0)]["peak_force"]) == 4.0 and abs(float(rows[(90, 4.0)]["peak_zmp"])) < 0.01
+    assert (out / "capability.png").stat().st_size > 1000
+    printed = capsys.readouterr().out
+    assert "by push.angle [deg]:" in printed and f"figure {out / 'capability.png'}" in printed
+    line = next(ln.split() for ln in printed.splitlines() if ln.startswith("  default") and "0:" in ln)
+    assert line[1:] == ["0:", "4", "90:", "4", "180:", "4", "270:", "4"], printed
+    static = next(ln for ln in printed.splitlines() if ln.startswith("  static tipping"))
+    assert "0: 12.0" in static and "90: 15.0" in static and "180: 8.0" in static, static
+
+
+def _polar_params():
+    from test_bounds import FRONTAL
+    return {**PARAMS, **FRONTAL}
+
+
+def test_polar_map_applies_to_force_by_angle_grids(tmp_path):
+    """Establishes: the polar map is drawn for a grid over push.force and push.angle (one panel) and
+    with a third key push.duration or push.height (a panel per value), as capability.png; not for
+    other third keys, random samples, or parameters without the stance's numbers."""
+    import matplotlib.pyplot as plt
+
+    from anklehip.analysis.capability import capability_figure, polar_panels
+    pts = {0.0: [(4, "completed"), (8, "fell")], 90.0: [(4, "completed"), (8, "completed")],
+           180.0: [(4, "fell")], 270.0: [(4, "completed"), (8, "fell")]}
+    head = POLAR.replace('scenario = "paper_five_pushes_3d"', 'scenario = "paper_five_pushes_3d"')
+    sf = _cap_sweep(tmp_path, '[grid]\n"push.force" = [4, 8]\n"push.angle" = [0, 90, 180, 270]\n', head)
+    assert polar_panels(sf) == [(None, None)]
+    out = plot_capability(sf, _cap_rows("push.angle", {"default": pts}), tmp_path, _polar_params())
+    assert out == tmp_path / "capability.png" and out.stat().st_size > 1000
+    sf = _cap_sweep(tmp_path, '[grid]\n"push.angle" = [0, 90, 180, 270]\n"push.force" = [4, 8]\n'
+                    '"push.duration" = [1.0, 0.2]\n', head)
+    assert polar_panels(sf) == [("push.duration", 1.0), ("push.duration", 0.2)]
+    rows = [dict(r, **{"push.duration": d}) for d in (1.0, 0.2) for r in _cap_rows("push.angle", {"default": pts})]
+    fig = capability_figure(sf, rows, _polar_params())
+    assert len([ax for ax in fig.axes if ax.name == "polar"]) == 2
+    plt.close(fig)
+    for grid in ('[grid]\n"push.force" = [4, 8]\n"push.angle" = [0, 90]\n"push.rise" = [0.01, 0.1]\n',
+                 '[random]\nn = 4\n"push.force" = [2, 8]\n"push.angle" = [0, 90]\n'):
+        sf = _cap_sweep(tmp_path, grid, head)
+        assert polar_panels(sf) is None and plot_capability(sf, [], tmp_path, _polar_params()) is None
+    sf = _cap_sweep(tmp_path, '[grid]\n"push.force" = [4, 8]\n"push.angle" = [0, 90]\n', head)
+    assert plot_capability(sf, [], tmp_path, PARAMS) is None
+
+
+def test_fixed_angle_duration_map_uses_the_bounds_in_that_direction(tmp_path):
+    """Establishes: a force x duration map of pushes with a fixed push.angle draws the bounds in that
+    direction (at 90 deg the side's static tipping force, not the back's)."""
+    import matplotlib.pyplot as plt
+
+    from anklehip.analysis.bounds import static_tipping_force_3d
+    from anklehip.analysis.capability import capability_figure
+    from test_bounds import ST
+    head = POLAR.replace("rise = 0.05", "rise = 0.05\nangle = 90")
+    sf = _cap_sweep(tmp_path, '[grid]\n"push.force" = [4, 8]\n"push.duration" = [0.2, 1.0]\n', head)
+    fig = capability_figure(sf, [], _polar_params())
+    static = next(ln for ln in fig.axes[0].lines if ln.get_label().startswith("static"))
+    assert static.get_ydata()[0] == pytest.approx(static_tipping_force_3d(ST, 90.0), rel=1e-12)
+    assert "toward 90 deg" in fig.axes[0].get_title()
+    plt.close(fig)

@@ -11,10 +11,20 @@ x is measured from the ankle axis (forward +), heights above the sole. Pure nump
 * lip_force_limit / lip_impulse_limit: the linear inverted pendulum bound of the ankle strategy
   (the body rigid, no angular momentum about its CoM, the ZMP at the edge from the push onset).
 
-    python -m anklehip.analysis.bounds       # the nominal numbers (docs/capability.md)
+In every horizontal direction (docs/capability.md §7), for the robot on both feet: `Stance` (the
+sagittal Robot plus the frontal numbers: stance width, leg length, roll inertias, the erect CoM's
+offsets), its support polygon (the rectangle that is the convex hull of the two soles) and the same
+three bounds as functions of the push's direction angle (0 = forward, 90 deg = toward +y, the left):
+static_tipping_force_3d, sustained_push_limit_3d, lip_force_limit_3d, lip_impulse_limit_3d. The
+lateral pendulum is the double-support parallelogram (legs rolling about their ankles, the upper
+body translating): Stance.omega_y. stance_from_params reads a Stance from plant parameters completed
+by the generated header hoap2/nominal.h (header_numbers).
+
+    python -m anklehip.analysis.bounds       # the nominal numbers (docs/capability.md §5 and §7)
 """
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 
@@ -180,6 +190,223 @@ def lip_impulse_limit(r: Robot, direction: float = +1, omega: float | None = Non
     return r.g * _edge_moment(r, direction) / (r.h * w)
 
 
+# ---------------------------------------------------------------------------------------------
+# every horizontal direction: the robot on both feet (docs/capability.md section 7)
+
+def push_direction(angle):
+    """(cos, sin) of a push direction in degrees (0 forward, on the back; 90 toward +y, the left; 180 on
+    the chest), exact at multiples of 90 deg: a push at 180 deg has no y component at all. Vectorised."""
+    a = np.mod(np.asarray(angle, float), 360.0)
+    q = a / 90.0
+    k = np.round(q).astype(int) % 4
+    exact = q == np.round(q)
+    c = np.where(exact, np.array([1.0, 0.0, -1.0, 0.0])[k], np.cos(np.radians(a)))
+    s = np.where(exact, np.array([0.0, 1.0, 0.0, -1.0])[k], np.sin(np.radians(a)))
+    return c, s
+
+
+@dataclass(frozen=True)
+class Stance:
+    """The robot standing erect on both feet, as the bounds in every direction see it (SI).
+
+    `body` is the sagittal Robot (its masses, heights, pitch inertias, feet, sole from x_heel to x_toe
+    and the push height). x is forward from the ankle axes, y left from the mid-plane. The soles,
+    each sole_width wide, are centred under the ankles at y = +-ankle_y. The erect body CoM is at
+    (x_b, y_b) (x_b = 0: over the ankle axes, as the Robot has it), the feet's at (body.x_f, y_f).
+    l1 and I1_roll are the legs' length and their roll inertia (both legs, each about its own CoM)
+    for the lateral pendulum; roll_max, the largest leg roll the joints allow the parallelogram, only
+    for parallelogram_reach."""
+    body: Robot
+    l1: float
+    I1_roll: float
+    ankle_y: float
+    sole_width: float
+    x_b: float = 0.0
+    y_b: float = 0.0
+    y_f: float = 0.0
+    roll_max: float = math.inf
+
+    @property
+    def y_edge(self) -> float:
+        """The outer sole edges' distance from the mid-plane [m]."""
+        return self.ankle_y + self.sole_width / 2
+
+    def polygon(self) -> np.ndarray:
+        """The support polygon, counter-clockwise from the front right corner: the convex hull of the
+        two soles, which for two equal soles side by side is the rectangle x_heel..x_toe x
+        -y_edge..y_edge."""
+        b, w = self.body, self.y_edge
+        return np.array([[b.x_toe, -w], [b.x_toe, w], [b.x_heel, w], [b.x_heel, -w]])
+
+    @property
+    def com(self) -> tuple[float, float]:
+        """The erect robot's CoM (feet included) on the ground: (x, y) [m]."""
+        b = self.body
+        return ((b.m_b * self.x_b + b.m_f * b.x_f) / b.m_tot, (b.m_b * self.y_b + b.m_f * self.y_f) / b.m_tot)
+
+    @property
+    def k_y(self) -> float:
+        """Sideways travel of the body CoM per radian of leg roll in the parallelogram [m]:
+        (m1 lg1 + m2 l1) / m_b (the legs' CoMs move lg1 phi, the upper body l1 phi)."""
+        b = self.body
+        return (b.m1 * (b.z1 - b.ankle_height) + b.m2 * self.l1) / b.m_b
+
+    @property
+    def omega_y(self) -> float:
+        """LIP rate [1/s] of the lateral motion in double support (the bounds use it): the legs roll by
+        phi about their ankles, the pelvis and the upper body translate by l1 phi without rolling (the
+        parallelogram), the feet stay. Angular momentum about a ground point p, linearised:
+        (m2 z2 l1 + m1 z1 lg1 + I1_roll) phi'' = m_b g (y - p) + m_f g (y_f - p) + F_y h with
+        y = k_y phi, so omega_y^2 = m_b g k_y / (m2 z2 l1 + m1 z1 lg1 + I1_roll)."""
+        b = self.body
+        lg1 = b.z1 - b.ankle_height
+        return math.sqrt(b.m_b * b.g * self.k_y / (b.m2 * b.z2 * self.l1 + b.m1 * b.z1 * lg1 + self.I1_roll))
+
+    @property
+    def parallelogram_reach(self) -> float:
+        """How far sideways the parallelogram alone can carry the body CoM within roll_max [m]."""
+        return self.k_y * math.sin(min(self.roll_max, math.pi / 2))
+
+    def axis(self, k: str) -> tuple[Robot, float]:
+        """The bounds' 1D problem along "x" or "y": a Robot whose x is that axis measured from the erect
+        body CoM (its toe and heel the polygon's edges ahead of and behind it, on y the left and right
+        outer sole edges; its x_f the feet's CoM), and the pendulum rate on that axis."""
+        b = self.body
+        if k == "x":
+            return (dataclasses.replace(b, x_toe=b.x_toe - self.x_b, x_heel=b.x_heel - self.x_b, x_f=b.x_f - self.x_b),
+                    b.omega)
+        w = self.y_edge
+        return dataclasses.replace(b, x_toe=w - self.y_b, x_heel=-w - self.y_b, x_f=self.y_f - self.y_b), self.omega_y
+
+
+def _per_axis(st: Stance, angle, fn):
+    """min over the axes of fn(axis robot, direction, omega) / |the push's component on the axis|: the
+    push direction's bound when each axis must hold its own component (an axis without one: no limit)."""
+    c, s = push_direction(angle)
+    out = None
+    with np.errstate(divide="ignore"):
+        for k, comp in (("x", c), ("y", s)):
+            r, w = st.axis(k)
+            v = np.where(comp >= 0, fn(r, +1, w), fn(r, -1, w)) / np.abs(comp)
+            out = v if out is None else np.minimum(out, v)
+    return float(out) if np.ndim(out) == 0 else out
+
+
+def static_tipping_force_3d(st: Stance, angle):
+    """Constant push [N] in the direction `angle` [deg] that tips the erect rigid robot over the support
+    polygon. The centre of pressure sits at the CoM's projection c moved by F h/(M g) along the push;
+    the robot tips when it reaches the polygon's boundary, about the edge the ray from c meets first
+    (a corner where it meets one): by moment balance about each edge the push points at,
+    F h (u . n) = M g (distance of c from the edge), the smallest of these F. On the rectangle:
+    min over x, y of the sagittal static_tipping_force of that axis / |cos| or |sin|. Feet included;
+    assumes what static_tipping_force assumes. Vectorised over angle."""
+    return _per_axis(st, angle, lambda r, d, w: static_tipping_force(r, d))
+
+
+def sustained_push_limit_3d(st: Stance, angle):
+    """Largest constant push [N] in the direction `angle` [deg] that any flat-footed strategy can hold:
+    statics, M g p = m_b g c_b + m_f g c_f + F h u with the centre of pressure p and the body CoM c_b
+    both in the polygon (the robot must still stand when the push stops) and the feet where they
+    are. On the rectangle the two axes are independent: p at the edges the push points at, c_b at
+    the opposite ones, F = min over x, y of the sagittal sustained_push_limit / |cos| or |sin|.
+    Assumes: small angles (h unchanged), feet flat and held down by their weight, friction enough,
+    no joint limits (see Stance.parallelogram_reach). Vectorised over angle."""
+    return _per_axis(st, angle, lambda r, d, w: sustained_push_limit(r, d))
+
+
+def lip_force_limit_3d(st: Stance, angle, duration, rise: float = 0.0):
+    """Largest peak force [N] of a trapezoid push (duration, rise, see trapezoid_integral) in the
+    direction `angle` [deg] after which a CoP-only (ankle) strategy can still be capturable. The
+    linearised sagittal and lateral motions are decoupled, each a pendulum of its own rate (the
+    ankle pitch's omega on x, the parallelogram's omega_y on y), and the polygon's x and y ranges
+    are independent, so the best CoP sits at the corner the push points at from the onset and each
+    axis must capture its own component: min over x, y of lip_force_limit of that axis / |cos| or
+    |sin|. Assumes what lip_force_limit assumes, per axis. Vectorised over angle (or duration)."""
+    return _per_axis(st, angle, lambda r, d, w: lip_force_limit(r, duration, rise, d, w))
+
+
+def lip_impulse_limit_3d(st: Stance, angle):
+    """Largest impulse [N s] of a very short push in the direction `angle` [deg] a CoP-only strategy
+    can absorb: min over x, y of lip_impulse_limit of that axis / |cos| or |sin|."""
+    return _per_axis(st, angle, lambda r, d, w: lip_impulse_limit(r, d, w))
+
+
+def tipping_edge(st: Stance, angle: float) -> str:
+    """Which part of the polygon the erect robot tips over under a push in the direction `angle` [deg]:
+    toe, heel, left or right edge, or the corner between two (within 1e-9 of both)."""
+    c, s = (float(x) for x in push_direction(angle))
+    cand = []
+    for k, comp, names in (("x", c, ("toe", "heel")), ("y", s, ("left", "right"))):
+        if comp != 0:
+            r, _ = st.axis(k)
+            cand.append((static_tipping_force(r, comp) / abs(comp), names[0] if comp > 0 else names[1]))
+    f = min(x for x, _ in cand)
+    hit = [n for x, n in cand if x <= f * (1 + 1e-9)]
+    return hit[0] + " edge" if len(hit) == 1 else f"{hit[0]}-{hit[1]} corner"
+
+
+# The generated header's names of the numbers the bounds read (hoap2/include/hoap2/nominal.h, HOAP2_<NAME>),
+# by the plant parameter's name where a plant has one.
+HEADER_NAMES = {"g": "G", "m1": "M1", "l1": "L1", "lg1": "LG1", "I1": "I1", "m2": "M2", "lg2": "LG2", "I2": "I2",
+                "feet_mass": "FEET_MASS", "feet_com_x": "FEET_COM_X", "toe_x": "TOE_X", "heel_x": "HEEL_X",
+                "ankle_height": "ANKLE_HEIGHT", "ankle_y": "ANKLE_Y", "sole_width": "SOLE_WIDTH",
+                "I1_roll": "I1_ROLL", "link2_com_y": "LINK2_COM_Y", "ankle_roll_max": "ANKLE_ROLL_MAX",
+                "hip_abduction_max": "HIP_ABDUCTION_MAX", "hip_adduction_max": "HIP_ADDUCTION_MAX"}
+
+
+def header_numbers(text: str) -> dict[str, float]:
+    """The numbers of the generated header (hoap2/nominal.h) by their macro name without HOAP2_ (the
+    literal ones; the derived macros are expressions and are left out)."""
+    import re
+    return {m[1]: float(m[2]) for m in re.finditer(r"^#define HOAP2_(\w+) \(?(-?[0-9.eE+-]+)\)?$", text, re.M)}
+
+
+def plant_header(unzipdir) -> dict[str, float]:
+    """header_numbers of the robot header a plant FMU was built from: its sources/hoap2/nominal.h
+    (both plant FMUs are source FMUs and carry it); {} when the FMU has none."""
+    from pathlib import Path
+    p = Path(unzipdir) / "sources" / "hoap2" / "nominal.h"
+    return header_numbers(p.read_text()) if p.is_file() else {}
+
+
+def bounds_parameters(plant_values: dict, header: dict[str, float]) -> dict[str, float]:
+    """The numbers the bounds read, by the plant parameters' names: the plant's (its parameters' and
+    constants' start values with any overrides, e.g. Hoap2Plant's m1 or Hoap2Plant3D's h_push and
+    link CoM offsets) and, for what the plant does not publish (the 3D plant's masses, the stance
+    width, the roll inertias), the generated header's (header_numbers)."""
+    out = {k: header[m] for k, m in HEADER_NAMES.items() if m in header}
+    out.update({k: float(v) for k, v in plant_values.items() if isinstance(v, (int, float)) and not isinstance(v, bool)})
+    return out
+
+
+def erect_body_com_x(r: Robot, l1: float, d1: float, d2: float, theta_ankle: float, theta_hip: float) -> float:
+    """The body CoM's x [m] in the posture (theta_ankle, theta_hip) of the sagittal angles (+ forward;
+    the hip relative to the leg) when the links' CoMs lie d1 (legs) and d2 (upper body) ahead of their
+    joint lines: x1 = lg1 sin t1 + d1 cos t1, x2 = l1 sin t1 + lg2 sin t12 + d2 cos t12. The
+    controller's erect posture (docs/controller.md section 2.1) makes it 0 for the offsets it knows."""
+    lg1, lg2 = r.z1 - r.ankle_height, r.z2 - r.ankle_height - l1
+    t1, t12 = theta_ankle, theta_ankle + theta_hip
+    x1 = lg1 * math.sin(t1) + d1 * math.cos(t1)
+    x2 = l1 * math.sin(t1) + lg2 * math.sin(t12) + d2 * math.cos(t12)
+    return (r.m1 * x1 + r.m2 * x2) / r.m_b
+
+
+def stance_from_params(params: dict, theta_ankle: float = 0.0, theta_hip: float = 0.0) -> Stance:
+    """A Stance from bounds_parameters' numbers, standing in the posture (theta_ankle, theta_hip): the
+    sagittal Robot (robot_from_plant_params), the stance width, leg length and roll inertia, the
+    body CoM's x from the links' CoM offsets (the plant's constants link1_com_x, link2_com_x; 0 for a
+    plant whose links carry their CoMs on the joint lines, as Hoap2Plant's) in that posture, its y
+    from link 2's (the legs are mirror images: their offsets cancel), the feet's y on the mid-plane,
+    and the parallelogram's largest roll from the ankle-roll and hip ab/adduction limits."""
+    r = robot_from_plant_params(params)
+    p = {k: float(v) for k, v in params.items() if isinstance(v, (int, float))}
+    d1, d2 = p.get("link1_com_x", 0.0), p.get("link2_com_x", 0.0)
+    roll = min(p.get(k, math.inf) for k in ("ankle_roll_max", "hip_abduction_max", "hip_adduction_max"))
+    return Stance(body=r, l1=p["l1"], I1_roll=p["I1_roll"], ankle_y=p["ankle_y"], sole_width=p["sole_width"],
+                  x_b=erect_body_com_x(r, p["l1"], d1, d2, theta_ankle, theta_hip),
+                  y_b=r.m2 * p.get("link2_com_y", 0.0) / r.m_b, roll_max=roll)
+
+
 NOMINAL_DURATIONS = (0.1, 0.15, 0.2, 0.3, 0.5, 1.0, 2.0, 4.0)   # scenarios/sweeps/force_duration.toml
 
 
@@ -208,10 +435,57 @@ def nominal_table(params: dict, durations=NOMINAL_DURATIONS, rise: float = 0.05)
     return "\n".join(["| quantity | value |", "|---|---|"] + [f"| {q} | {v} |" for q, v in rows])
 
 
-if __name__ == "__main__":      # pragma: no cover - prints the doc's table
+NOMINAL_ANGLES = tuple(range(0, 360, 30))      # scenarios/sweeps/polar_3d.toml
+POLAR_DURATIONS = (1.0, 0.2)                    # its pulses
+
+
+def stance_table(st: Stance) -> str:
+    """The stance's numbers (docs/capability.md section 7) as a markdown table."""
+    b = st.body
+    cx, cy = st.com
+    rows = [("ankles across (ankle_y), sole width", f"±{1000 * st.ankle_y:.1f} mm, {1000 * st.sole_width:.1f} mm"),
+            ("support polygon", f"x {1000 * b.x_heel:.1f} … {1000 * b.x_toe:.1f} mm, y ±{1000 * st.y_edge:.1f} mm"),
+            ("erect body CoM (x_b, y_b)", f"{1000 * st.x_b:.2f} mm, {1000 * st.y_b:.2f} mm"),
+            ("erect robot CoM on the ground (feet included)", f"{1000 * cx:.2f} mm, {1000 * cy:.2f} mm"),
+            ("k_y: body CoM travel per radian of leg roll", f"{1000 * st.k_y:.1f} mm"),
+            ("ω_x, rigid body pitching about the ankles (sagittal)", f"{b.omega:.3f} s⁻¹"),
+            ("ω_y, the double-support parallelogram (lateral)", f"{st.omega_y:.3f} s⁻¹"),
+            ("ω, point mass √(g/z_b)", f"{b.omega_point:.3f} s⁻¹"),
+            ("largest leg roll of the parallelogram (joint limits)", f"{st.roll_max:.4f} rad"),
+            ("body CoM reach of the parallelogram sideways", f"{1000 * st.parallelogram_reach:.1f} mm")]
+    return "\n".join(["| quantity | value |", "|---|---|"] + [f"| {q} | {v} |" for q, v in rows])
+
+
+def direction_table(st: Stance, angles=NOMINAL_ANGLES, durations=POLAR_DURATIONS, rise: float = 0.05) -> str:
+    """The bounds per push direction (docs/capability.md section 7) as a markdown table."""
+    head = ["direction [deg]", "tips over", "static [N]", "sustained [N]", "LIP impulse [N·s]"]
+    head += [f"LIP, {d:g} s pulse [N]" for d in durations]
+    out = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+    for a in angles:
+        cells = [f"{a:g}", tipping_edge(st, a), f"{static_tipping_force_3d(st, a):.2f}",
+                 f"{sustained_push_limit_3d(st, a):.2f}", f"{lip_impulse_limit_3d(st, a):.3f}"]
+        cells += [f"{float(lip_force_limit_3d(st, a, d, rise)):.2f}" for d in durations]
+        out.append("| " + " | ".join(cells) + " |")
+    return "\n".join(out)
+
+
+def nominal_tables_3d(params: dict, theta_ankle: float = 0.0, theta_hip: float = 0.0) -> str:
+    """stance_table and direction_table of the robot standing in (theta_ankle, theta_hip)."""
+    st = stance_from_params(params, theta_ankle, theta_hip)
+    return stance_table(st) + "\n\n" + direction_table(st)
+
+
+if __name__ == "__main__":      # pragma: no cover - prints the doc's tables
     import argparse
     from ..running.fmu import FMUInfo
     from ..files.paths import PLANT_FMU, find_fmu
+    from ..files.scenario import Scenario
+    from ..running.master import Models
+    from ..running.sweep import bounds_parameters_of
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--fmu-dir")
-    print(nominal_table(FMUInfo.load(find_fmu(PLANT_FMU, ap.parse_args().fmu_dir)).start_values()))
+    fmu_dir = ap.parse_args().fmu_dir
+    print(nominal_table(FMUInfo.load(find_fmu(PLANT_FMU, fmu_dir)).start_values()))
+    # the 3D plant standing in the default controller's erect posture, as a sweep on it sees it
+    p = bounds_parameters_of(Models.load(fmu_dir, plant_model="3d"), Scenario("bounds", None, plant_model="3d"))
+    print("\n" + nominal_tables_3d(p, p.get("theta_ankle_erect", 0.0), p.get("theta_hip_erect", 0.0)))

@@ -7,7 +7,10 @@ one row per variant. More keys: the first two, every other value pooled.
 
 A grid over push.force and push.duration (or push.height) also gives the capability map
 (`capability.png`): each variant's survive/fall boundary over the other key, with the analytic
-bounds of anklehip/analysis/bounds.py (docs/capability.md).
+bounds of anklehip/analysis/bounds.py (docs/capability.md). A grid over push.force and push.angle
+(and at most one of push.duration, push.height: a panel per value) gives the polar capability map
+instead (`capability.png`): each variant's boundary per push direction against the bounds in
+every direction (docs/capability.md section 7).
 """
 from __future__ import annotations
 
@@ -21,7 +24,8 @@ import numpy as np
 def _label(key: str) -> str:
     units = {"push.force": "peak push force [N]", "push.duration": "push duration [s]", "push.rise": "rise time [s]",
              "push.t": "push onset [s]", "push.height": "push height above the sole [m]",
-             "push.direction": "direction (+1 back, -1 chest)"}
+             "push.direction": "direction (+1 back, -1 chest)",
+             "push.angle": "push direction [deg] (0 forward, 90 toward +y, the left)"}
     return units.get(key, key)
 
 
@@ -110,6 +114,21 @@ def _marker(r: dict, size: int = 60) -> dict:
 CAPABILITY_X = ("push.duration", "push.height")
 
 
+def polar_panels(sf) -> list[tuple[str | None, float | None]] | None:
+    """The panels of the polar capability map: a grid over push.force and push.angle gives one panel
+    [(None, None)]; with a third key among CAPABILITY_X, a panel per value [(key, value), ...] in the
+    grid's order. None for any other sweep (random samples included)."""
+    keys = list(sf.axes)
+    if not {"push.force", "push.angle"} <= set(keys) or len(keys) > 3:
+        return None
+    rest = [k for k in keys if k not in ("push.force", "push.angle")]
+    if not rest:
+        return [(None, None)]
+    if rest[0] not in CAPABILITY_X:
+        return None
+    return [(rest[0], float(x)) for x in dict.fromkeys(sf.axes[rest[0]])]
+
+
 def capability_key(sf) -> str | None:
     """The x key of the capability map: a grid over push.force and one of CAPABILITY_X; else None."""
     keys = list(sf.axes)
@@ -152,7 +171,8 @@ def _axis_ends(xs: np.ndarray, log: bool) -> tuple[float, float]:
 
 
 def plot_capability(sf, rows: list[dict[str, Any]], out: Path, plant_params: dict) -> Path | None:
-    """capability_figure as <out>/capability.png; None when there is none."""
+    """capability_figure (the polar map for a grid over push.force and push.angle) as
+    <out>/capability.png; None when there is none."""
     fig = capability_figure(sf, rows, plant_params)
     if fig is None:
         return None
@@ -163,6 +183,33 @@ def plot_capability(sf, rows: list[dict[str, Any]], out: Path, plant_params: dic
     return p
 
 
+def _bounds_along(sf, plant_params: dict, rise: float):
+    """The bounds along the sweep's fixed push direction: (static(r), sustained(r), lip(r, durations),
+    at_height(h) -> r, the plant's push height, "on the back" or the like); r a Robot for
+    push.direction (the sagittal functions), a Stance for push.angle (the 3D ones). None when the
+    parameters do not describe the robot."""
+    import dataclasses
+
+    from . import bounds as B
+    angle = sf.push.get("angle")
+    if angle is None:
+        try:
+            robot = B.robot_from_plant_params(plant_params)
+        except KeyError:
+            return None
+        d = 1 if sf.push["direction"] >= 0 else -1
+        return (lambda r: B.static_tipping_force(r, d), lambda r: B.sustained_push_limit(r, d),
+                lambda r, dur: B.lip_force_limit(r, dur, rise, d), lambda h: dataclasses.replace(robot, h=h),
+                robot.h, "on the back" if d > 0 else "on the chest")
+    stance = stance_of(plant_params)
+    if stance is None:
+        return None
+    return (lambda s: B.static_tipping_force_3d(s, angle), lambda s: B.sustained_push_limit_3d(s, angle),
+            lambda s, dur: B.lip_force_limit_3d(s, angle, dur, rise),
+            lambda h: dataclasses.replace(stance, body=dataclasses.replace(stance.body, h=h)),
+            stance.body.h, f"toward {angle:g} deg")
+
+
 def capability_figure(sf, rows: list[dict[str, Any]], plant_params: dict):
     """The capability map: one axes, x = push.duration (log) or push.height, y = peak push force; each
     variant's survive/fall boundary (survive_boundary) as a step line, each value held back to the
@@ -170,22 +217,22 @@ def capability_figure(sf, rows: list[dict[str, Any]], plant_params: dict):
     analytic bounds: static tipping, sustained-push limit and the LIP bound of the ankle strategy.
     Forces are magnitudes (push.direction -1: on the chest, bounds mirrored). The bounds use
     plant_params (the plant FMU's defaults with the scenario's and the first variant's overrides).
-    None when the sweep is not a grid over push.force and push.duration / push.height, or the
-    parameters are not the sagittal model's."""
-    import dataclasses
+    A grid over push.force and push.angle gives polar_figure instead. None when the sweep is
+    neither, or the parameters are not the robot's (the sagittal model's; for the polar map also
+    the stance's: anklehip.analysis.bounds.stance_from_params). A fixed push.angle gives the
+    bounds in that direction."""
+    if polar_panels(sf) is not None:
+        return polar_figure(sf, rows, plant_params)
 
-    from .bounds import lip_force_limit, robot_from_plant_params, static_tipping_force, sustained_push_limit
     kx = capability_key(sf)
     if kx is None:
         return None
-    try:
-        robot = robot_from_plant_params(plant_params)
-    except KeyError:
-        return None
-    import matplotlib.pyplot as plt
-    direction = 1 if sf.push["direction"] >= 0 else -1
-    side = "back" if direction > 0 else "chest"
     rise, dur = sf.push["rise"], sf.push["duration"]
+    bounds = _bounds_along(sf, plant_params, rise)
+    if bounds is None:
+        return None
+    static_of, sustained_of, lip_of, at_height, h0, side = bounds
+    import matplotlib.pyplot as plt
     xv = np.array(sorted(set(sf.axes[kx])), float)
     log = kx == "push.duration" and xv[0] > 0
     fig, ax = plt.subplots(figsize=(8, 5.2))
@@ -207,18 +254,19 @@ def capability_figure(sf, rows: list[dict[str, Any]], plant_params: dict):
     # the analytic bounds over x
     xx = np.geomspace(x0, x1, 400) if log else np.linspace(max(x0, 1e-3), x1, 400)
     if kx == "push.duration":
-        static = np.full_like(xx, static_tipping_force(robot, direction))
-        sustained = np.full_like(xx, sustained_push_limit(robot, direction))
-        lip = lip_force_limit(robot, xx, rise, direction)
-        lip_label = f"LIP bound of the ankle strategy ({1000 * rise:g} ms rise/fall, h = {robot.h:.3f} m)"
-        shape = f"trapezoid push on the {side}, rise/fall {1000 * rise:g} ms, at h = {robot.h:.3f} m"
+        r0 = at_height(h0)
+        static = np.full_like(xx, static_of(r0))
+        sustained = np.full_like(xx, sustained_of(r0))
+        lip = np.asarray(lip_of(r0, xx))
+        lip_label = f"LIP bound of the ankle strategy ({1000 * rise:g} ms rise/fall, h = {h0:.3f} m)"
+        shape = f"trapezoid push {side}, rise/fall {1000 * rise:g} ms, at h = {h0:.3f} m"
     else:
-        hs = [dataclasses.replace(robot, h=h) for h in xx]
-        static = np.array([static_tipping_force(r, direction) for r in hs])
-        sustained = np.array([sustained_push_limit(r, direction) for r in hs])
-        lip = np.array([float(lip_force_limit(r, dur, rise, direction)) for r in hs])
+        hs = [at_height(h) for h in xx]
+        static = np.array([static_of(r) for r in hs])
+        sustained = np.array([sustained_of(r) for r in hs])
+        lip = np.array([float(lip_of(r, dur)) for r in hs])
         lip_label = f"LIP bound of the ankle strategy ({dur:g} s push, {1000 * rise:g} ms rise/fall)"
-        shape = f"trapezoid push on the {side}, {dur:g} s, rise/fall {1000 * rise:g} ms"
+        shape = f"trapezoid push {side}, {dur:g} s, rise/fall {1000 * rise:g} ms"
     ax.plot(xx, static, "--", color="k", lw=1.3, label="static tipping force (erect, rigid)")
     ax.plot(xx, sustained, ":", color="0.35", lw=1.6, label="sustained-push limit (any flat-footed strategy)")
     ax.plot(xx, lip, "-", color="k", lw=1.3, label=lip_label)
@@ -230,7 +278,7 @@ def capability_figure(sf, rows: list[dict[str, Any]], plant_params: dict):
         ax.set_xticks(xv, [f"{x:g}" for x in xv])
         ax.minorticks_off()
     ax.set_xlabel(_label(kx))
-    ax.set_ylabel(f"peak push force on the {side} [N]")
+    ax.set_ylabel(f"peak push force {side} [N]")
     ax.grid(alpha=0.3)
     note = "steps: largest force that stood with every smaller one (o), held back to the previous x; ^ all stood"
     errors = sum(r.get("outcome") == "error" for r in rows)
@@ -240,4 +288,109 @@ def capability_figure(sf, rows: list[dict[str, Any]], plant_params: dict):
         note += f"; bounds for the plant of variant {sf.variants[0].name}"
     ax.set_title(f"{sf.name}: capability map, {shape}\n{note}", fontsize=9)
     ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.12), ncol=2, fontsize=8, frameon=False)
+    return fig
+
+
+# ---------------------------------------------------------------------------------------------
+# the polar capability map: the boundary per push direction against the bounds in every direction
+
+def stance_of(plant_params: dict):
+    """The Stance of a sweep's plant parameters (anklehip.running.sweep: the plant's numbers completed
+    by its header, standing in the controller's erect posture); None when they do not describe one."""
+    from .bounds import stance_from_params
+    try:
+        return stance_from_params(plant_params, plant_params.get("theta_ankle_erect", 0.0),
+                                  plant_params.get("theta_hip_erect", 0.0))
+    except KeyError:
+        return None
+
+
+def polar_bounds(stance, angles, panel: tuple[str | None, float | None], push: dict) -> dict[str, np.ndarray]:
+    """The three bounds [N] at the angles [deg] for one panel of the polar map: the push's duration
+    and rise from the sweep's [push] unless the panel is a duration; its height the stance's unless
+    the panel is a height."""
+    import dataclasses
+
+    from .bounds import lip_force_limit_3d, static_tipping_force_3d, sustained_push_limit_3d
+    key, value = panel
+    if key == "push.height":
+        stance = dataclasses.replace(stance, body=dataclasses.replace(stance.body, h=value))
+    duration = value if key == "push.duration" else push["duration"]
+    a = np.asarray(angles, float)
+    return {"static": np.asarray(static_tipping_force_3d(stance, a)),
+            "sustained": np.asarray(sustained_push_limit_3d(stance, a)),
+            "lip": np.asarray(lip_force_limit_3d(stance, a, duration, push["rise"]))}
+
+
+def panel_rows(rows, panel):
+    """The rows of one panel of the polar map (all of them without a third key)."""
+    key, value = panel
+    return rows if key is None else [r for r in rows if key in r and float(r[key]) == value]
+
+
+def polar_figure(sf, rows: list[dict[str, Any]], plant_params: dict):
+    """The polar capability map: a polar panel per value of the grid's third key (push.duration or
+    push.height; one panel without one), seen from above with the robot facing up (0 deg, forward,
+    at the top; 90 deg, toward +y, to the left). Per variant and push direction, the largest force
+    that stood with every smaller one standing too (survive_boundary over push.angle; ^ where every
+    force tried stood), the tested directions joined by lines; and the bounds in every direction
+    (static tipping, sustained-push limit, LIP bound of the CoP-only strategy for the panel's
+    duration) for the first variant's plant in the controller's erect posture. None without a
+    stance in plant_params."""
+    stance = stance_of(plant_params)
+    panels = polar_panels(sf)
+    if stance is None or panels is None:
+        return None
+    import matplotlib.pyplot as plt
+
+    from .bounds import sustained_push_limit_3d
+    names = [x.name for x in sf.variants]
+    n = len(panels)
+    fig, axes = plt.subplots(1, n, figsize=(5.4 * n + 0.6, 6.6), subplot_kw={"projection": "polar"}, squeeze=False)
+    th = np.linspace(0.0, 360.0, 721)
+    fmax = max(sf.axes["push.force"])
+    rmax = 1.08 * max(fmax, float(np.max(sustained_push_limit_3d(stance, th))))
+    for ax, panel in zip(axes[0], panels):
+        ax.set_theta_zero_location("N")
+        b = polar_bounds(stance, th, panel, sf.push)
+        t = np.radians(th)
+        for i, v in enumerate(names):
+            xs, fs, top = survive_boundary(panel_rows(rows, panel), v, "push.angle")
+            if not len(xs):
+                continue
+            c = f"C{i}"
+            order = np.argsort(np.mod(xs, 360.0))
+            ang = np.radians(np.mod(xs[order], 360.0))
+            f, tp = fs[order], top[order]
+            closed = len(xs) > 2 and np.ptp(np.mod(xs, 360.0)) > 180.0
+            ax.plot(np.append(ang, ang[0]) if closed else ang, np.append(f, f[0]) if closed else f, "-", color=c,
+                    lw=1.2 + 1.0 * (len(names) - 1 - i), label=v)
+            ax.plot(ang[~tp], f[~tp], "o", color=c, ms=4)
+            ax.plot(ang[tp], f[tp], "^", color=c, ms=7)
+        ax.plot(t, b["static"], "--", color="k", lw=1.2, label="static tipping force (erect, rigid)")
+        ax.plot(t, b["sustained"], ":", color="0.35", lw=1.5, label="sustained-push limit (any flat-footed strategy)")
+        ax.plot(t, b["lip"], "-", color="k", lw=1.1, label="LIP bound of the CoP-only strategy")
+        ax.set_ylim(0.0, rmax)
+        ax.set_rlabel_position(112.5)
+        ax.tick_params(labelsize=7)
+        key, value = panel
+        what = (f"{sf.push['duration']:g} s pushes" if key is None else f"{value:g} s pushes"
+                if key == "push.duration" else f"pushes at h = {value:g} m")
+        ax.set_title(what, fontsize=9, pad=14)
+    rise = 1000 * sf.push["rise"]
+    dur = "" if any(k == "push.duration" for k, _ in panels) else f", {sf.push['duration']:g} s"
+    h = "" if any(k == "push.height" for k, _ in panels) else f", at h = {stance.body.h:.3f} m"
+    note = ("radius: largest peak force [N] that stood with every smaller one (o; ^ all stood), per push direction, "
+            "seen from above (0 deg forward, 90 deg to the left)")
+    errors = sum(r.get("outcome") == "error" for r in rows)
+    if errors:
+        note += f"; {errors} points failed (error), see points.csv"
+    if any(v.plant != sf.variants[0].plant for v in sf.variants):
+        note += f"; bounds for the plant of variant {sf.variants[0].name}"
+    fig.suptitle(f"{sf.name}: polar capability map, trapezoid pushes{dur}, rise/fall {rise:g} ms{h}\n{note}",
+                 fontsize=9)
+    handles, labels = axes[0][0].get_legend_handles_labels()
+    leg = fig.legend(handles, labels, loc="lower center", ncol=2, fontsize=8, frameon=False)
+    below = leg.get_window_extent(fig.canvas.get_renderer()).height / fig.bbox.height   # the panels above it
+    fig.tight_layout(rect=(0, below + 0.04, 1, 0.93))
     return fig

@@ -110,8 +110,9 @@ def sweep(result: Any, *, title: str | None = None):
 
 def capability(result: Any):
     """A sweep file's capability map (anklehip.sweep of e.g. "force_duration"): each variant's
-    survive boundary over push duration or height, with the analytic bounds; None when the sweep
-    is not a grid over push.force and push.duration / push.height."""
+    survive boundary over push duration or height, with the analytic bounds; for a grid over
+    push.force and push.angle (e.g. "polar_3d") the polar map, the boundary per push direction
+    against the bounds in every direction; None when the sweep is neither."""
     from .capability import capability_figure
     if result.sweep_file is None:
         raise ValueError("a capability map needs a sweep file (anklehip.sweep without forces)")

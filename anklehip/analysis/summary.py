@@ -160,6 +160,12 @@ def check_expect(res: RunResult, e: Expect) -> list[Check]:
             if phase is not None:
                 ok &= phase[m] == 0
             det = f"phase 0 and |theta - theta_erect| <= {e.erect_tol:g} rad from {e.erect_by:g} s"
+            if {"phase_y", "phi_ref", "psi_ref"} <= set(names):
+                # the 3D controller: erect in the frontal plane too (frontal phase 0, legs and
+                # upper body back to level within the same tolerance)
+                ok &= (d["phase_y"][m] == 0) & (np.abs(d["phi_ref"][m]) <= e.erect_tol) & \
+                      (np.abs(d["psi_ref"][m]) <= e.erect_tol)
+                det += " (both planes: phase_y 0, |phi_ref|, |psi_ref| too)"
             if e1 or e2:
                 det += f" (erect posture {e1:+.4f}, {e2:+.4f} rad)"
             if not ok.all():

@@ -108,7 +108,8 @@ def cmd_run(a) -> int:
     if a.record_steptest:
         check_output_folder(a.record_steptest, "--record-steptest")
     # the scenario, the overrides and the FMUs: loaded, checked, instantiated and initialized
-    prepared = prepare(a.scenario, plant=a.plant, engine=a.engine, controller_config=a.controller_config,
+    prepared = prepare(a.scenario, plant=a.plant, controller=a.controller_model, engine=a.engine,
+                       controller_config=a.controller_config,
                        parameters=_set(a.set), faults=_faults(a), stop_time=a.stop_time, fmu_dir=a.fmu_dir,
                        origins=ORIGINS, robot=a.robot, fmi=a.fmi)
     sc = prepared.scenario
@@ -312,7 +313,7 @@ def cmd_sweep(a) -> int:
             rec = [r["time_to_recover"] for r in stood if math.isfinite(r.get("time_to_recover", math.nan))]
             print(f"  {v.name:<16} {len(stood)} of {len(rr)} stood" + (
                 f", {len(rec)} of them erect again (median recovery {statistics.median(rec):.2f} s)" if rec else ""))
-        _print_boundaries(res.sweep_file, res.rows)
+        _print_boundaries(res.sweep_file, res.rows, res.plant_parameters)
         figs = [f for k, f in res.files.items() if k.startswith("figure") or k == "capability"]
         print(f"table {res.files['table']}\n      {res.files['parquet']}" + "".join(f"\nfigure {f}" for f in figs))
     else:
@@ -328,17 +329,32 @@ def cmd_sweep(a) -> int:
     return _points_end(res, res.files["journal"], "sweep")
 
 
-def _print_boundaries(sf, rows) -> None:
+def _print_boundaries(sf, rows, plant_params: dict | None = None) -> None:
     """A force grid over a push's duration or height: per variant and per x, the largest force that
-    stood with every smaller one standing too (the capability map's boundary; >= when all stood)."""
-    from ..analysis.capability import capability_key, survive_boundary
+    stood with every smaller one standing too (the capability map's boundary; >= when all stood).
+    A force grid over push.angle: the same per direction, a block per duration or height, with the
+    bounds in those directions (the polar map's)."""
+    from ..analysis.capability import capability_key, panel_rows, polar_bounds, polar_panels, stance_of, survive_boundary
     kx = capability_key(sf)
-    if kx is None:
+    if kx is not None:
+        print(f"largest push.force that stood, every smaller one standing too [N], by {kx}:")
+        for v in sf.variants:
+            xs, fs, top = survive_boundary(rows, v.name, kx)
+            print(f"  {v.name:<16} " + "  ".join(f"{x:g}: {'>=' if t else ''}{f:g}" for x, f, t in zip(xs, fs, top)))
         return
-    print(f"largest push.force that stood, every smaller one standing too [N], by {kx}:")
-    for v in sf.variants:
-        xs, fs, top = survive_boundary(rows, v.name, kx)
-        print(f"  {v.name:<16} " + "  ".join(f"{x:g}: {'>=' if t else ''}{f:g}" for x, f, t in zip(xs, fs, top)))
+    stance = stance_of(plant_params or {})
+    for panel in polar_panels(sf) or []:
+        key, value = panel
+        print("largest push.force that stood, every smaller one standing too [N], by push.angle [deg]"
+              + (f", {key} = {value:g}:" if key else ":"))
+        for v in sf.variants:
+            xs, fs, top = survive_boundary(panel_rows(rows, panel), v.name, "push.angle")
+            print(f"  {v.name:<16} " + "  ".join(f"{x:g}: {'>=' if t else ''}{f:g}" for x, f, t in zip(xs, fs, top)))
+        if stance is not None:
+            angles = sorted(set(sf.axes["push.angle"]))
+            b = polar_bounds(stance, angles, panel, sf.push)
+            for name, label in (("static", "static tipping"), ("lip", "LIP bound"), ("sustained", "sustained limit")):
+                print(f"  {label:<16} " + "  ".join(f"{x:g}: {f:.1f}" for x, f in zip(angles, b[name])))
 
 
 def _points_end(res, journal: Path, command: str) -> int:
@@ -382,7 +398,7 @@ def cmd_robustness(a) -> int:
     except ValueError as e:
         return _err(str(e))
     out = check_output_folder(a.out if a.out else Path("results") / f"robustness_{sc.name}", "--out")
-    models = Models.load(a.fmu_dir, plant_model=sc.plant_model)
+    models = Models.for_scenario(sc, a.fmu_dir)
     with output_lock(out):
         res = run_studies(str(path), plan, a.fmu_dir, workers=a.workers, scheduler=a.scheduler,
                           journal=out / "points.jsonl", key=sweep_key(path, models), restart=a.restart,

@@ -127,6 +127,9 @@ def build_parser() -> argparse.ArgumentParser:
                         "drop_rate=0.1 delay_steps=2 mass_mismatch=-0.2; the keys: docs/scenarios.md")
     s.add_argument("--plant", choices=("sagittal", "3d"),
                    help="the plant model (default: the scenario's plant_model, else sagittal)")
+    s.add_argument("--controller-model", choices=("sagittal", "3d"),
+                   help="the controller: sagittal (the paper's) or 3d (with the frontal plane; needs --plant 3d); "
+                        "default: the scenario's controller_model, else sagittal")
     s.add_argument("--robot", metavar="ROBOT",
                    help="run on this robot: a robot file (anklehip robot lump) or a name in robots/; both FMUs' "
                         "parameters from it, gains scaled, pushes and times in the robot's units (docs/your-robot.md)")

@@ -23,7 +23,11 @@ PLANT_FMU = "Hoap2Plant.fmu"
 # The plant models a scenario may name (key plant_model, CLI --plant): the sagittal plant (CVODE)
 # and the 3D plant on the Open Dynamics Engine (docs/plant3d.md).
 PLANT_FMUS = {"sagittal": PLANT_FMU, "3d": "Hoap2Plant3D.fmu"}
-FMUS = (CONTROLLER_FMU, *PLANT_FMUS.values())
+# The controller models (key controller_model, CLI --controller-model): the paper's sagittal controller
+# and the controller for a robot in 3D, with the frontal plane (docs/controller.md section 11); the
+# 3D controller needs the 3D plant's signals.
+CONTROLLER_FMUS = {"sagittal": CONTROLLER_FMU, "3d": "AnkleHipController3D.fmu"}
+FMUS = (*CONTROLLER_FMUS.values(), *PLANT_FMUS.values())
 RT_RUNNER = "anklehip_rt_step"
 NATIVE_LIBRARY = "libanklehip_closed_loop.so"
 

@@ -246,6 +246,7 @@ class Scenario:
     push: PushProfile = field(default_factory=PushProfile.zero)
     push_y: PushProfile = field(default_factory=PushProfile.zero)   # sideways (+ left); 3D plant only
     plant_model: str = "sagittal"         # a key of paths.PLANT_FMUS
+    controller_model: str = "sagittal"    # a key of paths.CONTROLLER_FMUS ("3d" needs plant_model "3d")
     controller_config: str = "default"    # a named configuration of the controller FMU
     controller: dict[str, Any] = field(default_factory=dict)
     plant: dict[str, Any] = field(default_factory=dict)
@@ -327,7 +328,8 @@ def _tname(v: Any) -> str:
             dict: "table"}.get(type(v), type(v).__name__)
 
 
-TOP_KEYS = {"name", "description", "stop_time", "step", "push", "push_y", "plant_model", "controller_config",
+TOP_KEYS = {"name", "description", "stop_time", "step", "push", "push_y", "plant_model", "controller_model",
+            "controller_config",
             "controller", "plant", "faults", "robot", "push_units",
             "expect", "reference", "tags"}
 PUSH_UNITS = ("SI", "robot")
@@ -523,6 +525,15 @@ def parse_scenario(data: dict, where: str = "<scenario>", path: Path | None = No
             v.fail("plant_model", f"unknown plant model {sc.plant_model!r} (known: {', '.join(PLANT_FMUS)})")
     if sc.push_y.peak() != 0 and sc.plant_model == "sagittal":
         v.fail("push_y", "a sideways push needs plant_model = \"3d\" (the sagittal plant has no y)")
+    if "controller_model" in data:
+        from .paths import CONTROLLER_FMUS
+        sc.controller_model = v.str_(data["controller_model"], "controller_model")
+        if sc.controller_model not in CONTROLLER_FMUS:
+            v.fail("controller_model", f"unknown controller model {sc.controller_model!r} "
+                                       f"(known: {', '.join(CONTROLLER_FMUS)})")
+        if sc.controller_model == "3d" and sc.plant_model != "3d":
+            v.fail("controller_model", "the 3D controller needs plant_model = \"3d\" (it reads the 3D plant's "
+                                       "lateral ZMP and joint angles)")
     if "controller_config" in data:
         sc.controller_config = v.str_(data["controller_config"], "controller_config")
         if not sc.controller_config:

@@ -27,7 +27,7 @@ import numpy as np
 from ..errors import InputError, Terminated
 from .faults import SENSED_PREFIX, Faults, SensorChannel, TransitionPush, parameter_faults
 from .fmu import DISCARD, STATUS_NAMES, FMUError, FMUInfo, Slave, vr_array
-from ..files.paths import CONTROLLER_FMU, PLANT_FMUS, find_fmu
+from ..files.paths import CONTROLLER_FMUS, PLANT_FMUS, find_fmu
 from ..files.scenario import PushProfile, PushSegment, Scenario, ScenarioError, time_grid_problem
 
 CONTROLLER_INPUTS = ("theta_ankle", "theta_hip", "zmp_x", "fz")
@@ -84,14 +84,23 @@ class Models:
 
     @classmethod
     def load(cls, fmu_dir=None, controller: str | Path | None = None,
-             plant: str | Path | None = None, plant_model: str = "sagittal", fmi: int = 2) -> "Models":
-        """The controller FMU and the plant FMU: `plant` (a path) or the FMU of `plant_model`
-        (a key of paths.PLANT_FMUS: "sagittal" or "3d"); fmi=3: the FMI 3.0 twins."""
+             plant: str | Path | None = None, plant_model: str = "sagittal", fmi: int = 2,
+             controller_model: str = "sagittal") -> "Models":
+        """The controller FMU and the plant FMU: `controller` / `plant` (paths) or the FMUs of
+        `controller_model` and `plant_model` (keys of paths.CONTROLLER_FMUS and PLANT_FMUS:
+        "sagittal" or "3d"); fmi=3: the FMI 3.0 twins."""
         if plant_model not in PLANT_FMUS:
             raise FMUError(f"unknown plant model {plant_model!r} (known: {', '.join(PLANT_FMUS)})")
-        c = Path(controller) if controller else find_fmu(CONTROLLER_FMU, fmu_dir, fmi)
+        if controller_model not in CONTROLLER_FMUS:
+            raise FMUError(f"unknown controller model {controller_model!r} (known: {', '.join(CONTROLLER_FMUS)})")
+        c = Path(controller) if controller else find_fmu(CONTROLLER_FMUS[controller_model], fmu_dir, fmi)
         p = Path(plant) if plant else find_fmu(PLANT_FMUS[plant_model], fmu_dir, fmi)
         return cls(FMUInfo.load(c), FMUInfo.load(p))
+
+    @classmethod
+    def for_scenario(cls, scenario, fmu_dir=None, fmi: int = 2) -> "Models":
+        """The FMUs a scenario names (its plant_model and controller_model)."""
+        return cls.load(fmu_dir, plant_model=scenario.plant_model, controller_model=scenario.controller_model, fmi=fmi)
 
 
 def check_overrides(models: Models, controller: dict, plant: dict, origin: str = "") -> None:
@@ -215,7 +224,7 @@ class ClosedLoop:
                  log_categories: list[str] | None = None, engine: str = "fmpy", check_load: bool = True):
         if engine not in ENGINES:
             raise InputError(f"engine {engine!r}: one of {', '.join(ENGINES)}")
-        models = models or Models.load(fmu_dir, plant_model=scenario.plant_model)
+        models = models or Models.for_scenario(scenario, fmu_dir)
         if engine == "native" and 3 in (models.controller.fmi_version, models.plant.fmi_version):
             raise ScenarioError(f"{scenario.path or scenario.name}: the native engine runs FMI 2.0 FMUs only; "
                                 "run the FMI 3.0 twins with the FMPy engine (--engine fmpy)")

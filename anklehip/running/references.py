@@ -123,7 +123,8 @@ def regenerate(names: list[str] | None = None, *, out: str | Path | None = None,
             raise InputError(f"unknown scenario(s): {', '.join(unknown)}"
                              + (f"; did you mean {' or '.join(near)}?" if near else ""))
         scs = [s for s in scs if s.name in names]
-    models = {m: Models.load(fmu_dir, plant_model=m) for m in sorted({s.plant_model for s in scs})}
+    models = {m: Models.load(fmu_dir, plant_model=m[0], controller_model=m[1])
+              for m in sorted({(s.plant_model, s.controller_model) for s in scs})}
     items: list[Regenerated] = []
     with tempfile.TemporaryDirectory(prefix="anklehip-regen-") as tmp:
         for sc in scs:
@@ -131,7 +132,7 @@ def regenerate(names: list[str] | None = None, *, out: str | Path | None = None,
                 items.append(Regenerated(sc.name, None, "skipped", "no [reference] table"))
                 report(items[-1].line(check))
                 continue
-            res = simulate(sc, models[sc.plant_model], progress=progress)
+            res = simulate(sc, models[sc.plant_model, sc.controller_model], progress=progress)
             bad = [c for c in check_expect(res, sc.expect) if not c.ok]
             dst = sc.reference.file if root is None else root / "reference" / sc.reference.file.name
             if bad and not force:
@@ -174,7 +175,7 @@ def _steptests(root: Path | None, check: bool, fmu_dir, tmp: Path) -> list[Regen
                 out.append(Regenerated(name, case, "skipped", "no [source] scenario/stop_time in steptest.toml"))
                 continue
             sc = load_scenario(find_scenario(src["scenario"]))
-            res = simulate(sc, Models.load(fmu_dir, plant_model=sc.plant_model), stop_time=float(src["stop_time"]),
+            res = simulate(sc, Models.for_scenario(sc, fmu_dir), stop_time=float(src["stop_time"]),
                            progress=False)
         except (StepTestError, InputError) as e:
             out.append(Regenerated(name, case, "failed", str(e)))

@@ -89,7 +89,7 @@ def run_point(scenario_path: str, fmu_dir: str | None, study: Study, level: floa
     def logger(env, instance, status, category, message):
         (warnings if category == b"logStatusWarning" else events).append(message.decode(errors="replace"))
 
-    res = simulate(sc, Models.load(fmu_dir, plant_model=sc.plant_model), faults=faults, progress=False,
+    res = simulate(sc, Models.for_scenario(sc, fmu_dir), faults=faults, progress=False,
                    controller_overrides=study.controller, log_categories=LOG_CATEGORIES, logger=logger)
     d = res.data[:-1] if len(res.data) > 1 else res.data     # the last row repeats the controller side
     ctrl_real = [c for c in res.controller_columns if d.dtype[c].kind == "f"]

@@ -128,7 +128,7 @@ def _rel(p: Path) -> str:
         return str(p)
 
 
-def resolve(scenario: str | os.PathLike | Scenario, *, plant: str | None = None,
+def resolve(scenario: str | os.PathLike | Scenario, *, plant: str | None = None, controller: str | None = None,
             controller_config: str | None = None, parameters: Mapping[str, Any] | None = None,
             faults: Mapping[str, Any] | Faults | None = None, stop_time: float | None = None,
             fmu_dir: str | os.PathLike | None = None, models: Models | None = None,
@@ -152,9 +152,13 @@ def resolve(scenario: str | os.PathLike | Scenario, *, plant: str | None = None,
             raise InputError(f"{name['stop_time']} {stop_time:g} {problem} (scenario {_where(sc)}, step {sc.step:g} s)")
     if plant is not None:
         sc.plant_model = plant
+    if controller is not None:
+        sc.controller_model = controller
+    if sc.controller_model == "3d" and sc.plant_model != "3d":
+        raise ScenarioError(f"{_where(sc)}: the 3D controller needs the 3D plant ({name['plant']} 3d)")
     if sc.push_y.peak() != 0 and sc.plant_model == "sagittal":
         raise ScenarioError(f"{_where(sc)}: push_y: a sideways push needs the 3D plant ({name['plant']} 3d)")
-    models = models or Models.load(fmu_dir, plant_model=sc.plant_model, fmi=fmi)
+    models = models or Models.load(fmu_dir, plant_model=sc.plant_model, fmi=fmi, controller_model=sc.controller_model)
     if controller_config is not None:
         sc.controller_config = controller_config
         models.controller.configuration(sc.controller_config, name["controller_config"])
@@ -324,7 +328,8 @@ class PreparedRun:
             result.warnings.append(f"record_steptest {folder}: {type(e).__name__}: {e}")
 
 
-def prepare(scenario: str | os.PathLike | Scenario, *, plant: str | None = None, engine: str = "fmpy",
+def prepare(scenario: str | os.PathLike | Scenario, *, plant: str | None = None, controller: str | None = None,
+            engine: str = "fmpy",
             controller_config: str | None = None, parameters: Mapping[str, Any] | None = None,
             faults: Mapping[str, Any] | Faults | None = None, push: PushProfile | None = None,
             stop_time: float | None = None, fmu_dir: str | os.PathLike | None = None,
@@ -334,17 +339,20 @@ def prepare(scenario: str | os.PathLike | Scenario, *, plant: str | None = None,
     """resolve() the input, then instantiate and initialize both FMUs (ClosedLoop): a PreparedRun,
     or an InputError naming what is wrong (also the FMU's own reason when it refuses its
     parameters at initialization)."""
-    own_plant = scenario_of(scenario).plant_model
-    sc, models = resolve(scenario, plant=plant, controller_config=controller_config, parameters=parameters,
+    own = scenario_of(scenario)
+    sc, models = resolve(scenario, plant=plant, controller=controller, controller_config=controller_config,
+                         parameters=parameters,
                          faults=faults, stop_time=stop_time, fmu_dir=fmu_dir, models=models, origins=origins,
                          robot=robot, fmi=fmi)
     # the scenario's reference is of its own plant, robot and parameters
     changed = (bool(parameters) or controller_config is not None or bool(faults) or push is not None
-               or robot is not None or sc.plant_model != own_plant)
+               or robot is not None or sc.plant_model != own.plant_model
+               or sc.controller_model != own.controller_model)
     return PreparedRun(sc, models, engine=engine, push=push, stop_time=stop_time, changed=changed, logger=logger)
 
 
-def run(scenario: str | os.PathLike | Scenario, *, plant: str | None = None, engine: str = "fmpy",
+def run(scenario: str | os.PathLike | Scenario, *, plant: str | None = None, controller: str | None = None,
+        engine: str = "fmpy",
         controller_config: str | None = None, parameters: Mapping[str, Any] | None = None,
         faults: Mapping[str, Any] | Faults | None = None, push: PushProfile | None = None,
         stop_time: float | None = None, compare_reference: bool = True,
@@ -358,6 +366,8 @@ def run(scenario: str | os.PathLike | Scenario, *, plant: str | None = None, eng
     scenario           a name (``"paper_five_pushes"``), a path to a scenario TOML, or an
                        anklehip.Scenario (e.g. from load_scenario, changed in memory)
     plant              ``"sagittal"`` or ``"3d"`` (default: the scenario's plant_model)
+    controller         ``"sagittal"`` or ``"3d"``: the paper's controller or the one with the frontal
+                       plane (default: the scenario's controller_model; "3d" needs the 3D plant)
     engine             ``"fmpy"`` (default) or ``"native"`` (the same loop in C++, bit-identical)
     controller_config  a named controller configuration, e.g. ``"paper"``
     parameters         overrides, e.g. ``{"controller.Ka": 30, "plant.h_push": 0.3}``
@@ -376,7 +386,7 @@ def run(scenario: str | os.PathLike | Scenario, *, plant: str | None = None, eng
     Raises an InputError (before anything is written) for a wrong input; a fall, an error during
     the run or Ctrl-C is an `outcome` of the result.
     """
-    prepared = prepare(scenario, plant=plant, engine=engine, controller_config=controller_config,
+    prepared = prepare(scenario, plant=plant, controller=controller, engine=engine, controller_config=controller_config,
                        parameters=parameters, faults=faults, push=push, stop_time=stop_time, fmu_dir=fmu_dir,
                        models=models, logger=logger, robot=robot, fmi=fmi)
     return prepared.run(out=out, figures=figures, animate=animate, animation=animation,

@@ -62,10 +62,10 @@ def parse_variant(spec: str) -> Variant:
 
 
 @functools.lru_cache(maxsize=4)
-def cached_models(fmu_dir: str | None, plant_model: str):
+def cached_models(fmu_dir: str | None, plant_model: str, controller_model: str = "sagittal"):
     """The FMUs, loaded (unpacked) once per worker process and reused by its runs."""
     from .master import Models
-    return Models.load(fmu_dir, plant_model=plant_model)
+    return Models.load(fmu_dir, plant_model=plant_model, controller_model=controller_model)
 
 
 def _one(scenario_path: str, fmu_dir: str | None, peak: float, variant: Variant, engine: str = "fmpy") -> dict[str, Any]:
@@ -77,7 +77,7 @@ def _one(scenario_path: str, fmu_dir: str | None, peak: float, variant: Variant,
     base = sc.push.peak()
     if base == 0:
         raise ValueError(f"{scenario_path}: the scenario has no push to scale")
-    res = simulate(sc, cached_models(fmu_dir, sc.plant_model), controller_overrides=variant.controller,
+    res = simulate(sc, cached_models(fmu_dir, sc.plant_model, sc.controller_model), controller_overrides=variant.controller,
                    plant_overrides=variant.plant, push=sc.push.scaled(peak / base), progress=False, engine=engine, check_load=False)
     d = res.data
     return {"variant": variant.name, "peak_force": peak, "outcome": res.outcome,
@@ -297,7 +297,7 @@ def _force_sweep(scenario, forces, variants, fmu_dir, name):
     if not forces or not all(np.isfinite(forces)):
         raise InputError(f"{name['forces']}: finite numbers, got {forces!r}")
     variants = [v if isinstance(v, Variant) else parse_variant(v) for v in (variants or ["default"])]
-    models = Models.load(fmu_dir, plant_model=sc.plant_model)
+    models = Models.for_scenario(sc, fmu_dir)
     for v in variants:    # a bad variant is an error here, not a traceback in every worker
         models.controller.configuration(v.config or sc.controller_config, f"{name['variants']} {v.name}")
         check_overrides(models, v.controller, v.plant, f"{name['variants']} {v.name}")
@@ -310,12 +310,12 @@ def _force_sweep(scenario, forces, variants, fmu_dir, name):
 def _sweep_file(name_or_path, fmu_dir):
     from ..files.paths import find_sweep_file
     from ..files.scenario import faults_from, load_scenario
-    from .master import PUSH, Models, check_overrides, check_push_range
+    from .master import PUSH, PUSH_Y, Models, check_overrides, check_push_range
     from .sweepfile import load_sweep_file, point_setup
     path = find_sweep_file(str(name_or_path))
     sf = load_sweep_file(path)
     sc = load_scenario(sf.scenario)
-    models = Models.load(fmu_dir, plant_model=sc.plant_model)
+    models = Models.for_scenario(sc, fmu_dir)
     where = str(path)
     for k, vals in list(sf.axes.items()) + [(k, list(r)) for k, r in sf.ranges.items()]:
         group, _, name = k.partition(".")
@@ -329,10 +329,12 @@ def _sweep_file(name_or_path, fmu_dir):
                 check_overrides(models, {}, {"h_push": x}, f"{where}: {k}")
     # the strongest push of the sweep within the plant's push range
     forces = sf.axes.get("push.force") or list(sf.ranges.get("push.force", ())) or [sf.push["force"]]
+    angled = "angle" in sf.push or "push.angle" in sf.axes or "push.angle" in sf.ranges
     for f in (min(forces), max(forces)):
-        for sign in (1, -1):
-            push, *_ = point_setup(sf, {"push.force": f, "push.direction": sign}, sc)
-            check_push_range(models.plant, push, PUSH, f"{where}: push.force {f:g} N")
+        for d in ((0.0, 90.0, 180.0, 270.0) if angled else (1, -1)):
+            pt = point_setup(sf, {"push.force": f, ("push.angle" if angled else "push.direction"): d}, sc)
+            check_push_range(models.plant, pt.push, PUSH, f"{where}: push.force {f:g} N")
+            check_push_range(models.plant, pt.push_y, PUSH_Y, f"{where}: push.force {f:g} N")
     for v in sf.variants:
         models.controller.configuration(v.config or sc.controller_config, f"{where}: variant {v.name}")
         check_overrides(models, v.controller, v.plant, f"{where}: variant {v.name}")
@@ -391,7 +393,7 @@ def sweep(scenario, *, forces=None, variants=None, workers: int = 2, engine: str
         fn, title, key = sweep_point, sc.name, sweep_key(path, models)
         stem, journal_name, what = "sweep", "sweep.points.jsonl", f"sweep of {path.name}"
     result = SweepResult(name=title, rows=[], total=len(specs), sweep_file=sf, scenario=sc,
-                         plant_parameters=_plant_parameters(fmu_dir, sc, sf))
+                         plant_parameters=bounds_parameters_of(models, sc, sf.variants[0] if sf is not None else None))
     if out is None:
         t0 = time.perf_counter()
         o = run_points(fn, specs, workers=workers, scheduler=scheduler, journal=None, key=key, what=what,
@@ -424,13 +426,24 @@ def sweep(scenario, *, forces=None, variants=None, workers: int = 2, engine: str
     return result
 
 
-def _plant_parameters(fmu_dir, sc, sf) -> dict:
-    """The sagittal plant's parameters a sweep's bounds use: the FMU's defaults with the scenario's
-    and the first variant's plant overrides ({} without the sagittal plant FMU)."""
-    from .fmu import FMUError, FMUInfo
-    from ..files.paths import PLANT_FMU, MissingFileError, find_fmu
+def bounds_parameters_of(models, sc, v: Variant | None = None) -> dict:
+    """The numbers a sweep's bounds use (anklehip.analysis.bounds.bounds_parameters) for the scenario
+    `sc` run by `models` with the variant `v` (a sweep: its first): the plant FMU's parameters and
+    constants with the scenario's and the variant's plant overrides, completed by the generated
+    robot header the plant FMU carries; and the posture in which the robot stands when the push
+    comes, the controller's erect posture (theta_ankle_erect, theta_hip_erect: docs/controller.md
+    section 2.1)."""
+    import dataclasses
+
+    from ..analysis.bounds import bounds_parameters, plant_header
+    from ..errors import InputError
+    from .master import ERECT, _erect, scenario_parameters
+    over = {**sc.plant, **(v.plant if v else {})}
+    out = bounds_parameters({**models.plant.start_values(), **over}, plant_header(models.plant.unzipdir))
     try:
-        params = FMUInfo.load(find_fmu(PLANT_FMU, fmu_dir)).start_values()
-    except (MissingFileError, FMUError):
-        return {}
-    return {**params, **sc.plant, **(sf.variants[0].plant if sf is not None else {})}
+        sc0 = dataclasses.replace(sc, controller_config=v.config) if v is not None and v.config else sc
+        c_over, _ = scenario_parameters(sc0, models, v.controller if v else None, v.plant if v else None)
+        out.update(zip(ERECT, _erect(models, c_over)))
+    except InputError:   # no erect posture to read (e.g. a robot file's scenario): the joints' zero
+        pass
+    return out

@@ -1,6 +1,7 @@
 """Sweep files (`scenarios/sweeps/<name>.toml`): a base scenario, the push that is swept, the
 controller variants compared, and a full grid or seeded random samples over the push's magnitude,
-duration, rise time, height, onset and direction, controller and plant parameters and fault
+duration, rise time, height, onset and direction (+-1 along x, or an angle in the horizontal plane on
+the 3D plant), controller and plant parameters and fault
 options. Each point is one closed-loop run of the base scenario with that push and those values
 (docs/scenarios.md, "Sweep files"). Errors name the file, the key and the value.
 
@@ -13,6 +14,8 @@ options. Each point is one closed-loop run of the base scenario with that push a
     duration = 0.5                        # [s], rise included
     rise = 0.05                           # [s]
     direction = 1                         # +1 on the back (forward), -1 on the chest
+    # angle = 90                          # or: the horizontal direction [deg], 0 forward (on the back),
+                                          # 90 toward +y (the left), 180 on the chest; 3D plant only
     [[variant]]                           # compared configurations (default: one, the scenario's)
     name = "ankle_only"
     controller = { hip_strategy_enabled = 0 }
@@ -25,9 +28,11 @@ options. Each point is one closed-loop run of the base scenario with that push a
     seed = 1
     "push.force" = [2.0, 20.0]
 
-Swept keys: push.force, push.duration, push.rise, push.t, push.direction, push.height (the push
-point's height above the sole, the plant's h_push); controller.<parameter>, plant.<parameter>
-(checked against the FMUs); faults.<key> (docs/scenarios.md, "Fault injection").
+Swept keys: push.force, push.duration, push.rise, push.t, push.direction, push.angle (the push's
+direction [deg]: the peak force splits into the scenario's push, x, and push_y, y; not with
+push.direction; off the x axis only on the 3D plant), push.height (the push point's height above
+the sole, the plant's h_push); controller.<parameter>, plant.<parameter> (checked against the
+FMUs); faults.<key> (docs/scenarios.md, "Fault injection").
 """
 from __future__ import annotations
 
@@ -36,7 +41,7 @@ import json
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -46,7 +51,8 @@ from .sweep import MAX_GRID, Variant, parse_grid
 
 TOP_KEYS = {"description", "scenario", "stop_time", "push", "variant", "grid", "random"}
 PUSH_FIELDS = {"t": 2.0, "force": 8.0, "duration": 0.5, "rise": 0.05, "direction": 1.0}
-PUSH_SWEPT = {"force", "duration", "rise", "t", "direction", "height"}
+PUSH_OPTIONAL = {"angle"}           # [push] keys without a default: the push's direction in degrees
+PUSH_SWEPT = {"force", "duration", "rise", "t", "direction", "angle", "height"}
 RANDOM_KEYS = {"n", "seed"}
 
 
@@ -114,7 +120,7 @@ def load_sweep_file(path: str | Path) -> SweepFile:
         sf.stop_time = v.num(data["stop_time"], "stop_time", gt=0.0)
     if "push" in data:
         p = v.table(data["push"], "push")
-        v.keys(p, set(PUSH_FIELDS), "push.")
+        v.keys(p, set(PUSH_FIELDS) | PUSH_OPTIONAL, "push.")
         for k, x in p.items():
             sf.push[k] = v.num(x, f"push.{k}", **({"gt": 0.0} if k in ("force", "duration") else {"ge": 0.0}
                                                   if k in ("t", "rise") else {}))
@@ -172,7 +178,35 @@ def load_sweep_file(path: str | Path) -> SweepFile:
             v.fail("random", "names no key to sweep")
         if sf.n_random * len(sf.variants) > MAX_GRID:
             v.fail("random.n", f"{sf.n_random * len(sf.variants)} points (variants included), more than {MAX_GRID}")
+    _check_angle(v, sf, set(data.get("push", {})))
     return sf
+
+
+def _on_x_axis(angle: float) -> bool:
+    return math.remainder(angle, 180.0) == 0.0
+
+
+def _check_angle(v: _V, sf: SweepFile, push_keys: set[str]) -> None:
+    """push.angle (fixed or swept) excludes push.direction, and a push off the x axis needs the 3D
+    plant: the base scenario's plant_model is read to tell."""
+    where = [("push.angle", [sf.push["angle"]])] if "angle" in sf.push else []
+    where += [(f"grid.{k}", vals) for k, vals in sf.axes.items() if k == "push.angle"]
+    where += [(f"random.{k}", list(r)) for k, r in sf.ranges.items() if k == "push.angle"]
+    if not where:
+        return
+    direction = ["push.direction"] if "direction" in push_keys else []
+    direction += [f"{g}.push.direction" for g, d in (("grid", sf.axes), ("random", sf.ranges)) if "push.direction" in d]
+    if direction:
+        v.fail(direction[0], f"give the push's direction once: {where[0][0]} or push.direction (+-1 along x), not both")
+    from ..files.scenario import load_scenario
+    sc = load_scenario(sf.scenario)
+    if sc.plant_model != "sagittal":
+        return
+    for key, vals in where:
+        off = [x for x in vals if not _on_x_axis(x)] if not key.startswith("random.") else vals
+        if off:
+            v.fail(key, f"{off[0]:g} deg: a push off the x axis (other than 0 or 180 deg) needs the 3D plant, and the "
+                        f"base scenario {sf.scenario.name} runs the sagittal plant (plant_model = \"3d\" in a scenario)")
 
 
 def _check_key(v: _V, where: str, key: str) -> None:
@@ -185,8 +219,30 @@ def _check_key(v: _V, where: str, key: str) -> None:
                   "plant.P, faults.KEY)")
 
 
-def point_setup(sf: SweepFile, vals: dict[str, float], scenario) -> tuple[PushProfile, dict, dict, dict]:
-    """The push profile and the controller / plant / fault overrides of one point."""
+class Point(NamedTuple):
+    """One point's push and overrides: the push along x (the scenario's push) and y (its push_y), the
+    push along its own direction (its peak the signed force along x for push.direction, the force's
+    magnitude for push.angle), and the controller, plant and fault overrides."""
+    push: PushProfile
+    push_y: PushProfile
+    along: PushProfile
+    controller: dict
+    plant: dict
+    faults: dict
+
+
+def _pulse(sf_push: dict, force: float) -> PushProfile:
+    if force == 0.0:
+        return PushProfile.zero()
+    return PushProfile.from_segments([PushSegment("pulse", t=sf_push["t"], force=force, duration=sf_push["duration"],
+                                                  rise=sf_push["rise"])])
+
+
+def point_setup(sf: SweepFile, vals: dict[str, float], scenario=None) -> Point:
+    """The pushes and the controller / plant / fault overrides of one point. With push.angle the peak
+    force F splits into F cos(angle) along x and F sin(angle) along y (exact on the axes:
+    anklehip.analysis.bounds.push_direction)."""
+    from ..analysis.bounds import push_direction
     push = dict(sf.push)
     c, p, f = {}, {}, {}
     for k, x in vals.items():
@@ -202,10 +258,14 @@ def point_setup(sf: SweepFile, vals: dict[str, float], scenario) -> tuple[PushPr
             p[name] = x
         else:
             f[name] = x
-    force = push["force"] * (1.0 if push["direction"] >= 0 else -1.0)
-    prof = PushProfile.from_segments([PushSegment("pulse", t=push["t"], force=force, duration=push["duration"],
-                                                  rise=push["rise"])])
-    return prof, c, p, f
+    if "angle" in push:
+        cx, sy = (float(x) for x in push_direction(push["angle"]))
+        fx, fy = push["force"] * cx, push["force"] * sy
+        along = _pulse(push, push["force"])
+    else:
+        fx, fy = push["force"] * (1.0 if push["direction"] >= 0 else -1.0), 0.0
+        along = _pulse(push, fx)
+    return Point(_pulse(push, fx), _pulse(push, fy), along, c, p, f)
 
 
 def sweepfile_point(spec: dict) -> dict[str, Any]:
@@ -220,20 +280,24 @@ def sweepfile_point(spec: dict) -> dict[str, Any]:
     var = spec["variant"]
     if var["config"]:
         sc.controller_config = var["config"]
-    push, c, p, f = point_setup(sf, vals, sc)
+    pt = point_setup(sf, vals, sc)
+    c, p, f = pt.controller, pt.plant, pt.faults
+    sc.push_y = pt.push_y        # the swept push replaces the scenario's pushes, sideways ones too
     faults = faults_from(f, sc.faults, f"{sf.path}: faults") if f else sc.faults
     engine = spec["engine"] if not (faults.sensor_active or faults.transition_push) else "fmpy"
     stop = sf.stop_time or sc.stop_time
-    res = simulate(sc, cached_models(spec["fmu_dir"], sc.plant_model), controller_overrides={**var["controller"], **c},
-                   plant_overrides={**var["plant"], **p}, push=push, faults=faults, stop_time=stop,
+    res = simulate(sc, cached_models(spec["fmu_dir"], sc.plant_model, sc.controller_model), controller_overrides={**var["controller"], **c},
+                   plant_overrides={**var["plant"], **p}, push=pt.push, faults=faults, stop_time=stop,
                    progress=False, engine=engine, check_load=False)
     d = res.data
-    ps = summarize_pushes(res, push, sc.expect.erect_tol)
+    ps = summarize_pushes(res, pt.along, sc.expect.erect_tol)
     s = ps[0] if ps else None
     row: dict[str, Any] = {"variant": var["name"], **vals, "outcome": res.outcome,
                            "fell_at": res.fell_at if res.fell_at is not None else math.nan,
-                           "peak_force": push.peak(), "impulse": s.impulse if s else math.nan,
+                           "peak_force": pt.along.peak(), "impulse": s.impulse if s else math.nan,
                            "peak_zmp": s.peak_zmp if s else math.nan,
+                           **({"peak_zmp_y": float(d["zmp_y"][np.argmax(np.abs(d["zmp_y"]))])}
+                              if "zmp_y" in d.dtype.names and len(d) else {}),
                            "phases": "".join(str(x) for x in s.phases) if s else "",
                            "max_phase": int(d["phase"].max()) if "phase" in d.dtype.names else -1,
                            "time_to_recover": s.time_to_recover if s and s.time_to_recover is not None else math.nan,

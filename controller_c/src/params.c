@@ -99,8 +99,8 @@ static const struct {
     const char *description;
     void (*fill)(ahc_params *);
 } k_configs[] = {
-    {"default", "The paper's law with reference kinematics for eqs. 23-24, p_lim = 25 mm, T_ah = 0.5 s and a 20 ms "
-                "ZMP filter, chosen by push sweeps on the plant (docs/controller.md section 4.5)",
+    {"default", "The paper's law with reference kinematics for eqs. 23-24, p_lim = 25 mm and T_ah = 0.5 s, "
+                "chosen by push sweeps on the plant (docs/controller.md section 4.5)",
      ahc_params_default},
     {"paper", "Nenchev & Nishio (ICRA 2010) as published: p_lim = 45 mm, T_ah = 1 s (docs/controller.md section 4.5)",
      ahc_params_paper},

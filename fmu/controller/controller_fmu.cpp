@@ -17,6 +17,7 @@
 
 #include "ahc/controller.h"
 #include "fmuglue/glue.hpp"
+#include "ahcfmu/param_vars.hpp"
 
 using namespace fmuglue;
 
@@ -43,47 +44,6 @@ bool isTunable(const char* name) {
   for (const char* t : kTunable)
     if (std::strcmp(t, name) == 0) return true;
   return false;
-}
-
-// resources/configurations.toml: every named configuration of the C library (ahc_params_named)
-// with the parameter values that differ from the defaults, for importers that select a
-// configuration by name (anklehip: `controller_config = "paper"`). Generated, never edited.
-std::string configurationsToml() {
-  ahc_params def;
-  ahc_params_default(&def);
-  size_t count = 0;
-  const ahc_param_info* table = ahc_param_table(&count);
-  std::string s =
-      "# Named configurations of AnkleHipController: parameter values that differ from the defaults.\n"
-      "# Generated from controller_c (ahc_params_named); see documentation/ and docs/controller.md.\n";
-  for (size_t c = 0; c < ahc_config_count(); ++c) {
-    ahc_params p;
-    ahc_params_named(&p, ahc_config_name(c));
-    s += std::string("\n[") + ahc_config_name(c) + "]\ndescription = \"" + ahc_config_description(c) + "\"\n";
-    for (size_t i = 0; i < count; ++i) {
-      const char* a = reinterpret_cast<const char*>(&p) + table[i].offset;
-      const char* b = reinterpret_cast<const char*>(&def) + table[i].offset;
-      char line[160];
-      if (table[i].is_int) {
-        int x, y;
-        std::memcpy(&x, a, sizeof x);
-        std::memcpy(&y, b, sizeof y);
-        if (x == y) continue;
-        std::snprintf(line, sizeof line, "%s = %d\n", table[i].name, x);
-      } else {
-        double x, y;
-        std::memcpy(&x, a, sizeof x);
-        std::memcpy(&y, b, sizeof y);
-        if (x == y) continue;
-        // The shortest of %.15g / %.17g that reads back exactly.
-        std::snprintf(line, sizeof line, "%.15g", x);
-        const char* fmt = std::strtod(line, nullptr) == x ? "%s = %.15g\n" : "%s = %.17g\n";
-        std::snprintf(line, sizeof line, fmt, table[i].name, x);
-      }
-      s += line;
-    }
-  }
-  return s;
 }
 
 ModelInfo makeInfo() {
@@ -153,29 +113,8 @@ ModelInfo makeInfo() {
 
   size_t count = 0;
   const ahc_param_info* table = ahc_param_table(&count);
-  for (size_t i = 0; i < count; ++i) {
-    const ahc_param_info& p = table[i];
-    Variable v;
-    v.name = p.name;
-    v.vr = vr::first_param + static_cast<fmi2ValueReference>(i);
-    v.type = p.is_int ? Type::Integer : Type::Real;
-    v.causality = Causality::Parameter;
-    v.variability = isTunable(p.name) ? Variability::Tunable : Variability::Fixed;
-    v.unit = p.is_int ? "" : p.unit;
-    v.description = p.description;
-    const char* base = reinterpret_cast<const char*>(&def) + p.offset;
-    if (p.is_int) {
-      int x;
-      std::memcpy(&x, base, sizeof x);
-      v.start = x;
-    } else {
-      std::memcpy(&v.start, base, sizeof(double));
-    }
-    v.min = std::isfinite(p.min) ? p.min : kNoBound;
-    v.max = std::isfinite(p.max) ? p.max : kNoBound;
-    m.variables.push_back(v);
-  }
-  m.resources.emplace_back("configurations.toml", configurationsToml());
+  ahcfmu::addParamVariables(m, table, count, vr::first_param, &def, isTunable);
+  m.resources.emplace_back("configurations.toml", ahcfmu::configurationsToml("AnkleHipController"));
   return m;
 }
 
@@ -390,18 +329,7 @@ class ControllerModel final : public Model {
     if (!tunableOnly) ahc_params_default(&p);
     size_t count = 0;
     const ahc_param_info* table = ahc_param_table(&count);
-    for (size_t i = 0; i < count; ++i) {
-      if (tunableOnly && !isTunable(table[i].name)) continue;
-      char* base = reinterpret_cast<char*>(&p) + table[i].offset;
-      const fmi2ValueReference r = vr::first_param + static_cast<fmi2ValueReference>(i);
-      if (table[i].is_int) {
-        int x = ctx.integer(r);
-        std::memcpy(base, &x, sizeof x);
-      } else {
-        double x = ctx.real(r);
-        std::memcpy(base, &x, sizeof x);
-      }
-    }
+    ahcfmu::readParamVariables(ctx, table, count, vr::first_param, &p, tunableOnly ? isTunable : nullptr);
   }
 
   // The number of ticks whose times t0 + k T fall in (t0, t], by the rule of the file's header.

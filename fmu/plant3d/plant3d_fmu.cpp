@@ -45,7 +45,8 @@ enum : fmi2ValueReference {
   ode_steps = 95, mode_switches = 96, contacts = 97, held_feet = 98,
   link1_com_x = 170, link2_com_x = 171,  // constants: the robot's CoM offsets for the controller
   first_real_param = 100,  // 100 + index into realParams()
-  servo_on = 190, seed = 191, flat_foot_weld = 192
+  servo_on = 190, seed = 191, flat_foot_weld = 192,
+  first_leg_ref = 200,     // 12 per-leg set points q_<side>_<joint>_ref: 200 + side * 6 + joint
 };
 }
 
@@ -134,6 +135,19 @@ const std::vector<RealParam>& realParams() {
 
 const char* kCellNames[kCells] = {"front_left", "front_right", "rear_left", "rear_right"};
 const char* kSideNames[kLegs] = {"left", "right"};
+// Per leg joint: the both-legs input its per-leg input is added to, and the sense both share with
+// the output q_<side>_<joint> (docs/plant3d.md section 3; the same for both legs, not mirrored).
+const char* kBothLegsRef[kLegJoints] = {"theta_hip_yaw_ref", "theta_hip_ref",   "theta_hip_roll_ref",
+                                        "theta_knee_ref",    "theta_ankle_ref", "theta_ankle_roll_ref"};
+const char* kJointWords[kLegJoints] = {"hip yaw", "hip pitch", "hip roll", "knee", "ankle pitch", "ankle roll"};
+const char* kJointSense[kLegJoints] = {
+    "+ = toes turned to the left, about +z",
+    "sagittal sense, + = trunk pitched forward relative to the thigh: hip flexion",
+    "+ = foot swung to the left relative to the trunk, about +x",
+    "+ = flexed",
+    "sagittal sense, + = shank pitched forward relative to the foot",
+    "+ = the foot's left edge up relative to the shank, about +x"};
+std::string legRefName(int side, int k) { return std::string("q_") + kSideNames[side] + "_" + joint_name(k) + "_ref"; }
 
 ModelInfo makeInfo() {
   Params def = default_params();
@@ -166,6 +180,12 @@ ModelInfo makeInfo() {
   add("theta_hip_roll_ref", vr::theta_hip_roll_ref, R, In, Cont, "rad", "Hip roll set point, both legs", 0.0);
   add("theta_hip_yaw_ref", vr::theta_hip_yaw_ref, R, In, Cont, "rad", "Hip yaw set point, both legs", 0.0);
   add("theta_knee_ref", vr::theta_knee_ref, R, In, Cont, "rad", "Knee set point, both legs (+ = flexed)", 0.0);
+  for (int s = 0; s < kLegs; ++s)
+    for (int k = 0; k < kLegJoints; ++k)
+      add(legRefName(s, k), vr::first_leg_ref + s * kLegJoints + k, R, In, Cont, "rad",
+          std::string(s == Left ? "Left" : "Right") + " " + kJointWords[k] + " set point, this leg only: added to " +
+              kBothLegsRef[k] + " (" + kJointSense[k] + ")",
+          0.0);
 
   add("theta_ankle", vr::theta_ankle, R, Out, Cont, "rad", "Ankle pitch (leg relative to foot), mean of both legs");
   add("theta_hip", vr::theta_hip, R, Out, Cont, "rad", "Hip pitch (trunk relative to leg), mean of both legs");
@@ -217,7 +237,8 @@ ModelInfo makeInfo() {
   add("input_fault", vr::input_fault, I, Out, Disc, "",
       "Inputs held at their last finite value because they are NaN/Inf: bit i = input i in the order theta_ankle_ref, "
       "theta_hip_ref, push_force, push_force_y, theta_ankle_roll_ref, theta_hip_roll_ref, theta_hip_yaw_ref, "
-      "theta_knee_ref (0 = healthy)");
+      "theta_knee_ref, then bit 8 + 6 side + joint = q_<side>_<joint>_ref (left, right; hip_yaw, hip, hip_roll, knee, "
+      "ankle, ankle_roll) (0 = healthy)");
   add("ode_steps", vr::ode_steps, I, Out, Disc, "", "ODE steps so far");
   add("mode_switches", vr::mode_switches, I, Out, Disc, "", "Contact mode switches so far");
   add("contacts", vr::contacts, I, Out, Disc, "", "Sole-corner contacts in the last ODE step (a held foot: 4)");
@@ -250,13 +271,31 @@ ModelInfo makeInfo() {
 
 int clampi(std::int64_t v) { return v > 2147483647 ? 2147483647 : static_cast<int>(v); }
 
-constexpr int kInputs = 8;
-const fmi2ValueReference kInputVr[kInputs] = {vr::theta_ankle_ref,      vr::theta_hip_ref,      vr::push_force,
-                                              vr::push_force_y,         vr::theta_ankle_roll_ref, vr::theta_hip_roll_ref,
-                                              vr::theta_hip_yaw_ref,    vr::theta_knee_ref};
-const char* kInputNames[kInputs] = {"theta_ankle_ref",      "theta_hip_ref",      "push_force",
-                                    "push_force_y",         "theta_ankle_roll_ref", "theta_hip_roll_ref",
-                                    "theta_hip_yaw_ref",    "theta_knee_ref"};
+// The Real inputs in input_fault's bit order: the eight of before, then the per-leg set points.
+constexpr int kBothLegInputs = 8, kFirstLegRef = kBothLegInputs, kInputs = kBothLegInputs + kLegs * kLegJoints;
+struct InputTable {
+  fmi2ValueReference vr[kInputs];
+  std::string name[kInputs];
+  const char* c_name[kInputs];
+};
+const InputTable& inputTable() {
+  static const InputTable t = [] {
+    InputTable x{{vr::theta_ankle_ref, vr::theta_hip_ref, vr::push_force, vr::push_force_y, vr::theta_ankle_roll_ref,
+                  vr::theta_hip_roll_ref, vr::theta_hip_yaw_ref, vr::theta_knee_ref},
+                 {"theta_ankle_ref", "theta_hip_ref", "push_force", "push_force_y", "theta_ankle_roll_ref",
+                  "theta_hip_roll_ref", "theta_hip_yaw_ref", "theta_knee_ref"},
+                 {}};
+    for (int s = 0; s < kLegs; ++s)
+      for (int k = 0; k < kLegJoints; ++k) {
+        const int i = kFirstLegRef + s * kLegJoints + k;
+        x.vr[i] = vr::first_leg_ref + s * kLegJoints + k;
+        x.name[i] = legRefName(s, k);
+      }
+    for (int i = 0; i < kInputs; ++i) x.c_name[i] = x.name[i].c_str();
+    return x;
+  }();
+  return t;
+}
 
 // The plant's parameters from the parameter variables (range-checked by the glue).
 Params paramsFromStore(const Context& ctx) {
@@ -326,8 +365,9 @@ class Plant3DFmu : public Model {
     built_from_.clear();
   }
 
-  // 2: field by field, parameters from the store; 3: the held feet
-  std::uint32_t state_version() const override { return 3; }
+  // 2: field by field, parameters from the store; 3: the held feet; 4: the per-leg set points
+  // (inputs and last finite inputs) and each joint's servo torque
+  std::uint32_t state_version() const override { return 4; }
 
   // The initial outputs in initialization mode (<InitialUnknowns>: computed from the parameters,
   // after the settling): the plant is built there and kept for fmi2ExitInitializationMode while
@@ -382,7 +422,8 @@ class Plant3DFmu : public Model {
       return res;
     attach(ctx);
     double in[kInputs];
-    const fmi2Status st = readFiniteInputs(ctx, t, kInputs, kInputVr, kInputNames, last_in_, in, vr::input_fault);
+    const InputTable& inputs = inputTable();
+    const fmi2Status st = readFiniteInputs(ctx, t, kInputs, inputs.vr, inputs.c_name, last_in_, in, vr::input_fault);
     Inputs pin;
     pin.ref[AnklePitch] = in[0];
     pin.ref[HipPitch] = in[1];
@@ -392,6 +433,8 @@ class Plant3DFmu : public Model {
     pin.ref[HipRoll] = in[5];
     pin.ref[HipYaw] = in[6];
     pin.ref[Knee] = in[7];
+    for (int s = 0; s < kLegs; ++s)
+      for (int k = 0; k < kLegJoints; ++k) pin.leg_ref[s][k] = in[kFirstLegRef + s * kLegJoints + k];
     plant_->set_inputs(pin);
     const auto r = plant_->do_step(plantStepTo(t, h, plant_->time()));  // to the master's t + h
     write_outputs(ctx);

@@ -656,23 +656,22 @@ bool Plant::restore(const Snapshot& s) {
     return false;
   if (!std::isfinite(s.t) || !std::isfinite(s.t_fall) || !std::isfinite(s.pivot[0]) || !std::isfinite(s.pivot[1]))
     return false;
-  for (double x : s.y)
-    if (!std::isfinite(x)) return false;
-  for (double x : s.impulse)
-    if (!std::isfinite(x)) return false;
-  for (double x : s.inputs)
-    if (!std::isfinite(x)) return false;
-  // ERK's proposed step: 0 (estimate one) or a step that advances the time, at most the longest
-  // communication step (forged ones failed the next step: a negative one with "h0 and tout - t0
-  // inconsistent", a denormal one never left t)
-  if (!(s.h_next == 0.0 || (s.h_next >= 1e-12 * (1.0 + std::fabs(s.t)) && s.h_next <= 3600.0))) return false;
-  // A state a simulation can have (finite values far beyond it made the next step's right-hand
-  // side fail): the foot within 1 km, angles within 100 rad (the robot falls long before), speeds
-  // below 1 km/s and 1e4 rad/s, as the 3D plant's bodies.
+  // every value within what a running plant can hold (a forged state must not reach the integrator;
+  // finite values far beyond these made the next step's right-hand side fail): the foot within 1 km,
+  // angles within 100 rad (the robot falls long before), speeds below 1 km/s and 1e4 rad/s, as the
+  // 3D plant's bodies; impulses within 1e12 N s
   for (int i = 0; i < 10; ++i) {
     const double bound = i < 2 ? 1e3 : i < 5 ? 1e2 : i < 7 ? 1e3 : 1e4;
     if (!(std::fabs(s.y[i]) <= bound)) return false;
   }
+  for (double x : s.impulse)
+    if (!(std::fabs(x) <= 1e12)) return false;
+  for (double x : s.inputs)
+    if (!std::isfinite(x)) return false;
+  // ERK's proposed step: 0 (estimate one) or a step that advances the time, at most 1e3 s (forged
+  // ones failed the next step: a negative one with "h0 and tout - t0 inconsistent", a denormal one
+  // never left t)
+  if (!(s.h_next == 0.0 || (s.h_next >= 1e-12 * (1.0 + std::fabs(s.t)) && s.h_next <= 1e3))) return false;
   t_ = s.t;
   std::memcpy(y_, s.y, sizeof y_);
   std::memcpy(impulse_, s.impulse, sizeof impulse_);

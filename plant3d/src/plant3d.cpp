@@ -763,7 +763,8 @@ Plant3D::StepResult Plant3D::ode_step(double dt, bool release) {
         dJointSetAMotorAxis(m, i, 0, -n[0], -n[1], -n[2]);
         dJointSetAMotorAngle(m, i, w.q[s][k]);  // for the limit rows
         const double kd = P_.servo_on ? 0.5 * sv.kd : 0.0, d = 0.5 * sv.damping;
-        const double wcmd = P_.servo_on ? hoap2_soft_sat(sv.kp / sv.kd * (in_.ref[k] - w.q[s][k]), sv.vel_max) : 0.0;
+        const double e = in_.set_point(s, k) - w.q[s][k];  // both legs' ref + this leg's (section 3)
+        const double wcmd = P_.servo_on ? hoap2_soft_sat(sv.kp / sv.kd * e, sv.vel_max) : 0.0;
         const double gain = kd + d;
         const double vel = gain > 0 ? kd * wcmd / gain : 0.0;
         w.servo_vel[s][k] = vel;
@@ -1145,7 +1146,10 @@ void Plant3D::evaluate_outputs() {
 
   // joints
   for (int s = 0; s < kLegs; ++s)
-    for (int k = 0; k < kLegJoints; ++k) o.joint[s][k] = w.q[s][k];
+    for (int k = 0; k < kLegJoints; ++k) {
+      o.joint[s][k] = w.q[s][k];
+      o.tau_joint[s][k] = w.tau[s][k];
+    }
   for (int s = 0; s < kLegs; ++s) {
     o.theta_ankle += 0.5 * o.joint[s][AnklePitch];
     o.theta_hip += 0.5 * o.joint[s][HipPitch];

@@ -424,11 +424,15 @@ static void test_contact_study() {
 
 // Establishes: a snapshot restored into a fresh instance continues bit for bit like the original
 // (ODE world: bodies' positions, quaternions, rotation matrices and velocities; inputs, noise
-// generator, statistics), also with sensor noise on and during a rocking motion.
+// generator, statistics), also with sensor noise on, per-leg set points and during a rocking motion.
 static void test_snapshot() {
   Params P = default_params();
   P.sensor_noise = 0.5;
-  auto push = [](double t, Inputs& u) { u.push_x = (t >= 0.1 && t < 0.25) ? 13.0 : 0.0; };
+  auto push = [](double t, Inputs& u) {
+    u.push_x = (t >= 0.1 && t < 0.25) ? 13.0 : 0.0;
+    u.leg_ref[Left][HipRoll] = -0.05 * t;
+    u.leg_ref[Right][Knee] = 0.1 * t;
+  };
   Plant3D a(P);
   CHECK(a.initialize(0.0), "%s", a.message().c_str());
   run(a, 200, push);  // mid-push
@@ -509,18 +513,23 @@ static void test_joint_statics() {
               "hip kp e %.5f N m\n", o.tau_hip, -M_hip, o.tau_ankle, -M_ankle, pd_hip);
 }
 
-// Establishes: the joint coordinates read from the ball, hinge and universal joints are the
-// proto's: with gravity off and every joint of both legs driven to a different angle, each
-// converges to its set point, and the foot's orientation relative to the trunk equals the product
-// of the proto's six joint rotations (its axes, its senses, its chain order) at those angles.
-static void test_kinematics() {
+// With gravity off (and no friction: the feet slide where the legs put them) the inputs `set`
+// drive every joint; each must reach its set point sp[side][joint] within 1e-4 rad, and each foot's
+// orientation relative to the trunk must equal the product of the proto's six joint rotations (its
+// axes, its senses, its chain order) at the joint angles reached, within 1e-9. `hold_feet`: the
+// feet start held flat (Params::flat_foot_weld), which legs of different shapes cannot satisfy
+// (the two held feet and the legs close a chain).
+static void check_joint_chain(const std::function<void(Inputs&)>& set, const double (&sp)[kLegs][kLegJoints],
+                              bool hold_feet = true) {
   Params P = default_params();
   P.g = 0.0;
-  P.mu = 0.0;  // no load from the ground either: the feet slide where the legs put them
+  P.mu = 0.0;
+  P.flat_foot_weld = hold_feet;
+  P.fall_foot_pitch = P.fall_body_pitch = 4.0;  // never: without gravity the robot floats, it cannot fall
   Plant3D p(P);
   CHECK(p.initialize(0.0), "%s", p.message().c_str());
-  const double ref[kLegJoints] = {0.12, 0.2, 0.07, 0.4, -0.15, -0.06};  // this model's sense
-  run(p, 2000, [&](double, Inputs& u) { std::copy(ref, ref + kLegJoints, u.ref); });
+  const auto r = run(p, 2000, [&](double, Inputs& u) { set(u); });
+  CHECK(r == Plant3D::Result::Ok, "%s", p.message().c_str());
   const Outputs& o = p.outputs();
   auto rot = [](const double a[3], double q, double R[9]) {  // Rodrigues
     const double c = std::cos(q), s = std::sin(q), v = 1 - c;
@@ -533,12 +542,12 @@ static void test_kinematics() {
     for (int r = 0; r < 3; ++r)
       for (int c = 0; c < 3; ++c) C[r * 3 + c] = A[r * 3] * B[c] + A[r * 3 + 1] * B[3 + c] + A[r * 3 + 2] * B[6 + c];
   };
-  double Rt[9], worst_q = 0, worst_R = 0;
+  double Rt[9], worst_R = 0;
   p.body_rotation(0, Rt);
   for (int s = 0; s < kLegs; ++s) {
-    double chain[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1}, tmp[9], Rj[9];
+    double chain[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1}, tmp[9], Rj[9], worst_q = 0;
     for (int k = 0; k < kLegJoints; ++k) {
-      worst_q = std::max(worst_q, std::fabs(o.joint[s][k] - ref[k]));
+      worst_q = std::max(worst_q, std::fabs(o.joint[s][k] - sp[s][k]));
       // the proto's zero-posture axes (world axes of the unrotated robot) and its sense
       const bool sag = k == HipPitch || k == AnklePitch;
       const double axis0[kLegJoints][3] = {{0, 0, 1}, {0, 1, 0}, {1, 0, 0}, {0, 1, 0}, {0, 1, 0}, {1, 0, 0}};
@@ -546,16 +555,130 @@ static void test_kinematics() {
       mul(chain, Rj, tmp);
       std::copy(tmp, tmp + 9, chain);
     }
+    CHECK(worst_q < 1e-4, "a %s joint is %g rad from its set point", s == Left ? "left" : "right", worst_q);
     double Rf[9], rel[9];
     p.body_rotation(1 + s * kLegBodies + Foot, Rf);
     for (int r = 0; r < 3; ++r)
       for (int c = 0; c < 3; ++c) rel[r * 3 + c] = Rt[r] * Rf[c] + Rt[3 + r] * Rf[3 + c] + Rt[6 + r] * Rf[6 + c];
     for (int i = 0; i < 9; ++i) worst_R = std::max(worst_R, std::fabs(rel[i] - chain[i]));
+    std::printf("  %s leg: 6 joints at their set points within %.2g rad\n", s == Left ? "left" : "right", worst_q);
   }
-  CHECK(worst_q < 1e-4, "a joint is %g rad from its set point", worst_q);
   CHECK(worst_R < 1e-9, "foot orientation differs from the proto chain by %g", worst_R);
-  std::printf("  12 joints at their set points within %.2g rad; foot orientation = proto chain within %.2g\n",
-              worst_q, worst_R);
+  std::printf("  foot orientations = proto chain within %.2g\n", worst_R);
+}
+
+// Establishes: the joint coordinates read from the ball, hinge and universal joints are the
+// proto's: with gravity off and every joint of both legs driven to a different angle by the
+// both-legs set points, each converges to its set point, and the foot's orientation relative to
+// the trunk equals the product of the proto's six joint rotations at those angles.
+static const double kChainRef[kLegJoints] = {0.12, 0.2, 0.07, 0.4, -0.15, -0.06};  // this model's sense
+static void test_kinematics() {
+  double sp[kLegs][kLegJoints];
+  for (auto& leg : sp) std::copy(kChainRef, kChainRef + kLegJoints, leg);
+  check_joint_chain([](Inputs& u) { std::copy(kChainRef, kChainRef + kLegJoints, u.ref); }, sp);
+}
+
+// Establishes the per-leg set points' rule (docs/plant3d.md section 3): a joint's set point is the
+// both-legs set point plus its own leg's, in the same sense as its coordinate. The both-legs set
+// points of test_kinematics, and per-leg set points on the left leg alone, different for every
+// joint: the left leg's joints reach the sums, the right leg's the both-legs set points, and both
+// feet sit where the proto's joint chain puts them (the feet on their corner contacts: two held
+// feet would close the chain).
+static void test_per_leg_set_points() {
+  const double offset[kLegJoints] = {-0.25, -0.3, -0.2, 0.3, 0.1, 0.15};  // left leg only
+  double sp[kLegs][kLegJoints];
+  for (int k = 0; k < kLegJoints; ++k) {
+    sp[Left][k] = kChainRef[k] + offset[k];
+    sp[Right][k] = kChainRef[k];
+  }
+  check_joint_chain(
+      [&](Inputs& u) {
+        std::copy(kChainRef, kChainRef + kLegJoints, u.ref);
+        std::copy(offset, offset + kLegJoints, u.leg_ref[Left]);
+      },
+      sp, false);
+  Inputs u;
+  u.ref[Knee] = 0.3;
+  u.leg_ref[Right][Knee] = -0.1;
+  CHECK(u.set_point(Left, Knee) == 0.3 && u.set_point(Right, Knee) == 0.3 - 0.1, "set_point is not ref + leg_ref");
+}
+
+// Establishes: the per-leg set points lift one foot, and the servo chain's statics on one leg.
+// Both legs roll in parallel (ankle roll +phi, hip roll -phi: the pelvis moves to the left over the
+// left sole), then the right leg alone flexes (hip +a, knee +2a, ankle +a: its sole lifts).
+// At rest on the left foot: the right sole carries nothing and hangs above the ground, the left
+// sole carries the weight with the ZMP under the CoM, and every servo torque of both legs is the
+// moment of gravity about its own axis: on the hanging right leg that of the bodies below the
+// joint, on the standing left leg that of everything above it (the trunk and the hanging leg
+// included), within 1e-6 of the largest such moment (the servo torques as the motors apply them).
+static void test_one_leg_statics() {
+  Params P = default_params();
+  Plant3D p(P);
+  CHECK(p.initialize(0.0), "%s", p.message().c_str());
+  const double phi = 0.21, a = 0.3, t_shift = 1.5, t_lift = 2.0, t_rest = 3.5;
+  auto quintic = [](double x) {
+    x = std::clamp(x, 0.0, 1.0);
+    return x * x * x * (10 - 15 * x + 6 * x * x);
+  };
+  const double right_foot_z0 = p.bodies()[1 + Right * kLegBodies + Foot].com[2];
+  auto inputs = [&](double t, Inputs& u) {
+    const double shift = quintic(t / t_shift), lift = quintic((t - t_lift) / 1.0);
+    u.ref[AnkleRoll] = phi * shift;
+    u.ref[HipRoll] = -phi * shift;
+    u.leg_ref[Right][HipPitch] = a * lift;
+    u.leg_ref[Right][Knee] = 2 * a * lift;
+    u.leg_ref[Right][AnklePitch] = a * lift;
+  };
+  const auto r = run(p, static_cast<int>((t_lift + 1.0 + t_rest) / kDt), inputs);
+  Inputs held;
+  inputs(p.time(), held);
+  CHECK(r == Plant3D::Result::Ok, "%s", p.message().c_str());
+  const Outputs& o = p.outputs();
+  const double mg = P.mass() * P.g;
+  const auto bodies = p.bodies();
+  const auto joints = p.joints();
+  const double rise = bodies[1 + Right * kLegBodies + Foot].com[2] - right_foot_z0;
+  CHECK(o.fz_foot[Right] == 0.0 && rise > 5e-3, "right foot: load %g N, raised %g m", o.fz_foot[Right], rise);
+  CHECK(std::fabs(o.fz_foot[Left] - mg) < 1e-3 * mg, "left foot carries %g N of %g N", o.fz_foot[Left], mg);
+  CHECK(std::fabs(o.zmp_x - o.com_x) < 1e-3 && std::fabs(o.zmp_y - o.com_y) < 1e-3, "ZMP (%g, %g), CoM (%g, %g)",
+        o.zmp_x, o.zmp_y, o.com_x, o.com_y);
+  CHECK(p.welded(Left) && !p.welded(Right), "held feet: left %d, right %d", p.welded(Left), p.welded(Right));
+  // the bodies distal to joint k of leg s (below it: the shank from the knee on, the foot from
+  // the ankle on); body index 1 + s * kLegBodies + {Thigh, Shank, Foot}
+  auto distal = [](int s, int k, int i) {
+    if (i == 0 || (i - 1) / kLegBodies != s) return false;
+    const int b = (i - 1) % kLegBodies;
+    return k <= HipRoll ? true : k == Knee ? b >= Shank : b == Foot;
+  };
+  double worst = 0, largest = 0;
+  for (int s = 0; s < kLegs; ++s) {
+    for (int k = 0; k < kLegJoints; ++k) {
+      const JointInfo& j = joints[s * kLegJoints + k];
+      const bool sag = k == HipPitch || k == AnklePitch;
+      const double e[3] = {sag ? -j.axis[0] : j.axis[0], sag ? -j.axis[1] : j.axis[1], sag ? -j.axis[2] : j.axis[2]};
+      // gravity's moment about the joint's axis (its sense) of the bodies on one side: the
+      // hanging leg's below the joint, the standing leg's above it (the torque on the parent is
+      // minus the servo torque, on the child plus)
+      double M = 0;
+      for (int i = 0; i < kBodies; ++i) {
+        if (distal(s, k, i) != (s == Right)) continue;
+        const double d[3] = {bodies[i].com[0] - j.anchor[0], bodies[i].com[1] - j.anchor[1],
+                             bodies[i].com[2] - j.anchor[2]};
+        const double f = -bodies[i].mass * P.g;  // along z
+        M += (d[1] * f) * e[0] - (d[0] * f) * e[1];  // (d x (0, 0, f)) . e
+      }
+      const double expected = s == Right ? -M : M;
+      worst = std::max(worst, std::fabs(o.tau_joint[s][k] - expected));
+      largest = std::max(largest, std::fabs(expected));
+      std::printf("  %-5s %-10s servo %+9.5f N m, gravity %+9.5f N m, q %+.4f rad (set point %+.4f)\n",
+                  s == Left ? "left" : "right", joint_name(k), o.tau_joint[s][k], expected, o.joint[s][k],
+                  held.set_point(s, k));
+    }
+  }
+  CHECK(worst < 1e-6 * largest, "a servo torque is %g N m from gravity's moment (largest %g N m)", worst, largest);
+  std::printf("  on the left foot (%.4f N of m g %.4f N), the right sole %.2f mm up; servo torques = gravity's "
+              "moments within %.2g N m (largest %.4f N m)\n",
+              o.fz_foot[Left], mg, 1e3 * rise, worst, largest);
 }
 
 int main(int argc, char** argv) {
@@ -569,7 +692,8 @@ int main(int argc, char** argv) {
                {"contact_study", test_contact_study},
                {"snapshot", test_snapshot},
                {"instances", test_instances},           {"joint_statics", test_joint_statics},
-               {"kinematics", test_kinematics}};
+               {"kinematics", test_kinematics},         {"per_leg_set_points", test_per_leg_set_points},
+               {"one_leg_statics", test_one_leg_statics}};
   bool ran = false;
   for (auto& t : tests)
     if (which == "all" || which == t.name) {

@@ -5,7 +5,10 @@
 //                               and ModelInfo::resources into <out-dir>/resources/; source files
 //                               (names in sources/) make it a source FMU's description; --fmi3:
 //                               the FMI 3.0 Co-Simulation description of the same table
-//   <Name>_gen --markdown       prints the variable table as Markdown (for docs/)
+//   <Name>_gen --markdown [--causality C]
+//                               prints the variable table (its variables of causality C, e.g.
+//                               input) as Markdown (for docs/)
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -56,13 +59,14 @@ std::string html(const std::string& s) {
 
 void usage(std::ostream& o, const char* prog) {
   o << "usage: " << prog << " [--fmi3] <out-dir> [<source file>...]\n"
-    << "       " << prog << " --markdown\n\n"
+    << "       " << prog << " --markdown [--causality C]\n\n"
     << "Generates the FMU's description from its variable table (the table the binary uses at run time):\n"
     << "  <out-dir>       an existing folder: writes modelDescription.xml, documentation/index.html and\n"
     << "                  the model's resources/ files into it; <source file>s (names in sources/) make it\n"
     << "                  a source FMU's description. The build runs this when it packs the FMU.\n"
     << "  --fmi3          the FMI 3.0 Co-Simulation twin's description (same table; default FMI 2.0)\n"
-    << "  --markdown      prints the variable table as Markdown (docs/, scripts/update_docs.py)\n"
+    << "  --markdown      prints the variable table as Markdown (docs/, scripts/update_docs.py);\n"
+    << "  --causality C   with --markdown: only the variables of causality C (input, output, parameter, ...)\n"
     << "  -h, --help      this text\n"
     << "SOURCE_DATE_EPOCH, when set, is the generationDateAndTime (reproducible builds).\n";
 }
@@ -90,11 +94,22 @@ int main(int argc, char** argv) {
     std::cerr << info.model_name << ": invalid variable table:\n" << problems;
     return 1;
   }
-  if (argc == 2 && std::string(argv[1]) == "--markdown") {
+  if (std::string(argv[1]) == "--markdown") {
+    const bool filter = argc == 4 && std::string(argv[2]) == "--causality";
+    if (argc != 2 && !filter) {
+      usage(std::cerr, prog);
+      return 2;
+    }
+    auto shown = [&](const Variable& v) { return !filter || xmlName(v.causality) == std::string(argv[3]); };
+    if (std::none_of(info.variables.begin(), info.variables.end(), shown)) {
+      std::cerr << prog << ": no variable of causality " << argv[3] << "\n";
+      return 2;
+    }
     std::cout << "| name | vr | type | causality | variability | unit | start | min | max | description |\n"
               << "|---|---|---|---|---|---|---|---|---|---|\n";
     for (const auto& v : info.variables)
-      std::cout << "| `" << v.name << "` | " << v.vr << " | " << xmlTypeName(v) << " | " << xmlName(v.causality)
+      if (shown(v))
+        std::cout << "| `" << v.name << "` | " << v.vr << " | " << xmlTypeName(v) << " | " << xmlName(v.causality)
                 << " | " << xmlName(v.variability) << " | " << v.unit << " | " << startText(v) << " | "
                 << g(v.min) << " | " << g(v.max) << " | " << markdownCell(v.description) << " |\n";
     return 0;

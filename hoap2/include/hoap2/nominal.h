@@ -69,6 +69,33 @@
 #define HOAP2_LINK2_COM_X 0.00244263
 /* Control period of the HOAP-2 [s] (not from the proto). */
 #define HOAP2_SAMPLE_PERIOD 0.001
+/* Frontal plane: the hip joints (their yaw, roll and pitch axes meet) across from the mid-plane [m]. */
+#define HOAP2_HIP_Y 0.039
+/* Frontal plane: the ankle joints (pitch and roll axes meet) across from the mid-plane [m];
+ * the stance width is twice this, each sole centred under its ankle. */
+#define HOAP2_ANKLE_Y 0.039
+/* Hip axes -> knee axis [m] (knee straight). */
+#define HOAP2_THIGH 0.1
+/* Knee axis -> ankle axes [m]; THIGH + SHANK = L1. */
+#define HOAP2_SHANK 0.1
+/* Frontal plane: each leg's link-1 CoM outward of its ankle-hip line [m]. */
+#define HOAP2_LINK1_COM_Y 0.0010626
+/* Roll inertia of link 1 [kg m^2]: each leg's about its own CoM, both legs summed. */
+#define HOAP2_I1_ROLL 0.00999015
+/* Frontal plane: CoM of link 2 left of the mid-plane [m] (arms hanging). */
+#define HOAP2_LINK2_COM_Y 0.000124406
+/* Roll inertia of link 2 about its own CoM [kg m^2] (arms hanging). */
+#define HOAP2_I2_ROLL 0.0366682
+/* Ankle roll limit [rad], either way (lleg/rleg_joint_6). */
+#define HOAP2_ANKLE_ROLL_MAX 0.43633
+/* Hip roll limit outward (the foot away from the mid-plane) [rad]. */
+#define HOAP2_HIP_ABDUCTION_MAX 0.541052
+/* Hip roll limit inward [rad]. */
+#define HOAP2_HIP_ADDUCTION_MAX 0.36652
+/* Knee lower limit [rad] (+ = flexed; the proto's lleg_joint_4). */
+#define HOAP2_KNEE_MIN (-0.017453)
+/* Knee upper limit [rad]. */
+#define HOAP2_KNEE_MAX 2.26893
 
 /* --- derived ------------------------------------------------------------------------------- */
 /* Mass of the two-link body above the ankle [kg] (m = m1 + m2 of the paper). */

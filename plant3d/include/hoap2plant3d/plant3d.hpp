@@ -83,9 +83,16 @@ Params default_params();
 // line): c = sqrt(k J / 2) / a, J its inertia about that line, a half the sole length.
 double critical_contact_damping(double k);
 
+// The servos' set points (docs/plant3d.md section 3): leg `side`'s joint k is driven to
+// ref[k] + leg_ref[side][k], each joint in its own sense (the pitch joints in the sagittal sense,
+// the others in the proto's, the same for both legs). ref[] drives both legs alike (the sagittal
+// controller's theta_ankle_ref, theta_hip_ref, ...); leg_ref[][] moves one leg alone. With leg_ref
+// all 0 the set points are ref[] bit for bit (x + 0 == x; only a -0 reference becomes +0).
 struct Inputs {
-  double ref[kLegJoints] = {};       // set points, both legs alike [rad]
-  double push_x = 0.0, push_y = 0.0; // [N], world frame
+  double ref[kLegJoints] = {};              // set points, both legs alike [rad]
+  double leg_ref[kLegs][kLegJoints] = {};   // per-leg set points, added to ref[] [rad]
+  double push_x = 0.0, push_y = 0.0;        // [N], world frame
+  double set_point(int side, int k) const { return ref[k] + leg_ref[side][k]; }
 };
 
 struct Outputs {
@@ -110,6 +117,7 @@ struct Outputs {
   double slip_speed[kLegs] = {};     // horizontal speed of each sole's centre [m/s]
   double feet_x = 0, feet_y = 0;     // the feet frame's origin (mid-ankle, on the ground), world [m]
   double joint[kLegs][kLegJoints] = {};  // all twelve joint angles [rad]
+  double tau_joint[kLegs][kLegJoints] = {};  // each joint's servo torque, in the joint's sense [N m]
   double imu_roll = 0, imu_pitch = 0, imu_yaw = 0;  // trunk orientation (Z-Y-X Euler) [rad]
   double gyro[3] = {};               // trunk angular velocity, trunk frame [rad/s]
 };
@@ -130,7 +138,7 @@ struct BodyState {
 // Everything that determines the future, bit for bit (plain old data).
 struct Snapshot {
   std::uint32_t magic = 0x48335053u;  // "H3PS"
-  std::uint32_t version = 3;
+  std::uint32_t version = 4;          // 4: the per-leg set points (Inputs::leg_ref), Outputs::tau_joint
   double t = 0, t_fall = 0;
   std::int32_t fallen = 0, mode = 0;
   std::int32_t limits_near = 0, pad = 0;
@@ -161,6 +169,7 @@ void visit_fields(S& s, F&& f) {
     for (auto& x : b.avel) f("body.avel", x);
   }
   for (auto& x : s.in.ref) f("inputs.ref", x);
+  for (auto& leg : s.in.leg_ref) for (auto& x : leg) f("inputs.leg_ref", x);
   f("inputs.push_x", s.in.push_x);
   f("inputs.push_y", s.in.push_y);
   f("rng", s.rng);
@@ -178,6 +187,7 @@ void visit_fields(S& s, F&& f) {
   for (auto& x : o.fz_foot) f("outputs.fz_foot", x);
   for (auto& x : o.slip_speed) f("outputs.slip_speed", x);
   for (auto& leg : o.joint) for (auto& x : leg) f("outputs.joint", x);
+  for (auto& leg : o.tau_joint) for (auto& x : leg) f("outputs.tau_joint", x);
   for (auto& x : o.gyro) f("outputs.gyro", x);
   f("outputs.contact_mode", o.contact_mode);
   f("outputs.contacts", o.contacts);

@@ -1,0 +1,94 @@
+/*
+ * controller3d.c — the sagittal and frontal controllers side by side and the legs' set points
+ * (controller3d.h, docs/controller.md §11.4).
+ */
+#include <math.h>
+#include <string.h>
+
+#include "ahc/controller3d.h"
+
+static void geometry(ahc3d *c)
+{
+    c->legs.thigh = c->frontal.f.thigh;
+    c->legs.shank = c->frontal.f.shank;
+    c->legs.hip_y = c->frontal.f.hip_y;
+    c->legs.ankle_y = c->frontal.f.ankle_y;
+}
+
+int ahc3d_init(ahc3d *c, const ahc_params *sp, const ahc_frontal_params *fp)
+{
+    int rc;
+    if (!c) return AHC_ERR_NULL;
+    memset(c, 0, sizeof *c);
+    rc = ahc_init(&c->sag, sp);
+    if (rc != AHC_OK) return rc;
+    rc = ahc_frontal_init(&c->frontal, fp, sp);
+    geometry(c);
+    return rc;
+}
+
+void ahc3d_reset(ahc3d *c)
+{
+    ahc_reset(&c->sag);
+    ahc_frontal_reset(&c->frontal);
+    geometry(c);
+}
+
+void ahc3d_step(ahc3d *c, const ahc3d_sensors *s, ahc3d_outputs *out)
+{
+    ahc_frontal_sensors fs;
+    int side, j;
+    memset(out, 0, sizeof *out);
+    /* 1. the paper's controller, on the sagittal sensors alone */
+    ahc_step(&c->sag, &s->sag, &out->sag);
+    /* 2. the frontal angles, measured on the pivot leg the frontal reference names */
+    fs.zmp_y = s->zmp_y;
+    fs.fz = s->sag.fz;
+    fs.fz_left = s->fz_left;
+    fs.fz_right = s->fz_right;
+    fs.phi = fs.psi = NAN;
+    {
+        int finite = 1;
+        for (side = 0; side < 2; ++side)
+            for (j = 0; j < AHC_LEG_JOINTS; ++j) finite = finite && isfinite(s->q[side][j]);
+        if (finite) ahc_legs_frontal_angles(&c->legs, s->q, c->frontal.psi >= 0.0, &fs.phi, &fs.psi);
+    }
+    /* 3. the frontal controller */
+    ahc_frontal_step(&c->frontal, &fs, &out->frontal);
+    /* 4. the legs: both planes' references minus the sagittal ones alone, which are the pitch
+     * angles th1, th2 on both legs (the straight legs' kinematics, leg_ik.h) */
+    if (out->frontal.phi_ref != 0.0 || out->frontal.psi_ref != 0.0) {
+        double full[2][AHC_LEG_JOINTS];
+        const double th1 = out->sag.theta_ankle_ref, th2 = out->sag.theta_hip_ref;
+        out->legs_out_of_reach = ahc_legs_from_planes(&c->legs, th1, th2, out->frontal.phi_ref,
+                                                      out->frontal.psi_ref, full);
+        for (side = 0; side < 2; ++side) {
+            for (j = 0; j < AHC_LEG_JOINTS; ++j) out->q_ref_offset[side][j] = full[side][j];
+            out->q_ref_offset[side][AHC_LEG_ANKLE_PITCH] -= th1;
+            out->q_ref_offset[side][AHC_LEG_HIP_PITCH] -= th2;
+        }
+    }
+}
+
+int ahc3d_state_validate(const ahc3d *c, char *msg, size_t msg_size)
+{
+    int rc;
+    if (!c) return AHC_ERR_NULL;
+    rc = ahc_state_validate(&c->sag, msg, msg_size);
+    if (rc != AHC_OK) return rc;
+    rc = ahc_frontal_state_validate(&c->frontal, msg, msg_size);
+    if (rc != AHC_OK) return rc;
+    if (c->legs.thigh != c->frontal.f.thigh || c->legs.shank != c->frontal.f.shank ||
+        c->legs.hip_y != c->frontal.f.hip_y || c->legs.ankle_y != c->frontal.f.ankle_y)
+        return AHC_ERR_INCONSISTENT;
+    if (c->frontal.valid) {
+        /* the frontal layer's copy of the sagittal parameters must be the sagittal layer's */
+        size_t n, i;
+        const ahc_param_info *t = ahc_param_table(&n);
+        for (i = 0; i < n; ++i) {
+            const char *x = (const char *)&c->frontal.sp + t[i].offset, *y = (const char *)&c->sag.p + t[i].offset;
+            if (memcmp(x, y, t[i].is_int ? sizeof(int) : sizeof(double)) != 0) return AHC_ERR_INCONSISTENT;
+        }
+    }
+    return AHC_OK;
+}

@@ -1,0 +1,122 @@
+// The parameters of a controller FMU from one of the C library's parameter tables (ahc_param_info
+// rows: ahc_param_table, ahc_frontal_param_table): one variable per row, value reference
+// first + row index, start value from the defaults struct, range from the row; and reading them
+// back into a struct. Shared by AnkleHipController.fmu and AnkleHipController3D.fmu.
+#pragma once
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <string>
+
+#include "ahc/controller.h"
+#include "ahc/frontal.h"
+#include "fmuglue/glue.hpp"
+
+namespace ahcfmu {
+
+using IsTunable = bool (*)(const char* name);
+
+inline void addParamVariables(fmuglue::ModelInfo& m, const ahc_param_info* table, size_t count,
+                              fmi2ValueReference first, const void* defaults, IsTunable tunable) {
+  using namespace fmuglue;
+  for (size_t i = 0; i < count; ++i) {
+    const ahc_param_info& p = table[i];
+    Variable v;
+    v.name = p.name;
+    v.vr = first + static_cast<fmi2ValueReference>(i);
+    v.type = p.is_int ? Type::Integer : Type::Real;
+    v.causality = Causality::Parameter;
+    v.variability = tunable(p.name) ? Variability::Tunable : Variability::Fixed;
+    v.unit = p.is_int ? "" : p.unit;
+    v.description = p.description;
+    const char* base = static_cast<const char*>(defaults) + p.offset;
+    if (p.is_int) {
+      int x;
+      std::memcpy(&x, base, sizeof x);
+      v.start = x;
+    } else {
+      std::memcpy(&v.start, base, sizeof(double));
+    }
+    v.min = std::isfinite(p.min) ? p.min : kNoBound;
+    v.max = std::isfinite(p.max) ? p.max : kNoBound;
+    m.variables.push_back(v);
+  }
+}
+
+// Reads the table's variables into the struct at p (only the tunable ones with `only`).
+inline void readParamVariables(fmuglue::Context& ctx, const ahc_param_info* table, size_t count,
+                               fmi2ValueReference first, void* p, IsTunable only = nullptr) {
+  for (size_t i = 0; i < count; ++i) {
+    if (only && !only(table[i].name)) continue;
+    char* base = static_cast<char*>(p) + table[i].offset;
+    const fmi2ValueReference r = first + static_cast<fmi2ValueReference>(i);
+    if (table[i].is_int) {
+      const int x = ctx.integer(r);
+      std::memcpy(base, &x, sizeof x);
+    } else {
+      const double x = ctx.real(r);
+      std::memcpy(base, &x, sizeof x);
+    }
+  }
+}
+
+// The rows of a parameter table whose values differ between p and def, as TOML lines.
+inline std::string differingRows(const ahc_param_info* table, size_t count, const void* p, const void* def) {
+  std::string s;
+  for (size_t i = 0; i < count; ++i) {
+    const char* a = static_cast<const char*>(p) + table[i].offset;
+    const char* b = static_cast<const char*>(def) + table[i].offset;
+    char line[160];
+    if (table[i].is_int) {
+      int x, y;
+      std::memcpy(&x, a, sizeof x);
+      std::memcpy(&y, b, sizeof y);
+      if (x == y) continue;
+      std::snprintf(line, sizeof line, "%s = %d\n", table[i].name, x);
+    } else {
+      double x, y;
+      std::memcpy(&x, a, sizeof x);
+      std::memcpy(&y, b, sizeof y);
+      if (x == y) continue;
+      // The shortest of %.15g / %.17g that reads back exactly.
+      std::snprintf(line, sizeof line, "%.15g", x);
+      const char* fmt = std::strtod(line, nullptr) == x ? "%s = %.15g\n" : "%s = %.17g\n";
+      std::snprintf(line, sizeof line, fmt, table[i].name, x);
+    }
+    s += line;
+  }
+  return s;
+}
+
+// resources/configurations.toml: every named configuration of the C library (ahc_params_named,
+// and with `frontal` ahc_frontal_params_named too) with the parameter values that differ from the
+// defaults, for importers that select a configuration by name (anklehip: `controller_config =
+// "paper"`). Generated, never edited.
+inline std::string configurationsToml(const char* model, bool frontal = false) {
+  ahc_params def;
+  ahc_params_default(&def);
+  ahc_frontal_params fdef;
+  ahc_frontal_params_default(&fdef);
+  size_t count = 0, fcount = 0;
+  const ahc_param_info* table = ahc_param_table(&count);
+  const ahc_param_info* ftable = ahc_frontal_param_table(&fcount);
+  std::string s =
+      std::string("# Named configurations of ") + model + ": parameter values that differ from the defaults.\n"
+      "# Generated from controller_c (ahc_params_named); see documentation/ and docs/controller.md.\n";
+  for (size_t c = 0; c < ahc_config_count(); ++c) {
+    ahc_params p;
+    ahc_params_named(&p, ahc_config_name(c));
+    s += std::string("\n[") + ahc_config_name(c) + "]\ndescription = \"" + ahc_config_description(c) + "\"\n";
+    s += differingRows(table, count, &p, &def);
+    if (frontal) {
+      ahc_frontal_params f;
+      ahc_frontal_params_named(&f, ahc_config_name(c));
+      s += differingRows(ftable, fcount, &f, &fdef);
+    }
+  }
+  return s;
+}
+
+}  // namespace ahcfmu
