@@ -23,7 +23,12 @@ the checksum catches accidents, not forgeries. What this establishes, through th
 - the sagittal plant refuses snapshots a simulation cannot have, each of which made the next step
   fail with fmi2Error before (a negative or denormal ERK step, a speed of 1e300 or 1e5 rad/s), a
   state whose time is past its stop time, and a servo velocity gain of 5e-324 (kp / kd overflowed
-  and the right-hand side was NaN): found by 18 000 re-signed random forgeries.
+  and the right-hand side was NaN): found by 18 000 re-signed random forgeries;
+- the 3D controller (AnkleHipController3D) holds the same instance rules: a state with its time
+  moved, or with a parameter variable other than the controller's copy (frontal or sagittal), is
+  refused (before: accepted), while its genuine states before, during and after a run are accepted
+  (one taken before initialization after a set-up with start 5 s was refused before) and continue
+  bit for bit.
 """
 from __future__ import annotations
 
@@ -339,3 +344,55 @@ def test_plant_restore_is_bit_exact(raw_plant, integrator):
         x.free()
     assert modes >= 4                      # the pushes rocked the foot
     assert not differing, f"{len(differing)} steps differ, first {differing[:3]}"
+
+
+# ---------------------------------------------------------------------------------------------
+# The 3D controller (AnkleHipController3D.fmu, issue 29) holds the same rules: its restored state
+# must fit the instance's clock and parameters (before: only its own invariants were checked, so a
+# state with its time moved to T made the next 1 ms step run T / 1 ms ticks).
+
+@pytest.fixture(scope="module")
+def raw_controller3d(fmu_path, tmp_path_factory):
+    import zipfile
+    from conftest import RawModel
+    d = tmp_path_factory.mktemp("AnkleHipController3D")
+    with zipfile.ZipFile(fmu_path("AnkleHipController3D")) as z:
+        z.extractall(d)
+    return RawModel(d)
+
+
+@pytest.mark.parametrize("T", [1e4, 1e16, 1e300])
+def test_3d_state_with_its_time_moved_is_refused(raw_controller3d, T):
+    inst, blob = _state_after(raw_controller3d, 30)
+    inst.free()
+    blob.set_time(T)
+    _refused(raw_controller3d, blob, "controller state rejected", "the instance's clock")
+
+
+@pytest.mark.parametrize("name, value", [("Ka_y", 251.0), ("Ka", 41.0)])
+def test_3d_controller_parameter_other_than_the_variable_is_refused(raw_controller3d, name, value):
+    inst, blob = _state_after(raw_controller3d, 100)
+    inst.free()
+    blob.set_var(name, value)   # the variable moved, the controller's copy not
+    _refused(raw_controller3d, blob, f"{name} = ", "in the state", f"{value:.17g} in the instance")
+
+
+def test_3d_genuine_states_are_accepted_and_continue(raw_controller3d):
+    inst = raw_controller3d.instance()
+    _round_trip(raw_controller3d, inst)                        # instantiated
+    assert inst.fmi2SetupExperiment(0, 0.0, 5.0, 0, 0.0) == fmi2OK
+    assert inst.fmi2EnterInitializationMode() == fmi2OK
+    _round_trip(raw_controller3d, inst)                        # initialization mode
+    assert inst.fmi2ExitInitializationMode() == fmi2OK
+    _round_trip(raw_controller3d, inst)                        # no tick yet
+    _drive(inst, 5.0, 400)
+    _round_trip(raw_controller3d, inst)                        # running, pushed
+    data = _snapshot_bytes(inst)
+    first = _drive(inst, 5.4, 200)
+    other = _running(raw_controller3d, name="other")
+    assert _restore_bytes(other, data) == fmi2OK, other.errors()
+    assert _drive(other, 5.4, 200) == first                    # bit for bit
+    other.free()
+    assert inst.fmi2Terminate() == fmi2OK
+    _round_trip(raw_controller3d, inst)                        # terminated
+    inst.free()
