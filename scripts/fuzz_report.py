@@ -19,7 +19,8 @@ ROOT = Path(__file__).resolve().parents[1]
 # our sources, by the folder a function's file lies in (the rest: the harness, ODE, SUNDIALS, libc++).
 # plant/src and plant3d/src are compiled without coverage instrumentation (CMakeLists.txt: tracing
 # every floating-point loop would slow the sanitized tests 300-fold), so they never appear here.
-FOLDERS = ("fmu/common/src", "fmu/common/include", "fmu/controller", "fmu/plant3d", "fmu/plant", "controller_c/src")
+FOLDERS = ("fmu/common/src", "fmu/common/include", "fmu/controller", "fmu/controller3d", "fmu/plant3d", "fmu/plant",
+           "controller_c/src")
 
 
 def stats(log: str) -> dict:
