@@ -8,7 +8,8 @@
   uses) against FMU2Slave.getReal/setReal (which build ctypes arrays on every call),
 * the same closed loop written with FMU2Slave's high-level methods, for comparison.
 
-Usage:  .venv/bin/python bench/closed_loop_bench.py [SCENARIO] [--stop-time T]
+Usage:  .venv/bin/python bench/closed_loop_bench.py [SCENARIO] [--stop-time T] [--quick]
+(--quick: every run only 2 s long, for the test suite's check that the benchmark still runs)
 FMUs: $ANKLEHIP_FMU_DIR or <repo>/build/fmus.
 """
 from __future__ import annotations
@@ -135,12 +136,13 @@ def main() -> None:
     ap.add_argument("scenario", nargs="?", default="paper_five_pushes")
     ap.add_argument("--stop-time", type=float, help="instrumented/high-level runs: simulate only this long "
                     "(default: min(scenario, 20 s))")
+    ap.add_argument("--quick", action="store_true", help="every run 2 s long (a smoke run, not figures to quote)")
     a = ap.parse_args()
     sc = load_scenario(find_scenario(a.scenario))
     models = Models.load()
-    T = a.stop_time or min(sc.stop_time, 20.0)
+    T = 2.0 if a.quick else a.stop_time or min(sc.stop_time, 20.0)
 
-    res = simulate(sc, models, progress=False)
+    res = simulate(sc, models, progress=False, stop_time=T if a.quick else None)
     print(f"scenario {sc.name}: {res.message or res.outcome}, {res.end_time:.3f} s simulated in {res.steps} steps "
           f"of {1e3 * sc.step:g} ms")
     print(f"  master (uninstrumented): wall {res.wall_time:.3f} s, {1e6 * res.wall_time / max(1, res.steps):.1f} µs/step "

@@ -10,6 +10,9 @@ libstdc++), B = the default build (zig cc, LLVM libc++, glibc 2.17):
   cmake -S . -B /tmp/gcc-build -DANKLEHIP_GLIBC_BASELINE= -DPython3_EXECUTABLE=$PWD/.venv/bin/python
   cmake --build /tmp/gcc-build --target AnkleHipController_fmu Hoap2Plant_fmu
   .venv/bin/python bench/fmu_builds.py /tmp/gcc-build/fmus build/fmus [--repeat 5]
+
+--quick: one run of the scenario's first 2 s per build and engine (the test suite's check that the
+benchmark still runs, tests/test_benchmarks.py; not figures to quote).
 """
 from __future__ import annotations
 
@@ -35,8 +38,11 @@ def main() -> int:
     ap.add_argument("fmus_b", type=Path, help="FMU folder of build B")
     ap.add_argument("--scenario", default="paper_five_pushes", help="scenario (default %(default)s)")
     ap.add_argument("--repeat", type=int, default=5, help="runs per build and engine (default %(default)s)")
+    ap.add_argument("--quick", action="store_true", help="one run of 2 s per build and engine (a smoke run)")
     a = ap.parse_args()
     sc = load_scenario(find_scenario(a.scenario))
+    if a.quick:
+        sc.stop_time, a.repeat = 2.0, 1
     builds = {"A": Models.load(a.fmus_a), "B": Models.load(a.fmus_b)}
     runs = {"native": lambda m: simulate(sc, m, engine="native"),
             "fmpy": lambda m: simulate(sc, m, progress=False)}

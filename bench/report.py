@@ -15,6 +15,10 @@ bench/results.json. Called by `bash bench/run.sh`; docs/performance.md explains 
 Medians of repeated runs; every ratio comes from figures measured in this same run.
 
 Usage: .venv/bin/python bench/report.py [--quick] [--out bench/results.json] [--fmi-sim PATH]
+
+--quick: every part on a short run (the closed loop's first 5 s, scaling to 5 s, sweeps of 2 points,
+a capability map of 2 x 1 points per variant), one repetition: what the test suite runs so that the
+report cannot rot (tests/test_benchmarks.py); its figures are not the ones to quote.
 """
 from __future__ import annotations
 
@@ -84,7 +88,7 @@ def plant_alone(replay_csv: Path, repeat: int) -> list[dict]:
     return rows
 
 
-def closed_loop(models, sc, repeat: int, tmp: Path) -> dict:
+def closed_loop(models, sc, repeat: int, tmp: Path, quick: bool = False) -> dict:
     from fmpy.util import write_csv as fmpy_write_csv
 
     def fmpy_e2e():
@@ -105,8 +109,9 @@ def closed_loop(models, sc, repeat: int, tmp: Path) -> dict:
     cli = {}
     for engine in ("fmpy", "native"):
         cmd = [str(Path(sys.executable).parent / "anklehip"), "run", SCENARIO, "--engine", engine, "--no-progress",
-               "--no-compare", "--out", str(tmp / f"cli_{engine}")]
-        cli[engine], _ = median_time(lambda: subprocess.run(cmd, capture_output=True, cwd=ROOT, check=True), 3)
+               "--no-compare", "--out", str(tmp / f"cli_{engine}")] + (["--stop-time", f"{sc.stop_time:g}"] if quick else [])
+        cli[engine], _ = median_time(lambda: subprocess.run(cmd, capture_output=True, cwd=ROOT, check=True),
+                                     1 if quick else 3)
     T = r_nat.end_time
     return {"stop_time": T, "steps": r_nat.steps, "rows_identical": same,
             "fmpy_simulate_s": t_fmpy_sim, "fmpy_with_csv_s": t_fmpy, "native_simulate_s": t_nat_sim,
@@ -191,11 +196,11 @@ print(json.dumps({"wall_s": w, "peak_rss_mb": status("VmHWM:") / 1024, "base_rss
 
 
 def scaling(tmp: Path, quick: bool) -> dict:
-    stops = (10, 30, 100, 300, 600) if not quick else (10, 30, 100)
+    stops = (10, 30, 100, 300, 600) if not quick else (2, 5)
     res: dict = {"stop_times": list(stops)}
     for engine in ("native", "fmpy"):
         pts = []
-        for T in (stops if engine == "native" else stops[:4]):
+        for T in (stops if engine == "native" or quick else stops[:4]):
             o = subprocess.run([sys.executable, "-c", SCALING_SCRIPT, str(ROOT), str(T), engine, str(tmp / "s.csv")],
                                capture_output=True, text=True, check=True).stdout
             pts.append({"stop_time": T, **json.loads(o)})
@@ -210,31 +215,40 @@ def scaling(tmp: Path, quick: bool) -> dict:
 def sweep_throughput(quick: bool) -> dict:
     from anklehip.running.sweep import Variant, run_sweep
     path = str(find_scenario(SCENARIO))
-    n = 8 if quick else 16
+    n = 2 if quick else 16
     forces = list(np.linspace(5.0, 7.0, n))
     out = {"runs": n}
     for engine, workers in (("native", 1), ("native", 2), ("fmpy", 2)):
         t = time.perf_counter()
-        rows = run_sweep(path, forces, [Variant("default", {}, {}, None)], workers=workers, engine=engine)
+        res = run_sweep(path, forces, [Variant("default", {}, {}, None)], workers=workers, engine=engine)
         w = time.perf_counter() - t
-        assert len(rows) == n
+        assert res.complete and len(res.rows) == n, f"sweep {engine} on {workers} workers: {len(res.rows)} of {n} points"
         out[f"{engine}_{workers}w_runs_per_min"] = n / w * 60.0
         out[f"{engine}_{workers}w_wall_s"] = w
     return out
 
 
-def capability_map_throughput(tmp: Path) -> dict:
+def capability_map_throughput(tmp: Path, quick: bool = False) -> dict:
     """The committed example sweep (scenarios/sweeps/force_duration.toml, 960 runs of up to 8 s) as
-    `anklehip sweep force_duration` runs it, on 1 and 2 local Dask workers."""
+    `anklehip sweep force_duration` runs it, on 1 and 2 local Dask workers (quick: the same sweep
+    file with a grid of 2 forces x 1 duration)."""
+    import re
     from anklehip.cli import main as cli
     from anklehip.running.sweepfile import load_sweep_file
     from anklehip.files.paths import find_sweep_file
-    sf = load_sweep_file(find_sweep_file("force_duration"))
+    path = find_sweep_file("force_duration")
+    if quick:
+        text = path.read_text()
+        text = re.sub(r'"push.force" = \[[^\]]*\]', '"push.force" = [5, 40]', text)
+        text = re.sub(r'"push.duration" = \[[^\]]*\]', '"push.duration" = [0.2]', text)
+        path = tmp / "force_duration.toml"
+        path.write_text(text)
+    sf = load_sweep_file(path)
     n = len(sf.values()) * len(sf.variants)
     out = {"sweep": "force_duration", "runs": n}
     for workers in (1, 2):
         t = time.perf_counter()
-        rc = cli(["sweep", "force_duration", "--workers", str(workers), "--out", str(tmp / f"cap{workers}"), "--restart"])
+        rc = cli(["sweep", str(path), "--workers", str(workers), "--out", str(tmp / f"cap{workers}"), "--restart"])
         w = time.perf_counter() - t
         assert rc == 0, f"anklehip sweep force_duration --workers {workers} exited {rc}"
         out[f"{workers}w_runs_per_min"] = n / w * 60.0
@@ -262,7 +276,7 @@ def fmt_table(R: dict) -> str:
              f"({c['rtf_native_with_csv']:.0f}x real time), CLI {c['cli_native_s']:.2f} s")
     p = R["peers"]
     L.append("")
-    L.append("3. peers, same 60 s (wall s; ratio = peer / native engine with CSV)")
+    L.append(f"3. peers, same {c['stop_time']:g} s (wall s; ratio = peer / native engine with CSV)")
     nat = c["native_with_csv_s"]
     rows = [("native engine (both FMUs + CSV)", nat), ("our FMPy master (both FMUs)", c["fmpy_simulate_s"]),
             ("FMPy simulate_fmu, plant FMU alone", p.get("fmpy_simulate_fmu_plant_s")),
@@ -302,19 +316,21 @@ def main() -> int:
         print(f"bench: {native.library_path()} missing: build with bash scripts/setup.sh", file=sys.stderr)
         return 1
     repeat = 1 if a.quick else 3
-    R: dict = {"machine": machine()}
+    R: dict = {"machine": machine(), "quick": a.quick}
     models = Models.load()
     sc = load_scenario(find_scenario(SCENARIO))
+    if a.quick:
+        sc.stop_time = 5.0
     with tempfile.TemporaryDirectory() as td:
         tmp = Path(td)
         ref = simulate(sc, models, engine="native")
         native.write_csv(tmp / "replay.csv", ref.data)
         R["plant"] = plant_alone(tmp / "replay.csv", repeat)
-        R["closed_loop"] = closed_loop(models, sc, repeat, tmp)
+        R["closed_loop"] = closed_loop(models, sc, repeat, tmp, a.quick)
         R["peers"] = peers(models, sc, ref, tmp, find_fmi_sim(a.fmi_sim), repeat)
         R["scaling"] = scaling(tmp, a.quick)
         R["sweep"] = sweep_throughput(a.quick)
-        R["capability_map"] = capability_map_throughput(tmp)
+        R["capability_map"] = capability_map_throughput(tmp, a.quick)
     Path(a.out).write_text(json.dumps(R, indent=1) + "\n")
     print(fmt_table(R))
     print(f"\nfigures: {a.out}")

@@ -290,11 +290,13 @@ function(add_fmu)
     set(so3_dep ${name}_fmi3)
   endif()
 
-  # The coverage-guided FMI fuzzer of this FMU (fmu/fuzz/fmi_fuzz.cpp, docs/reliability.md).
+  # The coverage-guided FMI fuzzer of this FMU (fmu/fuzz/fmi_fuzz.cpp, docs/reliability.md): both C
+  # APIs (the FMI 2.0 FMU's and its FMI 3.0 twin's) over the same glue and model objects.
   if(ANKLEHIP_FUZZ)
     target_compile_options(${name}_objs PRIVATE -fsanitize=fuzzer-no-link)
     add_executable(${name}_fuzz "${_ADD_FMU_GLUE_SRC}/../../fuzz/fmi_fuzz.cpp" "${_ADD_FMU_GLUE_SRC}/fmi2_api.cpp"
-                   $<TARGET_OBJECTS:${name}_objs>)
+                   "${_ADD_FMU_GLUE_SRC}/fmi3_api.cpp" $<TARGET_OBJECTS:${name}_objs>)
+    target_include_directories(${name}_fuzz PRIVATE "${_ADD_FMU_GLUE_SRC}")
     target_link_libraries(${name}_fuzz PRIVATE fmuglue ${FMU_LINK})
     target_compile_options(${name}_fuzz PRIVATE -fsanitize=fuzzer)
     target_link_options(${name}_fuzz PRIVATE -fsanitize=fuzzer)

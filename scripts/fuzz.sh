@@ -1,37 +1,69 @@
 #!/usr/bin/env bash
-# Run the libFuzzer FMI harness of each named FMU (docs/reliability.md section 1) for SECONDS,
-# from the committed seeds plus the corpus under WORK (which grows across runs), and print the
-# figures: inputs executed, inputs per second, edges covered, corpus size. Any crash, sanitizer
-# report, leak or input slower than 10 s fails the script and leaves the input in WORK/findings/.
-# Usage: bash scripts/fuzz.sh SECONDS WORK [FMU...]   (default: every shipped FMU; needs the
-#        build of `bash scripts/setup.sh --sanitize`)
-#   bash scripts/fuzz.sh 60 build/sanitize/fuzz                                   # the CI step
-#   bash scripts/fuzz.sh 1200 /tmp/campaign AnkleHipController Hoap2Plant          # a longer campaign
+# Run the libFuzzer FMI harness of each FMU (docs/reliability.md section 1) and print its figures:
+# inputs executed and per second, edges covered, corpus size, the deep programs' successful steps
+# per program, and the coverage of our sources (functions and edges reached, by folder, from
+# libFuzzer's -print_coverage over the final corpus). Every input starts from the committed seeds
+# plus the corpus under WORK (which grows across runs). Any crash, sanitizer report, leak, input
+# slower than 10 s or oracle finding (a restored state that does not continue bit for bit, an
+# accepted forged state that misbehaves) fails the script and leaves the input in WORK/findings/.
+# Usage:
+#   bash scripts/fuzz.sh SECONDS WORK [FMU...]     SECONDS per FMU (default FMUs: every shipped FMU
+#                                                 whose <Model>_fuzz is built in <build>/sanitize;
+#                                                 each covers the FMU and its FMI 3.0 twin)
+#   bash scripts/fuzz.sh --long WORK [FMU...]      until 10 million inputs per FMU (hours: the 3D
+#                                                 plant runs about 100 inputs/s sanitized); RUNS=N
+#                                                 sets another count; the figures also go to
+#                                                 WORK/figures.md, to be quoted in docs/reliability.md
+#   bash scripts/fuzz.sh 60 build/sanitize/fuzz   (the CI step; needs bash scripts/setup.sh --sanitize)
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$root"
-[ $# -ge 2 ] || { sed -n '2,10p' "$0" >&2; exit 2; }
-seconds="$1"; work="$2"; shift 2
-fmus=("$@"); [ ${#fmus[@]} -gt 0 ] || fmus=(AnkleHipController Hoap2Plant Hoap2Plant3D)
+long=0
+if [ "${1:-}" = "--long" ]; then long=1; shift; fi
+if [ "$long" -eq 1 ]; then
+  [ $# -ge 1 ] || { sed -n '2,20p' "$0" >&2; exit 2; }
+  work="$1"; shift
+  limit=(-runs="${RUNS:-10000000}")
+else
+  [ $# -ge 2 ] || { sed -n '2,20p' "$0" >&2; exit 2; }
+  seconds="$1"; work="$2"; shift 2
+  limit=(-max_total_time="$seconds")
+fi
 sbuild="${ANKLEHIP_BUILD_DIR:-build}/sanitize"
+fmus=("$@")
+if [ ${#fmus[@]} -eq 0 ]; then
+  # every shipped FMU (the ones packed into <build>/sanitize/fmus; not the glue's test model)
+  while IFS= read -r f; do
+    m="$(basename "$f" _fuzz)"
+    [ ! -f "$sbuild/fmus/$m.fmu" ] || fmus+=("$m")
+  done < <(find "$sbuild/fmu" -name '*_fuzz' -type f | sort)
+fi
+[ ${#fmus[@]} -gt 0 ] || { echo "fuzz: no <Model>_fuzz built in $sbuild (bash scripts/setup.sh --sanitize)" >&2; exit 1; }
 asan_rt="$(clang -print-file-name=libclang_rt.asan-x86_64.so)"
 export ASAN_OPTIONS="${ASAN_OPTIONS:-abort_on_error=1:detect_leaks=1:strict_string_checks=1:check_initialization_order=1}"
 export UBSAN_OPTIONS="${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}"
 export ASAN_SYMBOLIZER_PATH="${ASAN_SYMBOLIZER_PATH:-$(command -v llvm-symbolizer || true)}"
+mkdir -p "$work/findings"
+figures="$work/figures.md"
+[ "$long" -eq 1 ] && printf '| FMU | inputs | per second | edges | corpus | deep programs | successful steps per program | functions reached |\n|---|---|---|---|---|---|---|---|\n' >"$figures"
 for fmu in "${fmus[@]}"; do
   exe="$(find "$sbuild/fmu" -name "${fmu}_fuzz" -type f | head -n1)"
   [ -x "$exe" ] || { echo "fuzz: ${fmu}_fuzz not built in $sbuild (bash scripts/setup.sh --sanitize)" >&2; exit 1; }
   corpus="$work/corpus-$fmu"
-  mkdir -p "$corpus" "$work/findings"
+  mkdir -p "$corpus"
   log="$work/$fmu.log"
-  if ! LD_PRELOAD="$asan_rt" "$exe" -max_total_time="$seconds" -timeout=10 -rss_limit_mb=4096 -print_final_stats=1 \
+  t0=$(date +%s)
+  if ! LD_PRELOAD="$asan_rt" "$exe" "${limit[@]}" -timeout=10 -rss_limit_mb=4096 -print_final_stats=1 \
       -artifact_prefix="$work/findings/$fmu-" "$corpus" fmu/fuzz/corpus >"$log" 2>&1; then
     tail -n 60 "$log"
     echo "fuzz: the $fmu fuzzer found a defect (input in $work/findings/)" >&2
     exit 1
   fi
-  runs="$(sed -n 's/^stat::number_of_executed_units: *//p' "$log")"
-  rate="$(sed -n 's/^stat::average_exec_per_sec: *//p' "$log")"
-  cov="$(grep -Eo 'cov: [0-9]+' "$log" | tail -n1)"
-  echo "   $fmu: $runs inputs ($rate/s), ${cov#cov: } edges, corpus $(ls "$corpus" | wc -l) inputs, no finding"
+  wall=$(( $(date +%s) - t0 ))
+  # coverage of the final corpus: every function of ours the fuzzer's inputs reach
+  LD_PRELOAD="$asan_rt" "$exe" -runs=0 -print_coverage=1 "$corpus" fmu/fuzz/corpus >"$work/$fmu.coverage" 2>&1 || true
+  extra=()
+  [ "$long" -eq 0 ] || extra=(--figures "$figures")
+  .venv/bin/python scripts/fuzz_report.py "$fmu" "$log" "$work/$fmu.coverage" "$corpus" "$wall" "${extra[@]}"
 done
+[ "$long" -eq 0 ] || echo "figures: $figures"

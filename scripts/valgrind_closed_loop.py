@@ -6,9 +6,10 @@
 Runs `anklehip run SCENARIO` under memcheck (Python with PYTHONMALLOC=malloc, so the interpreter's
 own allocator hides nothing), reads Valgrind's XML report and counts, for each FMU binary, the
 errors (invalid reads/writes, uninitialised values, bad frees) and the definitely lost bytes whose
-stack passes through it. Exit status 0 only if both are zero for every FMU and the run succeeded;
-errors outside our binaries (the interpreter, numpy) are listed but do not count. Issue 12 /
-docs/reliability.md.
+stack passes through it (or through any other object built in this repository). Exit status 0
+only if both are zero for every FMU and the run succeeded; errors whose stacks pass through none
+of ours are listed by the library of their innermost frame (the interpreter, numpy, the loader)
+and do not count. Issue 12, issue 33 / docs/reliability.md.
 """
 from __future__ import annotations
 
@@ -21,25 +22,57 @@ import xml.etree.ElementTree as ET
 from collections import defaultdict
 from pathlib import Path
 
-FMU_BINARIES = ("AnkleHipController.so", "Hoap2Plant.so", "Hoap2Plant3D.so")
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def fmu_binaries() -> tuple[str, ...]:
+    """Every FMU binary this build ships (so a new FMU joins the check by being built)."""
+    d = Path(os.environ.get("ANKLEHIP_FMU_DIR", ROOT / os.environ.get("ANKLEHIP_BUILD_DIR", "build") / "fmus"))
+    return tuple(sorted(f"{p.stem}.so" for p in d.glob("*.fmu")))
+
+
+FMU_BINARIES = fmu_binaries()
 
 
 def ours(error: ET.Element) -> str | None:
-    """The FMU binary on the error's stack (or its allocation stack), if any."""
+    """The binary of ours on the error's stack (or its allocation stack), if any: an FMU binary, or
+    any other object built in this repository (the native closed-loop engine)."""
     for frame in error.iter("frame"):
         obj = frame.findtext("obj") or ""
         for name in FMU_BINARIES:
             if obj.endswith("/" + name):
                 return name
+        if obj.startswith(str(ROOT) + "/") and "/site-packages/" not in obj:   # not the venv's packages
+            return Path(obj).name
     return None
+
+
+def library(error: ET.Element) -> str:
+    """The object of the innermost frame that is not Valgrind's own (its malloc replacement): the
+    library an error outside our binaries belongs to."""
+    for frame in error.iter("frame"):
+        obj = frame.findtext("obj") or ""
+        if obj and "vgpreload" not in Path(obj).name:
+            return Path(obj).name
+    return "?"
 
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("scenario", nargs="?", default="hip_saves_push")
     ap.add_argument("--stop-time", default="1.5", help="simulated seconds (default 1.5: the push and the hip strategy)")
-    ap.add_argument("--plant", default=None, help="plant FMU name (default: the scenario's)")
+    ap.add_argument("--plant", default=None, choices=("sagittal", "3d"), help="plant model (default: the scenario's)")
     args = ap.parse_args(argv)
+    if not FMU_BINARIES:
+        print("valgrind_closed_loop: no packed FMUs in the build (bash scripts/setup.sh)", file=sys.stderr)
+        return 1
+    # the FMU binaries this run loads: the scenario's controller and plant
+    sys.path.insert(0, str(ROOT))
+    from anklehip.files.paths import CONTROLLER_FMUS, PLANT_FMUS, find_scenario
+    from anklehip.files.scenario import load_scenario
+    sc = load_scenario(find_scenario(args.scenario))
+    plant = PLANT_FMUS[args.plant or sc.plant_model]
+    used = {Path(CONTROLLER_FMUS[sc.controller_model]).stem + ".so", Path(plant).stem + ".so"}
 
     with tempfile.TemporaryDirectory(prefix="anklehip-valgrind-") as tmp:
         xml = Path(tmp) / "memcheck.xml"
@@ -60,12 +93,12 @@ def main(argv: list[str] | None = None) -> int:
 
     errors: dict[str, list[str]] = defaultdict(list)
     lost: dict[str, int] = defaultdict(int)
-    elsewhere: dict[str, int] = defaultdict(int)
+    elsewhere: dict[str, dict[str, int]] = defaultdict(lambda: defaultdict(int))
     for e in root.iter("error"):
         kind = e.findtext("kind") or "?"
         where = ours(e)
         if where is None:
-            elsewhere[kind] += 1
+            elsewhere[library(e)][kind] += 1
             continue
         if kind == "Leak_DefinitelyLost":
             xw = e.find("xwhat")
@@ -74,13 +107,17 @@ def main(argv: list[str] | None = None) -> int:
             what = e.findtext("what") or (e.find("xwhat").findtext("text") if e.find("xwhat") is not None else "")
             errors[where].append(f"{kind}: {what}")
 
-    print(f"{'FMU binary':<26} {'errors':>7} {'definitely lost [B]':>20}")
-    for name in FMU_BINARIES:
-        print(f"{name:<26} {len(errors[name]):>7} {lost[name]:>20}")
+    print(f"{'binary of ours':<30} {'errors':>7} {'definitely lost [B]':>20}")
+    for name in sorted(used | set(errors) | set(lost)):
+        print(f"{name:<30} {len(errors[name]):>7} {lost[name]:>20}")
         for line in errors[name][:10]:
             print("   ", line)
-    print("(outside the FMU binaries, not counted: "
-          + (", ".join(f"{n} {k}" for k, n in sorted(elsewhere.items())) or "nothing") + ")")
+    print("(not loaded by this scenario: " + (", ".join(sorted(set(FMU_BINARIES) - used)) or "none") + ")")
+    # No stack of these passes through a binary of ours: attributed to the library of the innermost
+    # frame besides Valgrind's own (the interpreter, numpy, lxml, the dynamic loader), listed, not counted.
+    print("outside our binaries, not counted:" + ("" if elsewhere else " nothing"))
+    for lib, kinds in sorted(elsewhere.items()):
+        print(f"    {lib}: " + ", ".join(f"{n} {k}" for k, n in sorted(kinds.items())))
     bad = any(errors.values()) or any(lost.values())
     print("valgrind_closed_loop:", "FAILED" if bad else "clean")
     return 1 if bad else 0

@@ -203,6 +203,7 @@ def test_where_names_the_checkout_and_the_build(fmu_dir, capsys):
     from conftest import REPO_ROOT
     assert main(["where"]) == 0
     out = capsys.readouterr().out
+    # the label column is as wide as the longest label (AnkleHipController3D.fmu since issue 29)
     assert re.search(rf"^checkout +{re.escape(str(REPO_ROOT))}$", out, re.M), out
     for name in ("AnkleHipController", "AnkleHipController3D", "Hoap2Plant", "Hoap2Plant3D"):
         assert re.search(rf"^{name}\.fmu +{re.escape(str(fmu_dir / (name + '.fmu')))}$", out, re.M), out

@@ -404,3 +404,30 @@ def test_comparison_figure_units_title_and_headers(fmu_dir):
         title = _bbox(ax.title, fig)
         assert title.x0 >= box.x0 - 1 and title.x1 <= box.x1 + 1 and title.y1 <= box.y1 + 1, ax.title.get_text()
         assert not sup.overlaps(title) and not sup.overlaps(_bbox(ax, fig))
+
+
+@pytest.mark.parametrize("cell", [1e30, -1e12, 4e8])
+def test_one_absurd_reference_cell_fails_instead_of_widening_the_band(tmp_path, cell):
+    """FMPy's band is dy times the signal's range: one 1e30 cell in the reference made it 1e29 high
+    and garbage passed (issue 33). Such an isolated cell fails the signal, naming it."""
+    ref = ref_signals(T)
+    ref["y"][700] = cell
+    garbage = ref_signals(T)
+    garbage["y"] = 1e5
+    rep = compare(garbage, ref)
+    y = next(s for s in rep.signals if s.name == "y")
+    assert not y.passed and f"isolated value {cell:.6g} at t={T[700]:.6g} s" in y.message, y.message
+    assert "corrupt cell" in y.message
+    assert next(s for s in rep.signals if s.name == "ramp").passed   # the other signals are compared as ever
+    write_csv(tmp_path / "ref.csv", ref)
+    write_csv(tmp_path / "res.csv", garbage)
+    assert main(["compare", str(tmp_path / "res.csv"), str(tmp_path / "ref.csv"), "--no-progress"]) == 1
+
+
+def test_a_genuine_spike_is_compared_as_usual():
+    """A sharp but physical peak (an impact: 300 times the rest of the signal) is not an outlier."""
+    y = 0.01 * np.sin(T)
+    y[1000] = 3.0
+    ref = make(T, y=y)
+    rep = compare(ref, ref)
+    assert rep.passed, rep.text()

@@ -523,8 +523,9 @@ def test_corrupted_serialized_state_rejected(raw_controller):
     b.free()
 
 
-def _fnv1a64(data: bytes) -> int:
-    h = 1469598103934665603
+def _fnv1a64(data: bytes, basis: int | None = None) -> int:
+    """FNV-1a 64 (offset basis 14695981039346656037, prime 1099511628211): the state checksum."""
+    h = 14695981039346656037 if basis is None else basis
     for b in data:
         h = ((h ^ b) * 1099511628211) & 0xFFFFFFFFFFFFFFFF
     return h

@@ -634,3 +634,81 @@ def test_locks_of_different_folders_are_independent(tmp_path):
     """Different folders do not block each other; the lock file holds the owner's pid."""
     with output_lock(tmp_path / "a"), output_lock(tmp_path / "b"):
         assert (tmp_path / "a" / ".anklehip.lock").read_text().strip() == str(os.getpid())
+
+
+# ----------------------------------------------------------------------------------------------
+# issue 33, item 9: the smaller ones
+
+def test_toml_with_a_byte_order_mark_is_read(tmp_path, fmu_dir, capsys):
+    """Editors on Windows write a UTF-8 BOM; the TOML parser alone said only "Invalid statement"."""
+    sc = tmp_path / "bom.toml"
+    sc.write_bytes(b"\xef\xbb\xbf" + (scenarios_dir() / "ankle_small_push.toml").read_bytes())
+    assert main(["run", str(sc), "--out", str(tmp_path / "o"), "--stop-time", "0.05", "--no-progress"]) == 0
+    assert load_scenario(sc).stop_time == load_scenario(scenarios_dir() / "ankle_small_push.toml").stop_time
+
+
+def test_deeply_nested_toml_is_refused_before_parsing(tmp_path, capsys):
+    """3 000 nested table names took 48 s to refuse (the parser is quadratic in the depth)."""
+    base = (scenarios_dir() / "ankle_small_push.toml").read_text()
+    deep = tmp_path / "deep.toml"
+    deep.write_text(base + "\n[controller" + ".a" * 3000 + "]\nx = 1\n")
+    with pytest.raises(ScenarioError, match=r"deep\.toml: invalid TOML: line \d+: a key or table nested 3001 levels "
+                                            r"deep \(at most 64\)"):
+        load_scenario(deep)
+    many = tmp_path / "many.toml"
+    many.write_text(base + "".join(f"\n[controller{'.a' * n}]" for n in range(1, 3001)) + "\n")
+    import time
+    t0 = time.perf_counter()
+    assert main(["run", str(many), "--out", str(tmp_path / "o"), "--no-progress"]) == 2
+    assert time.perf_counter() - t0 < 10
+    one_error_line(capsys.readouterr().err, "many.toml", "MiB: too large for a TOML input file")
+
+
+def test_a_folder_named_like_an_fmu_is_named_as_such(tmp_path, fmu_dir, capsys):
+    d = tmp_path / "fmus"
+    shutil.copytree(fmu_dir, d, ignore=shutil.ignore_patterns("AnkleHipController.fmu", "fmi3"))
+    (d / "AnkleHipController.fmu").mkdir()
+    assert main(["--fmu-dir", str(d), "run", "ankle_small_push", "--out", str(tmp_path / "o"), "--no-progress"]) == 2
+    one_error_line(capsys.readouterr().err, f"{d / 'AnkleHipController.fmu'} is a folder, not an FMU",
+                   "an FMU is one zip file")
+
+
+def _limited_write_run(out: Path, fmu_dir, limit: int, *extra) -> subprocess.CompletedProcess:
+    """`anklehip run` whose files may not grow beyond `limit` bytes (RLIMIT_FSIZE: a write beyond
+    fails with EFBIG, as a full disk fails with ENOSPC; Python ignores SIGXFSZ)."""
+    import resource
+
+    def limit_files():
+        resource.setrlimit(resource.RLIMIT_FSIZE, (limit, limit))
+    return subprocess.run([sys.executable, "-m", "anklehip.cli", "run", "ankle_small_push", "--out", str(out),
+                           "--no-progress", *extra], capture_output=True, text=True, timeout=300,
+                          env=dict(os.environ, ANKLEHIP_FMU_DIR=str(fmu_dir)), preexec_fn=limit_files)
+
+
+def test_a_write_that_fails_names_the_file_and_the_reason(previous_result, fmu_dir):
+    """Disk-full messages named the reason or the file, not both; the earlier result stays."""
+    before = snapshot(previous_result)
+    # larger than the FMUs' binaries (1.4 MB, unpacked first), smaller than the 6 s run's CSV (3 MB)
+    r = _limited_write_run(previous_result, fmu_dir, 2_000_000)
+    assert r.returncode == 2, r.stderr
+    one_error_line(r.stderr, f"{previous_result / 'ankle_small_push.csv'}: File too large")
+    assert snapshot(previous_result) == before
+    assert not [p for p in previous_result.iterdir() if p.name.startswith(".ankle_small_push")]
+
+
+def test_a_full_disk_is_named(tmp_path, fmu_dir):
+    """The same on a real full file system (a 300 kB tmpfs; skipped where it cannot be mounted)."""
+    mnt = tmp_path / "full"
+    mnt.mkdir()
+    if os.geteuid() != 0 or subprocess.run(["mount", "-t", "tmpfs", "-o", "size=300k", "tmpfs", str(mnt)],
+                                           capture_output=True).returncode != 0:
+        pytest.skip("cannot mount a tmpfs here")
+    try:
+        r = subprocess.run([sys.executable, "-m", "anklehip.cli", "run", "ankle_small_push", "--out",
+                            str(mnt / "o"), "--no-progress"], capture_output=True, text=True, timeout=300,
+                           env=dict(os.environ, ANKLEHIP_FMU_DIR=str(fmu_dir)))
+        assert r.returncode == 2 and f"{mnt / 'o' / 'ankle_small_push.csv'}: No space left on device" in r.stderr, \
+            r.stderr
+        assert [p.name for p in (mnt / "o").iterdir()] == [".anklehip.lock"]
+    finally:
+        subprocess.run(["umount", str(mnt)], capture_output=True)

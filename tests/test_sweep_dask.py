@@ -193,3 +193,58 @@ def test_journal_of_another_sweep_is_refused(tmp_path):
     res = run_sweep(str(sc), [7.0], VARIANTS[:1], workers=1, engine="native", journal=journal,
                     key=sweep_key(sc, models), restart=True)
     assert res.complete and res.resumed == 0
+
+
+def test_scheduler_without_workers_says_so_and_gives_up_after_the_timeout(tmp_path):
+    """A scheduler with no worker (issue 33: the sweep waited silently forever): a line says so and
+    how to start one, and after --worker-timeout the command ends with the reason."""
+    port = _free_port()
+    addr = f"tcp://127.0.0.1:{port}"
+    env = {**os.environ, "DASK_LOGGING__DISTRIBUTED": "error"}
+    sched = subprocess.Popen([DASK, "scheduler", "--host", "127.0.0.1", "--port", str(port), "--no-dashboard"],
+                             stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=env)
+    try:
+        deadline = time.time() + 60
+        while True:
+            try:
+                socket.create_connection(("127.0.0.1", port), timeout=1).close()
+                break
+            except OSError:
+                assert time.time() < deadline, "dask scheduler did not start"
+                time.sleep(0.2)
+        t0 = time.time()
+        r = subprocess.run([ANKLEHIP, "sweep", SCENARIO, "--forces", "7,9", "--scheduler", addr,
+                            "--worker-timeout", "2", "--out", str(tmp_path / "out")],
+                           capture_output=True, text=True, timeout=120, env=env)
+        assert time.time() - t0 < 60
+        assert r.returncode == 2, r.stderr
+        assert f"the Dask scheduler at {addr} has no worker; waiting up to 2 s" in r.stderr, r.stderr
+        assert f"no Dask worker connected to the scheduler at {addr} within 2 s" in r.stderr, r.stderr
+        assert "Traceback" not in r.stderr
+    finally:
+        sched.terminate()
+        try:
+            sched.wait(timeout=20)
+        except subprocess.TimeoutExpired:
+            sched.kill()
+
+
+def test_journal_that_is_not_utf8_is_refused_naming_the_file(tmp_path):
+    """Not an "unexpected UnicodeDecodeError" without the file (issue 33); a half-written last line,
+    which a killed run may leave, is dropped instead."""
+    sc = tmp_path / "mine.toml"
+    sc.write_text(find_scenario(SCENARIO).read_text())
+    models = Models.load()
+    journal = tmp_path / "j.jsonl"
+    run_sweep(str(sc), [7.0, 8.0], VARIANTS[:1], workers=1, engine="native", journal=journal,
+              key=sweep_key(sc, models))
+    good = journal.read_bytes()
+    journal.write_bytes(good + b'{"id": "half\xff\xfe')               # the last line: dropped
+    res = run_sweep(str(sc), [7.0, 8.0], VARIANTS[:1], workers=1, engine="native", journal=journal,
+                    key=sweep_key(sc, models))
+    assert res.complete and res.resumed == 2
+    lines = good.split(b"\n")
+    journal.write_bytes(lines[0] + b"\n\xff\xfe garbage\n" + b"\n".join(lines[1:]))
+    with pytest.raises(JournalMismatch, match=r"j\.jsonl: line 2: not UTF-8 text \(byte 0xff\)"):
+        run_sweep(str(sc), [7.0, 8.0], VARIANTS[:1], workers=1, engine="native", journal=journal,
+                  key=sweep_key(sc, models))

@@ -227,6 +227,25 @@ def _discrete_deviation(t: np.ndarray, y: np.ndarray, t_ref: np.ndarray, y_ref: 
     return np.minimum(np.abs(y - before), np.abs(y - after))
 
 
+# A reference sample whose distance from the median is this many times the range of all the other
+# samples is taken for a corrupt cell (one 1e30 cell made the band 1e29 high: anything passed).
+OUTLIER_RATIO = 1e6
+
+
+def _isolated_outlier(y: np.ndarray) -> tuple[int, float] | None:
+    """(index, ratio) of a single sample that alone makes the signal's range, else None."""
+    if len(y) < 3:
+        return None
+    med = float(np.median(y))
+    k = int(np.argmax(np.abs(y - med)))
+    off = abs(float(y[k]) - med)
+    rest = np.delete(y, k)
+    span = float(np.ptp(rest))
+    if span > 0:
+        return (k, off / span) if off > OUTLIER_RATIO * span else None
+    return (k, math.inf) if off > OUTLIER_RATIO * max(1.0, abs(med)) else None
+
+
 def compare_signal(name: str, t: np.ndarray, y: np.ndarray, t_ref: np.ndarray, y_ref: np.ndarray, *,
                    num: int | None = None, dx: int = 20, dy: float = 0.1, abs_tol: float | None = None,
                    rel_tol: float | None = None, band_floor: float | None = None,
@@ -249,6 +268,16 @@ def compare_signal(name: str, t: np.ndarray, y: np.ndarray, t_ref: np.ndarray, y
     if nan_ref.any():
         r.passed = False
         r.message = f"reference has NaN/Inf at t={t_ref[np.argmax(nan_ref)]:.6g}"
+        return r
+    spike = _isolated_outlier(y_ref)
+    if spike is not None:
+        k, ratio = spike
+        r.passed = False
+        r.message = (f"reference has an isolated value {y_ref[k]:.6g} at t={t_ref[k]:.6g} s, "
+                     + (f"{ratio:.3g} times the range of its other samples" if math.isfinite(ratio) else
+                        "where every other sample is the same")
+                     + ": a corrupt cell? (the band's height is dy times the signal's range, so it would let "
+                       "anything pass)")
         return r
     inside = (t >= t_ref[0]) & (t <= t_ref[-1])
     r.n_samples = int(inside.sum())

@@ -10,10 +10,14 @@ ends in a Python traceback.
 """
 from __future__ import annotations
 
+import contextlib
 import os
+import signal
 import sys
 
-from ..errors import InputError
+from ..errors import InputError, Terminated
+from ..files.output import os_error_message
+from ..running.points import NoWorkersError
 from .parser import EXIT_ERROR, EXIT_FAIL, EXIT_OK, FMI3_COMMANDS, build_parser
 
 __all__ = ["main", "build_parser", "UsageError", "EXIT_OK", "EXIT_FAIL", "EXIT_ERROR"]
@@ -28,25 +32,51 @@ def _err(msg: str) -> int:
     return EXIT_ERROR
 
 
-def main(argv=None) -> int:
-    import matplotlib
-    matplotlib.use("Agg")          # the command line only writes figures (the API leaves the backend alone)
-    from . import commands
-    p = build_parser()
-    a = p.parse_args(argv)
-    if a.fmi == 3 and a.cmd not in FMI3_COMMANDS:
-        return _err(f"--fmi 3: `{a.cmd}` runs the FMI 2.0 FMUs only (--fmi 3 works with {', '.join(FMI3_COMMANDS)})")
+def _terminate(signum, frame):
+    raise Terminated(signal.Signals(signum).name)
+
+
+@contextlib.contextmanager
+def _ending_signals_interrupt():
+    """SIGTERM and SIGHUP raise Terminated (a KeyboardInterrupt) in the main thread while a command
+    runs, so a kill ends a run as Ctrl-C does (the data so far as <name>.incomplete.csv, no half
+    result that looks complete); the previous handlers afterwards."""
+    import threading
+    names = [n for n in ("SIGTERM", "SIGHUP") if hasattr(signal, n)]
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    old = {n: signal.signal(getattr(signal, n), _terminate) for n in names}
     try:
-        return (a.fn if callable(a.fn) else getattr(commands, f"cmd_{a.fn}"))(a)   # robot: its own module
-    except KeyboardInterrupt:
-        print("interrupted", file=sys.stderr)
+        yield
+    finally:
+        for n, h in old.items():
+            signal.signal(getattr(signal, n), h)
+
+
+def main(argv=None) -> int:
+    try:
+        with _ending_signals_interrupt():
+            import matplotlib
+            matplotlib.use("Agg")          # the command line only writes figures (the API leaves the backend alone)
+            from . import commands
+            p = build_parser()
+            a = p.parse_args(argv)
+            if a.fmi == 3 and a.cmd not in FMI3_COMMANDS:
+                return _err(f"--fmi 3: `{a.cmd}` runs the FMI 2.0 FMUs only (--fmi 3 works with "
+                            f"{', '.join(FMI3_COMMANDS)})")
+            return (a.fn if callable(a.fn) else getattr(commands, f"cmd_{a.fn}"))(a)   # robot: its own module
+    except KeyboardInterrupt as e:
+        print(str(e) if isinstance(e, Terminated) else "interrupted", file=sys.stderr)
         return 130
     except BrokenPipeError:
         return EXIT_OK
     except InputError as e:
         return _err(str(e))
-    except OSError as e:      # a file or folder we cannot read or write
-        return _err(f"{e.filename}: {e.strerror}" if e.filename else str(e))
+    except NoWorkersError as e:
+        return _err(str(e))
+    except OSError as e:      # a file or folder we cannot read or write: name both, and the reason
+        return _err(os_error_message(e))
     except Exception as e:
         if os.environ.get("ANKLEHIP_DEBUG"):
             raise

@@ -302,7 +302,7 @@ def cmd_sweep(a) -> int:
         return _err(str(e))
     variants = [parse_variant(v) for v in a.variant] if a.variant else None
     res = sweep(a.scenario, forces=forces, variants=variants, workers=a.workers, engine=a.engine,
-                scheduler=a.scheduler, out=out, restart=a.restart, fmu_dir=a.fmu_dir,
+                scheduler=a.scheduler, worker_timeout=a.worker_timeout, out=out, restart=a.restart, fmu_dir=a.fmu_dir,
                 origins={"variants": "--variant", "forces": "--forces", "out": "--out"})
     if not res.rows:
         print("anklehip sweep: interrupted before any point finished; nothing written", file=sys.stderr)
@@ -404,7 +404,8 @@ def cmd_robustness(a) -> int:
     models = Models.for_scenario(sc, a.fmu_dir)
     with output_lock(out):
         res = run_studies(str(path), plan, a.fmu_dir, workers=a.workers, scheduler=a.scheduler,
-                          journal=out / "points.jsonl", key=sweep_key(path, models), restart=a.restart)
+                          journal=out / "points.jsonl", key=sweep_key(path, models), restart=a.restart,
+                          worker_timeout=a.worker_timeout)
         rows = res.rows
         if not rows:
             print("anklehip robustness: interrupted before any point finished; nothing written", file=sys.stderr)

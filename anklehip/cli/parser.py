@@ -247,6 +247,9 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--scheduler", metavar="ADDRESS",
                    help="run on the Dask scheduler at ADDRESS (e.g. tcp://host:8786; default: "
                         "$DASK_SCHEDULER_ADDRESS, else a local cluster of --workers processes)")
+    s.add_argument("--worker-timeout", type=_number(gt=0), default=120.0, metavar="S",
+                   help="with a scheduler that has no worker: how long to wait for one before giving up "
+                        "(default %(default)g s)")
     s.add_argument("--restart", action="store_true",
                    help="discard the points an earlier (interrupted) run of this sweep left in --out")
     s.add_argument("--out", metavar="DIR", help="output folder (default: results/sweep_<name>); a rerun into the "
@@ -264,6 +267,9 @@ def build_parser() -> argparse.ArgumentParser:
                    help="processes of the local Dask cluster (default %(default)s; not used with --scheduler)")
     s.add_argument("--scheduler", metavar="ADDRESS",
                    help="run on the Dask scheduler at ADDRESS (default: $DASK_SCHEDULER_ADDRESS, else a local cluster)")
+    s.add_argument("--worker-timeout", type=_number(gt=0), default=120.0, metavar="S",
+                   help="with a scheduler that has no worker: how long to wait for one before giving up "
+                        "(default %(default)g s)")
     s.add_argument("--restart", action="store_true", help="discard the points an earlier run left in --out")
     s.add_argument("--out", metavar="DIR", help="output folder (default: results/robustness_<scenario>); a rerun "
                                                 "into the same folder skips the points already done")

@@ -2,9 +2,12 @@
 lock, the file names of a run and the removal of an earlier run's files, the summary JSON."""
 from __future__ import annotations
 
+import contextlib
 import json
 import math
 import os
+import shutil
+import signal
 import tempfile
 import time
 from contextlib import contextmanager
@@ -34,21 +37,39 @@ def _publish(tmp: str, path: Path) -> None:
     os.replace(tmp, path)
 
 
+def os_error_message(e: OSError) -> str:
+    """One line naming the file (and the second one of a rename) and the reason, e.g.
+    "out/run.csv: No space left on device"."""
+    reason = e.strerror or str(e) or type(e).__name__
+    if e.filename is not None and getattr(e, "filename2", None) is not None:
+        return f"{e.filename} -> {e.filename2}: {reason}"
+    return f"{e.filename}: {reason}" if e.filename is not None else reason
+
+
+def named(e: OSError, path: str | os.PathLike) -> OSError:
+    """`e` as an OSError that names `path` (a failed write() names no file; a temporary file's name
+    means nothing to the user)."""
+    return OSError(e.errno, e.strerror or str(e), str(path))
+
+
 @contextmanager
 def _atomic(path: Path):
     """Yields (fd, temporary path) in the folder of `path`; the temporary file replaces `path` when
-    the block succeeds and is removed when it fails, so a reader never sees a half-written file."""
+    the block succeeds and is removed when it fails, so a reader never sees a half-written file. A
+    failure to write (a full disk) is an OSError naming `path` and the reason."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
     try:
         yield fd, tmp
         _publish(tmp, path)
-    except BaseException:
+    except BaseException as e:
         try:
             os.unlink(tmp)
         except OSError:
             pass
+        if isinstance(e, OSError) and e.filename in (None, tmp):
+            raise named(e, path) from e
         raise
 
 
@@ -116,6 +137,61 @@ def clear_previous(out_dir: Path, name: str, keep: tuple[Path, ...] = ()) -> Non
             p.unlink()
         except FileNotFoundError:
             pass
+
+
+def result_files(out_dir: Path, name: str) -> list[Path]:
+    """Every file a run of `name` may leave in `out_dir` (data, summary, figures)."""
+    return list(result_paths(out_dir, name).values()) + [Path(out_dir) / f"{name}{s}" for s in FIGURE_SUFFIXES]
+
+
+def remove_stale_temporaries(out_dir: Path, name: str) -> None:
+    """Remove what a killed earlier run of `name` left hidden in `out_dir`: the temporary files of its
+    atomic writes (.<file>.*.tmp) and its staging folder (.<name>.staging-*). Call it holding the
+    folder's lock (output_lock): no other run can be writing them."""
+    out_dir = Path(out_dir)
+    for f in result_files(out_dir, name):
+        for t in out_dir.glob(f".{glob_escape(f.name)}.*.tmp"):
+            with contextlib.suppress(OSError):
+                t.unlink()
+    for d in out_dir.glob(f".{glob_escape(name)}.staging-*"):
+        shutil.rmtree(d, ignore_errors=True)
+
+
+def glob_escape(s: str) -> str:
+    return "".join(f"[{c}]" if c in "*?[" else c for c in s)
+
+
+@contextmanager
+def staging(out_dir: Path, name: str):
+    """A hidden folder in `out_dir` where a run writes its files before they are published together
+    (publish); removed on the way out, whatever happens, so an interrupted run leaves nothing."""
+    d = Path(tempfile.mkdtemp(prefix=f".{name}.staging-", dir=out_dir))
+    try:
+        yield d
+    finally:
+        shutil.rmtree(d, ignore_errors=True)
+
+
+_ENDING_SIGNALS = tuple(getattr(signal, n) for n in ("SIGINT", "SIGTERM", "SIGHUP") if hasattr(signal, n))
+
+
+def publish(out_dir: Path, name: str, staged: list[Path], summary: Path) -> None:
+    """Move a run's staged files into `out_dir` in place of an earlier run's: the earlier summary
+    goes first and the new one comes last, so a summary never stands beside another run's files,
+    and the signals that end a run (SIGINT, SIGTERM, SIGHUP) wait until the files are in place (only
+    SIGKILL can stop it half-way, which leaves no summary: nothing that looks complete)."""
+    blocked = hasattr(signal, "pthread_sigmask")
+    old = signal.pthread_sigmask(signal.SIG_BLOCK, _ENDING_SIGNALS) if blocked else None
+    try:
+        out_dir = Path(out_dir)
+        result_paths(out_dir, name)["summary"].unlink(missing_ok=True)
+        clear_previous(out_dir, name)
+        for f in staged:
+            os.replace(f, out_dir / f.name)
+        os.replace(summary, out_dir / summary.name)
+    finally:
+        if blocked:
+            signal.pthread_sigmask(signal.SIG_SETMASK, old)
 
 
 LOCK_FILE = ".anklehip.lock"

@@ -145,6 +145,10 @@ def find_fmu(filename: str, fmu_dir: str | os.PathLike | None = None, fmi: int =
         p = d / filename
         if p.is_file():
             return p
+        if p.is_dir():
+            raise MissingFileError(f"{p} is a folder, not an FMU: an FMU is one zip file named {filename} (an "
+                                   "extracted FMU is not looked up; zip it or rebuild the FMUs with "
+                                   "`bash scripts/setup.sh`)")
     where = ", ".join(str(d) for d in dirs) or "no folder (no checkout, no package data)"
     raise MissingFileError(
         f"{filename} not found in {where}. Build the FMUs with `bash scripts/setup.sh` in a checkout, "

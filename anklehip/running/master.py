@@ -24,7 +24,7 @@ from typing import Any, Callable
 
 import numpy as np
 
-from ..errors import InputError
+from ..errors import InputError, Terminated
 from .faults import SENSED_PREFIX, Faults, SensorChannel, TransitionPush, parameter_faults
 from .fmu import DISCARD, STATUS_NAMES, FMUError, FMUInfo, Slave, vr_array
 from ..files.paths import CONTROLLER_FMUS, PLANT_FMUS, find_fmu
@@ -465,10 +465,11 @@ class ClosedLoop:
                     if n_pB:
                         p_getB(pc, vr_pB, n_pB, rI + oPB)
                 t_end = t0 + N * h
-        except KeyboardInterrupt:
+        except KeyboardInterrupt as e:      # Ctrl-C, or SIGTERM/SIGHUP through the CLI (errors.Terminated)
             last = max(j - 1, 0)
             t_end = t0 + last * h
-            outcome, message = "interrupted", f"interrupted by the user; data kept up to t={t_end:.3f} s"
+            why = str(e) if isinstance(e, Terminated) else "interrupted by the user"
+            outcome, message = "interrupted", f"{why}; data kept up to t={t_end:.3f} s"
         except Exception as e:   # keep what was computed, mark it as an error
             last = failed_at if failed_at >= 0 else max(j - 1, 0)
             t_end = t0 + last * h

@@ -200,5 +200,6 @@ def write_csv(path, data: np.ndarray) -> None:
     enc = [n.encode() for n in names]
     cnames = (ctypes.c_char_p * len(names))(*enc)
     err = ctypes.create_string_buffer(512)
-    if lib.ahn_write_csv(str(path).encode(), len(names), cnames, bytes(kinds), cols, strides, len(data), err, 512):
-        raise OSError(err.value.decode(errors="replace"))
+    rc = lib.ahn_write_csv(str(path).encode(), len(names), cnames, bytes(kinds), cols, strides, len(data), err, 512)
+    if rc:      # errno, err its strerror (a full disk: ENOSPC)
+        raise OSError(rc, err.value.decode(errors="replace"), str(path))

@@ -14,6 +14,7 @@ module-level function of this package) and return a dict of plain values.
 """
 from __future__ import annotations
 
+import asyncio
 import contextlib
 import json
 import logging
@@ -68,8 +69,21 @@ def read_journal(path: Path, key: str) -> dict[str, dict]:
     if not path.is_file():
         return {}
     rows: dict[str, dict] = {}
-    with open(path, encoding="utf-8") as f:
-        lines = f.read().split("\n")
+    try:
+        raw = path.read_bytes()
+    except OSError as e:
+        raise JournalMismatch(f"{path}: cannot read the points journal: {e.strerror}") from None
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError as e:
+        line = raw[:e.start].count(b"\n") + 1
+        # the last line a killed run may leave half-written; any other line: not our journal
+        if line == 1 or b"\n" in raw[e.start:].rstrip(b"\n"):
+            raise JournalMismatch(f"{path}: line {line}: not UTF-8 text (byte 0x{raw[e.start]:02x}): not a points "
+                                  "journal anklehip wrote; use another output folder, or --restart to discard "
+                                  "it") from None
+        text = raw[:raw.rfind(b"\n", 0, e.start) + 1].decode("utf-8", errors="replace")
+    lines = text.split("\n")
     if not lines or not lines[0].strip():
         return {}
     try:
@@ -101,14 +115,21 @@ class _Journal:
         path = Path(path)
         path.parent.mkdir(parents=True, exist_ok=True)
         new = not path.is_file() or path.stat().st_size == 0
+        torn = not new and not path.read_bytes().endswith(b"\n")   # a killed run's half-written last line
         self.f = open(path, "a", encoding="utf-8")
+        if torn:
+            self.f.write("\n")
         if new:
             self._write({"journal": JOURNAL_FORMAT, "version": 1, "key": key, "what": what})
 
     def _write(self, obj: dict) -> None:
-        self.f.write(json.dumps(obj, allow_nan=True) + "\n")
-        self.f.flush()
-        os.fsync(self.f.fileno())
+        try:
+            self.f.write(json.dumps(obj, allow_nan=True) + "\n")
+            self.f.flush()
+            os.fsync(self.f.fileno())
+        except OSError as e:        # a full disk: name the journal
+            from ..files.output import named
+            raise named(e, self.f.name) from e
 
     def add(self, row: dict) -> None:
         if self.f is not None:
@@ -167,6 +188,27 @@ class _Progress:
 # ---------------------------------------------------------------------------------------------
 # Dask
 
+# How long a sweep waits for a worker of a scheduler that has none [s] (--worker-timeout).
+WORKER_TIMEOUT = 120.0
+
+
+class NoWorkersError(RuntimeError):
+    """The Dask scheduler had no worker within the time allowed."""
+
+
+def wait_for_a_worker(client, addr: str, timeout: float) -> None:
+    """Return once the scheduler has a worker; say on stderr that it has none and wait up to `timeout`
+    seconds (a sweep submitted to a scheduler without workers would otherwise wait silently forever)."""
+    if client.scheduler_info().get("workers"):
+        return
+    print(f"the Dask scheduler at {addr} has no worker; waiting up to {timeout:g} s for one "
+          f"(start one with `dask worker {addr}`; --worker-timeout sets the wait)", file=sys.stderr, flush=True)
+    try:
+        client.wait_for_workers(1, timeout=timeout)
+    except (TimeoutError, asyncio.TimeoutError, OSError) as e:
+        raise NoWorkersError(f"no Dask worker connected to the scheduler at {addr} within {timeout:g} s; start workers "
+                             f"with `dask worker {addr}` or wait longer with --worker-timeout") from e
+
 def scheduler_address(scheduler: str | None) -> str | None:
     """The scheduler to use: the argument, else $DASK_SCHEDULER_ADDRESS, else None (a local cluster)."""
     return scheduler or os.environ.get("DASK_SCHEDULER_ADDRESS") or None
@@ -188,14 +230,16 @@ def _quiet_dask():
 
 
 @contextlib.contextmanager
-def dask_client(workers: int, scheduler: str | None):
+def dask_client(workers: int, scheduler: str | None, worker_timeout: float | None = None):
     """A Client of the scheduler at `scheduler` ($DASK_SCHEDULER_ADDRESS), else of a local cluster of
     `workers` processes that ignore SIGINT (Ctrl-C reaches only this process, which then stops
-    them)."""
+    them). A scheduler without workers: a line on stderr, then up to `worker_timeout` seconds
+    (default WORKER_TIMEOUT) of waiting for one, then NoWorkersError."""
     from dask.distributed import Client, LocalCluster
     addr = scheduler_address(scheduler)
     if addr:
         with Client(addr, timeout="20s") as client:
+            wait_for_a_worker(client, addr, WORKER_TIMEOUT if worker_timeout is None else worker_timeout)
             yield client
         return
     # inherited by the worker processes: SIGINT ignored, Dask's logging at CRITICAL (a worker whose
@@ -223,13 +267,15 @@ def dask_client(workers: int, scheduler: str | None):
 
 def run_points(fn: Callable[[dict], dict], specs: list[dict], *, workers: int = 2, scheduler: str | None = None,
                journal: Path | None = None, key: str = "", what: str = "", label: str = "points",
-               restart: bool = False, progress: bool = True) -> Outcome:
+               restart: bool = False, progress: bool = True,
+               worker_timeout: float = WORKER_TIMEOUT) -> Outcome:
     """Run fn(spec) for every spec (each with a unique str "id") and collect the rows.
 
     workers <= 1 and no scheduler: in this process, one after the other (no Dask cluster).
     `journal`: where finished rows are appended (and read back on a rerun with the same `key`;
     `restart` discards it first). Ctrl-C returns what is done with interrupted=True. `progress`:
-    the bar or lines on stderr (False: none)."""
+    the bar or lines on stderr (False: none). On a scheduler without workers it says so and waits
+    `worker_timeout` seconds for one, then raises NoWorkersError."""
     ids = [s["id"] for s in specs]
     if len(set(ids)) != len(ids):
         raise ValueError("run_points: point ids are not unique")
@@ -254,7 +300,7 @@ def run_points(fn: Callable[[dict], dict], specs: list[dict], *, workers: int = 
                 except KeyboardInterrupt:
                     out.interrupted = True
             else:
-                _run_dask(fn, todo, workers, scheduler, done, j, prog, out)
+                _run_dask(fn, todo, workers, scheduler, done, j, prog, out, worker_timeout)
     finally:
         prog.close()
         j.close()
@@ -270,10 +316,10 @@ def _silence_dask() -> None:
         logging.getLogger(n).setLevel(logging.CRITICAL + 1)
 
 
-def _run_dask(fn, todo, workers, scheduler, done, journal, prog, out) -> None:
+def _run_dask(fn, todo, workers, scheduler, done, journal, prog, out, worker_timeout=None) -> None:
     from dask.distributed import as_completed
     try:
-        with dask_client(workers, scheduler) as client:
+        with dask_client(workers, scheduler, worker_timeout) as client:
             futures = client.map(call_point, [fn] * len(todo), todo, pure=False)
             try:
                 for fut in as_completed(futures):

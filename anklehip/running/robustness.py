@@ -127,13 +127,14 @@ def robustness_point(spec: dict) -> dict[str, Any]:
 
 def run_studies(scenario_path: str, studies: list[tuple[Study, list[float]]], fmu_dir: str | None = None,
                 workers: int = 2, *, scheduler: str | None = None, journal: Path | None = None, key: str = "",
-                restart: bool = False):
+                restart: bool = False, worker_timeout: float | None = None):
     """Every study at every level, on Dask (anklehip.running.points, like the sweeps: journal, resumption,
     clean Ctrl-C). Returns an anklehip.running.points.Outcome."""
     from .points import run_points
     specs = [{"id": f"{s.label}@{float(x)!r}", "scenario": str(scenario_path), "fmu_dir": fmu_dir,
               "study": s.label, "level": float(x)} for s, levels in studies for x in levels]
     return run_points(robustness_point, specs, workers=workers, scheduler=scheduler, journal=journal, key=key,
+                      **({} if worker_timeout is None else {"worker_timeout": worker_timeout}),
                       what=f"robustness of {Path(scenario_path).name}", label="robustness", restart=restart)
 
 

@@ -9,6 +9,8 @@ falls, fails or is interrupted returns a result that says so (and, with ``out``,
 """
 from __future__ import annotations
 
+import contextlib
+
 import copy
 import os
 from dataclasses import dataclass, field
@@ -183,6 +185,23 @@ def resolve(scenario: str | os.PathLike | Scenario, *, plant: str | None = None,
 # ----------------------------------------------------------------------------------------------
 # the run
 
+def _as_published(e: OSError, stage: Path, out: Path) -> OSError:
+    """`e` naming the file as it is published in `out` rather than in the staging folder."""
+    if e.filename is not None and Path(e.filename).parent == stage:
+        return OSError(e.errno, e.strerror or str(e), str(out / Path(e.filename).name))
+    return e
+
+
+@contextlib.contextmanager
+def _named_in(stage: Path, out: Path):
+    """OSErrors raised inside name the published file (a full disk: "out/run.csv: No space left on
+    device"), not the staging folder's."""
+    try:
+        yield
+    except OSError as e:
+        raise _as_published(e, stage, out) from e
+
+
 class PreparedRun:
     """A scenario run whose input has been checked and whose FMUs are instantiated and initialized
     (ClosedLoop): nothing can be wrong with the input any more. `run()` runs it once and, with
@@ -252,28 +271,50 @@ class PreparedRun:
 
     def _write(self, out: Path, figures: bool, animate: bool, animation, record_steptest, compare_reference: bool,
                progress) -> ScenarioResult:
-        from ..files.output import atomic_write_csv, clear_previous, result_paths, write_summary_json
+        """Run, then write the files into a hidden staging folder and publish them together
+        (anklehip.files.output.publish): an earlier run's files are replaced only by a whole new set,
+        its summary last. An interruption while the figures are drawn keeps the run (its data and
+        summary are published without the missing figures, with a warning) and is raised again."""
+        from ..files.output import atomic_write_csv, os_error_message, publish, remove_stale_temporaries, \
+            result_paths, staging, write_summary_json
         sc = self.scenario
+        remove_stale_temporaries(out, sc.name)     # what a killed run left hidden (we hold the lock)
         paths = result_paths(out, sc.name)
         res = self.loop.run(progress)
         csv = paths["csv"] if res.complete else paths["incomplete_csv"]
-        atomic_write_csv(csv, res.data)
-        # only now that this run's data are in place: the previous run's files go (its complete CSV
-        # must not sit next to this run's incomplete one), the new summary is written last
-        clear_previous(out, sc.name, keep=(csv,))
-        result = self._result(res, compare_reference, out)
-        result.files = {"csv": csv, "summary": paths["summary"], **result.files}
-        # figures and the step-test case must not lose the summary of a run that has been computed
-        if figures or animate:
-            try:
-                from ..analysis.bounds import plant_header
-                for p in make_figures(sc.name, res.data, out, res, animate=animate, anim_args=dict(animation or {}),
-                                      figures=figures, progress=progress, header=plant_header(self.models.plant.unzipdir)):
+        interrupted: BaseException | None = None
+        with staging(out, sc.name) as stage, _named_in(stage, out):
+            atomic_write_csv(stage / csv.name, res.data)
+            result = self._result(res, compare_reference, stage)
+            staged = [stage / csv.name] + [Path(p) for p in result.files.values()]
+            # figures and the step-test case must not lose the summary of a run that has been computed
+            if figures or animate:
+                drawn: list[Path] = []
+                try:
+                    from ..analysis.bounds import plant_header
+                    make_figures(sc.name, res.data, stage, res, animate=animate, anim_args=dict(animation or {}),
+                                 figures=figures, progress=progress, files=drawn,
+                                 header=plant_header(self.models.plant.unzipdir))
+                except KeyboardInterrupt as e:
+                    interrupted = e
+                    result.warnings.append("figures interrupted: the data and the summary are written without "
+                                           "the figures not yet drawn")
+                except OSError as e:
+                    result.warnings.append(f"figures failed: {os_error_message(_as_published(e, stage, out))}")
+                except Exception as e:
+                    result.warnings.append(f"figures failed: {type(e).__name__}: {e}")
+                for p in drawn:
                     result.files[p.stem] = p
-            except Exception as e:
-                result.warnings.append(f"figures failed: {type(e).__name__}: {e}")
-        self._record(result, res, record_steptest)
-        write_summary_json(paths["summary"], result.summary())
+                staged += drawn
+            self._record(result, res, record_steptest)
+            # the files as they will be named once published
+            result.files = {"csv": csv, "summary": paths["summary"],
+                            **{k: (out / Path(v).name if Path(v).parent == stage else Path(v))
+                               for k, v in result.files.items()}}
+            write_summary_json(stage / paths["summary"].name, result.summary())
+            publish(out, sc.name, staged, stage / paths["summary"].name)
+        if interrupted is not None:
+            raise interrupted
         return result
 
     def _record(self, result: ScenarioResult, res: RunResult, folder) -> None:
@@ -412,13 +453,15 @@ def zmp_limits(params: dict[str, Any]) -> tuple[float, ...] | None:
 
 def make_figures(sc_name: str, data: np.ndarray, out: Path, res: RunResult | None = None, animate: bool = False,
                  anim_args: dict | None = None, figures: bool = True, params: dict | None = None,
-                 progress: bool | None = None, header: dict | None = None) -> list[Path]:
+                 progress: bool | None = None, header: dict | None = None,
+                 files: list[Path] | None = None) -> list[Path]:
     """The standard figures of a result (and the 3D plant's frontal one, and for the 3D controller
     the frontal Fig. 5), the animation if asked; geometry from the run's plant parameters, or
     `params` for a CSV read back; the support polygon's edges from those and the plant's robot
     header (`header`: anklehip.analysis.bounds.plant_header). `progress` as in
     master.simulate: on a terminal a bar of the figures, then one of the GIF's frames, and a line per
-    file written; nothing with False (`--no-progress`) or when stderr is not a terminal."""
+    file written; nothing with False (`--no-progress`) or when stderr is not a terminal. `files`: a
+    list the files are appended to as each is written (what was done when an interruption stops it)."""
     import time
 
     from ..analysis import frontal_cycle, plots
@@ -439,14 +482,20 @@ def make_figures(sc_name: str, data: np.ndarray, out: Path, res: RunResult | Non
             jobs.append((f"{sc_name}_fig5_frontal.png",
                          lambda p: frontal_cycle.frontal_cycle(
                              data, p, edge=edge, title=f"{sc_name}: first side push (frontal plane, cf. paper Fig. 5)")))
-    files = []
+    files = [] if files is None else files
     bar = plots.progress_bar(len(jobs), "figures", "fig", progress) if jobs else None
     try:
         for name, draw in jobs:
             if bar is not None:
                 bar.set_postfix_str(name)
             t0 = time.perf_counter()
-            files.append(draw(out / name))
+            try:
+                files.append(draw(out / name))
+            except OSError as e:        # a full disk: name the figure
+                if e.filename is None:
+                    from ..files.output import named
+                    raise named(e, out / name) from e
+                raise
             if bar is not None:
                 bar.update(1)
             plots.say_written(bar, files[-1], time.perf_counter() - t0)

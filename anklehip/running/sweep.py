@@ -143,13 +143,14 @@ def force_sweep_specs(scenario_path, forces, variants: list[Variant], fmu_dir: s
 
 def run_sweep(scenario_path: str, forces: list[float], variants: list[Variant], fmu_dir: str | None = None,
               workers: int = 2, engine: str = "fmpy", *, scheduler: str | None = None,
-              journal: Path | None = None, key: str = "", restart: bool = False):
+              journal: Path | None = None, key: str = "", restart: bool = False, worker_timeout: float | None = None):
     """Every variant at every peak force, on Dask (anklehip.running.points: a local cluster, or the
     scheduler at `scheduler` / $DASK_SCHEDULER_ADDRESS); finished points go to `journal` and a
     rerun with the same `key` skips them. Returns an anklehip.running.points.Outcome."""
     from .points import run_points
     specs = force_sweep_specs(scenario_path, forces, variants, fmu_dir, engine)
     return run_points(sweep_point, specs, workers=workers, scheduler=scheduler, journal=journal, key=key,
+                      **({} if worker_timeout is None else {"worker_timeout": worker_timeout}),
                       what=f"sweep of {Path(scenario_path).name}", label="sweep", restart=restart)
 
 
@@ -395,7 +396,8 @@ def _check_variants(models, sc, variants: list[Variant], fmu_dir, where: str) ->
 
 def sweep(scenario, *, forces=None, variants=None, workers: int = 2, engine: str | None = None,
           scheduler: str | None = None, out=None, restart: bool = False, figures: bool = True,
-          fmu_dir=None, progress: bool = True, origins: dict[str, str] | None = None) -> SweepResult:
+          fmu_dir=None, progress: bool = True, origins: dict[str, str] | None = None,
+          worker_timeout: float | None = None) -> SweepResult:
     """Many closed-loop runs on Dask, one per point; `anklehip sweep` as a function.
 
     With `forces`, `scenario` is a scenario (name, path or Scenario with a file) whose push is
@@ -406,6 +408,8 @@ def sweep(scenario, *, forces=None, variants=None, workers: int = 2, engine: str
 
     workers    processes of a local Dask cluster (1: in this process), unless `scheduler`
                (an address, else $DASK_SCHEDULER_ADDRESS) names a running one
+    worker_timeout  with a scheduler that has no worker: seconds to wait for one (default 120),
+               then NoWorkersError
     engine     "native" (default when built) or "fmpy"
     out        a folder: the journal (a rerun resumes, `restart` discards it), the table as CSV and
                Parquet, and with `figures` the sweep's figures; None: nothing written
@@ -443,12 +447,14 @@ def sweep(scenario, *, forces=None, variants=None, workers: int = 2, engine: str
     if out is None:
         t0 = time.perf_counter()
         o = run_points(fn, specs, workers=workers, scheduler=scheduler, journal=None, key=key, what=what,
+                       **({} if worker_timeout is None else {"worker_timeout": worker_timeout}),
                        label=f"sweep {title}", progress=progress)
         result.rows, result.interrupted, result.wall = o.rows, o.interrupted, time.perf_counter() - t0
         return result
     out = check_output_folder(out, name["out"])
     with output_lock(out):
         o = run_points(fn, specs, workers=workers, scheduler=scheduler, journal=out / journal_name, key=key,
+                       **({} if worker_timeout is None else {"worker_timeout": worker_timeout}),
                        what=what, label=f"sweep {title}", restart=restart, progress=progress)
         result.rows, result.resumed, result.interrupted, result.wall = o.rows, o.resumed, o.interrupted, o.wall
         result.files["journal"] = out / journal_name

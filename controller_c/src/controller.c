@@ -618,6 +618,8 @@ static int in_range(double x, double lo, double hi) { return isfinite(x) && x >=
 
 #define STATE_FAIL(...) (snprintf_msg(msg, msg_size, __VA_ARGS__), AHC_ERR_INCONSISTENT)
 
+static int state_invariants(const ahc_controller *c, char *msg, size_t msg_size);
+
 static void snprintf_msg(char *msg, size_t n, const char *fmt, ...)
 {
     if (msg && n > 0) {
@@ -709,5 +711,93 @@ int ahc_state_validate(const ahc_controller *c, char *msg, size_t msg_size)
             if (!in_range(c->kw_spline.c[i], -big, big) || !in_range(c->rxd_spline.c[i], -big, big))
                 return STATE_FAIL("spline coefficient %d is not finite or beyond +-%g", i, big);
     }
+    return state_invariants(c, msg, msg_size);
+}
+
+/* The relations ahc_init and ahc_step keep between the fields (each checked field is finite and in
+ * range already). A forged k_w spline coefficient made k_w = -0.99 in phase 1. */
+static int state_invariants(const ahc_controller *c, char *msg, size_t msg_size)
+{
+    const ahc_params *p = &c->p;
+    const double h = p->sample_period;
+    const ahc_param_info *T_ah = ahc_param_find("T_ah");
+    const double ran = (double)c->tick * h; /* time the ticks ran [s] */
+    ahc_quintic q;
+    int i;
+
+    if (c->tick > AHC_TICK_MAX) return STATE_FAIL("tick = %llu is beyond %llu", c->tick, AHC_TICK_MAX);
+    /* Both splines are built together (ahc_reset, entering phase 1) over one duration, k_w from 0
+     * to 1 and r_x_d from (r_x, v0, 0) to rest: the coefficients follow from T and the start. */
+    if (c->kw_spline.T != c->rxd_spline.T || c->kw_spline.T < T_ah->min || c->kw_spline.T > T_ah->max)
+        return STATE_FAIL("spline durations %g and %g are not one T_ah in [%g, %g]", c->kw_spline.T,
+                          c->rxd_spline.T, T_ah->min, T_ah->max);
+    ahc_quintic_init(&q, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, c->kw_spline.T);
+    for (i = 0; i < 6; ++i)
+        if (q.c[i] != c->kw_spline.c[i])
+            return STATE_FAIL("kw_spline coefficient %d = %g is not the 0 -> 1 quintic's %g", i, c->kw_spline.c[i],
+                              q.c[i]);
+    ahc_quintic_init(&q, c->rxd_spline.c[0], c->rxd_spline.c[1], 0.0, 0.0, 0.0, 0.0, c->rxd_spline.T);
+    for (i = 0; i < 6; ++i)
+        if (q.c[i] != c->rxd_spline.c[i])
+            return STATE_FAIL("rxd_spline coefficient %d = %g is not the quintic from its start to rest (%g)", i,
+                              c->rxd_spline.c[i], q.c[i]);
+    /* k_w: 0 in the ankle strategy, the spline's value (within [0, 1]) in the transition, 1 after. */
+    if ((c->phase == AHC_PHASE_ANKLE && c->k_w != 0.0) ||
+        ((c->phase == AHC_PHASE_HIP || c->phase == AHC_PHASE_HIP_TO_ANKLE) && c->k_w != 1.0))
+        return STATE_FAIL("k_w = %g does not belong to phase %d", c->k_w, c->phase);
+    if ((c->phase == AHC_PHASE_ANKLE_TO_HIP || c->phase == AHC_PHASE_HIP) && c->hip_bump != 0.0)
+        return STATE_FAIL("hip_bump = %g in phase %d (eq. 16 holds the hip there)", c->hip_bump, c->phase);
+    if (c->phase != AHC_PHASE_HIP && c->fallback_timer != 0.0)
+        return STATE_FAIL("fallback_timer = %g outside phase 2", c->fallback_timer);
+    /* Timers and counters advance once per tick. */
+    if (c->phase_time > ran * (1.0 + 1e-6) + h || c->fallback_timer > c->phase_time * (1.0 + 1e-6) + h)
+        return STATE_FAIL("phase_time = %g or fallback_timer = %g is longer than the %g s the %llu ticks ran",
+                          c->phase_time, c->fallback_timer, ran, c->tick);
+    if (c->calib_n > c->tick) return STATE_FAIL("calib_n = %llu is more than tick = %llu", c->calib_n, c->tick);
+    if (c->tick == 0) {
+        /* nothing has run since ahc_init / ahc_reset */
+        if (c->started || c->holding || c->phase != AHC_PHASE_ANKLE || c->fault || c->zmp_f_valid || c->hist_n ||
+            c->d_f_valid || c->calib_done || c->last_out.fault || c->last_out.phase || c->last_out.k_w != 0.0 ||
+            c->th1 != 0.0 || c->th2 != 0.0 || c->dth1 != 0.0 || c->dth2 != 0.0)
+            return STATE_FAIL("tick = 0 with a state that only ticks produce");
+        return AHC_OK;
+    }
+    /* The last tick's outputs are the state it left (write_outputs). */
+    if (c->holding != ((c->fault & AHC_FAULT_HOLD_MASK) != 0))
+        return STATE_FAIL("holding = %d with fault = 0x%x", c->holding, c->fault);
+    if (c->last_out.fault != c->fault || c->last_out.phase != c->phase ||
+        c->last_out.k_w != (c->phase == AHC_PHASE_ANKLE ? 0.0 : c->k_w) || c->last_out.theta_ankle_ref != c->th1 ||
+        c->last_out.theta_hip_ref != c->th2 || c->last_out.dtheta_ankle_ref != c->dth1 ||
+        c->last_out.dtheta_hip_ref != c->dth2)
+        return STATE_FAIL("last_out does not hold the last tick's phase, fault, k_w and references");
+    return AHC_OK;
+}
+
+int ahc_state_validate_for(const ahc_controller *c, const ahc_params *p, unsigned long long tick, char *msg,
+                           size_t msg_size)
+{
+    size_t n = 0, i;
+    const ahc_param_info *t = ahc_param_table(&n);
+    int rc = ahc_state_validate(c, msg, msg_size);
+    if (rc != AHC_OK) return rc;
+    if (!p) return AHC_ERR_NULL;
+    if (!c->valid) return STATE_FAIL("the state is not initialized (valid = 0)");
+    for (i = 0; i < n; ++i) {
+        const char *a = (const char *)&c->p + t[i].offset, *b = (const char *)p + t[i].offset;
+        if (t[i].is_int) {
+            int x, y;
+            memcpy(&x, a, sizeof x);
+            memcpy(&y, b, sizeof y);
+            if (x != y) return STATE_FAIL("%s = %d in the state, %d in the instance", t[i].name, x, y);
+        } else {
+            double x, y;
+            memcpy(&x, a, sizeof x);
+            memcpy(&y, b, sizeof y);
+            if (memcmp(&x, &y, sizeof x) != 0)
+                return STATE_FAIL("%s = %.17g in the state, %.17g in the instance", t[i].name, x, y);
+        }
+    }
+    if (tick != AHC_TICK_ANY && c->tick != tick)
+        return STATE_FAIL("tick = %llu in the state, %llu by the instance's clock", c->tick, tick);
     return AHC_OK;
 }

@@ -8,6 +8,13 @@
  *    bits, derived constants, parameters) is refused with a message naming the field
  *    (audit: a blob with NaN in the disturbance filter was accepted and the next step output
  *    disturbance_moment = NaN).
+ *  - the invariants between fields (issue 33): a k_w spline coefficient forged from 80 to -80
+ *    (k_w = -0.99 in phase 1 before), an r_x_d spline that does not end at rest, k_w or hip_bump
+ *    that do not belong to the phase, timers longer than the ticks run, last outputs that are not
+ *    the references, a tick count beyond AHC_TICK_MAX are refused;
+ *  - ahc_state_validate_for refuses a state whose parameters differ from the instance's (Ka 41
+ *    in the state, 40 in the instance) or whose tick count is not the instance's clock, and
+ *    accepts every state of the run against its own parameters and tick.
  */
 #include "ahc_test.h"
 
@@ -26,13 +33,14 @@ int main(void)
     CHECK(ahc_init(&c, &p) == AHC_OK, "init");
     CHECK(accepted(&c, msg, sizeof msg), "fresh instance: %s", msg);
     for (n = 0; n < 8000; ++n) {
+        unsigned long long tick_before = c.tick;
         /* a push that runs 0 -> 1 -> 2 -> 3 -> 0, with a NaN sample and a lifted sample */
         ahc_sensors s = { 0.0, 0.0, n < 300 ? 0.045 : -0.005, 70.0 };
         if (n == 150) s.zmp_x = NAN;
         if (n == 151) s.fz = 1.0;
         ahc_step(&c, &s, &o);
         phases_seen |= 1 << o.phase;
-        if (!accepted(&c, msg, sizeof msg)) {
+        if (!accepted(&c, msg, sizeof msg) || ahc_state_validate_for(&c, &p, tick_before + 1, msg, sizeof msg)) {
             CHECK(0, "tick %d (phase %d) refused: %s", n, o.phase, msg);
             break;
         }
@@ -73,6 +81,69 @@ int main(void)
     REFUSED(bad.zmp_alpha, 0.5, "derived constants");
     REFUSED(bad.p.sample_period, 2.2e-310, "sample_period");
     REFUSED(bad.p.Ka, NAN, "Ka");
+
+    /* invariants between fields: a state in each phase, forged the way a re-signed blob can be */
+    {
+        ahc_controller run, in_phase[4];
+        int have[4] = {0, 0, 0, 0}, ph;
+        CHECK(ahc_init(&run, &p) == AHC_OK, "init");
+        for (n = 0; n < 8000; ++n) {
+            ahc_sensors s = { 0.0, 0.0, n < 300 ? 0.045 : -0.005, 70.0 };
+            ahc_step(&run, &s, &o);
+            if (!have[o.phase] && (run.phase_time > 0.005 || o.phase == AHC_PHASE_HIP)) {
+                in_phase[o.phase] = run;
+                have[o.phase] = 1;
+            }
+        }
+        CHECK(have[0] && have[1] && have[2] && have[3], "a state in every phase");
+        c = in_phase[AHC_PHASE_ANKLE_TO_HIP];
+        CHECK(c.kw_spline.c[3] == 80.0, "T_ah = 0.5 s: k_w's t^3 coefficient is 80 (%g)", c.kw_spline.c[3]);
+        REFUSED(bad.kw_spline.c[3], -80.0, "kw_spline coefficient 3");
+        REFUSED(bad.rxd_spline.c[4], bad.rxd_spline.c[4] + 1.0, "rxd_spline coefficient 4");
+        REFUSED(bad.rxd_spline.c[2], 0.01, "rxd_spline coefficient 2");
+        REFUSED(bad.rxd_spline.T, 0.7, "spline durations");
+        REFUSED(bad.kw_spline.T, 1000.0, "kw_spline.T");
+        REFUSED(bad.hip_bump, 0.1, "hip_bump");
+        REFUSED(bad.last_out.theta_hip_ref, bad.th2 + 0.01, "last_out");
+        REFUSED(bad.phase_time, 1e6, "phase_time");
+        REFUSED(bad.tick, AHC_TICK_MAX + 1, "tick");
+        REFUSED(bad.calib_n, bad.tick + 1, "calib_n");
+        c = in_phase[AHC_PHASE_ANKLE];
+        REFUSED(bad.k_w, 0.5, "k_w");
+        REFUSED(bad.fallback_timer, 0.1, "fallback_timer");
+        REFUSED(bad.holding, 1, "holding");
+        c = in_phase[AHC_PHASE_HIP];
+        REFUSED(bad.k_w, 0.99, "k_w");
+        c = in_phase[AHC_PHASE_HIP_TO_ANKLE];
+        REFUSED(bad.k_w, 0.0, "k_w");
+        CHECK(ahc_init(&c, &p) == AHC_OK, "init");
+        REFUSED(bad.started, 1, "tick = 0");
+        REFUSED(bad.th1, 0.01, "tick = 0");
+
+        /* against the instance: parameters and tick */
+        for (ph = 0; ph < 4; ++ph) {
+            ahc_params q = p;
+            c = in_phase[ph];
+            CHECK(ahc_state_validate_for(&c, &p, c.tick, msg, sizeof msg) == AHC_OK, "phase %d: %s", ph, msg);
+            CHECK(ahc_state_validate_for(&c, &p, AHC_TICK_ANY, msg, sizeof msg) == AHC_OK, "phase %d: %s", ph, msg);
+            q.Ka = 41.0;
+            c.p.Ka = 40.0;
+            CHECK(ahc_state_validate_for(&c, &q, c.tick, msg, sizeof msg) == AHC_ERR_INCONSISTENT &&
+                      strstr(msg, "Ka = 40 in the state, 41 in the instance"), "Ka mismatch: %s", msg);
+            c = in_phase[ph];
+            q = p;
+            q.lean_enabled = 1;
+            CHECK(ahc_state_validate_for(&c, &q, c.tick, msg, sizeof msg) == AHC_ERR_INCONSISTENT &&
+                      strstr(msg, "lean_enabled = 0 in the state, 1 in the instance"), "integer mismatch: %s", msg);
+            CHECK(ahc_state_validate_for(&c, &p, c.tick + 1000000, msg, sizeof msg) == AHC_ERR_INCONSISTENT &&
+                      strstr(msg, "by the instance's clock"), "tick mismatch: %s", msg);
+        }
+        bad = in_phase[0];
+        bad.valid = 0;
+        CHECK(ahc_state_validate_for(&bad, &p, AHC_TICK_ANY, msg, sizeof msg) == AHC_ERR_INCONSISTENT,
+              "not initialized: %s", msg);
+        CHECK(ahc_state_validate_for(&in_phase[0], NULL, 0, msg, sizeof msg) == AHC_ERR_NULL, "NULL params");
+    }
 
     /* a refused state is what ahc_step would turn into non-finite outputs: the guard matters */
     bad = c;

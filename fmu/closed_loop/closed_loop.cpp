@@ -14,6 +14,7 @@
 // repr of a float / str of an integer, i.e. the shortest round-trip digits), byte for byte.
 #include <charconv>
 #include <chrono>
+#include <cerrno>
 #include <cmath>
 #include <cstdarg>
 #include <cstdint>
@@ -286,11 +287,15 @@ int ahn_run_closed_loop(ahn_run* r) {
 
 int ahn_write_csv(const char* path, int32_t n_cols, const char* const* names, const char* kinds,
                   const void* const* columns, const int64_t* strides, int64_t n_rows, char* err, int32_t err_len) {
+  // On failure: the reason (strerror) in err and errno as the result (a full disk: ENOSPC), so the
+  // caller can name the file and the reason.
   FILE* f = std::fopen(path, "wb");
   if (!f) {
-    std::snprintf(err, static_cast<size_t>(err_len), "cannot write %s: %s", path, std::strerror(errno));
-    return 1;
+    const int e = errno ? errno : EIO;
+    std::snprintf(err, static_cast<size_t>(err_len), "%s", std::strerror(e));
+    return e;
   }
+  int first_errno = 0;
   std::string head;
   for (int c = 0; c < n_cols; ++c) {
     if (c) head += ',';
@@ -336,8 +341,15 @@ int ahn_write_csv(const char* path, int32_t n_cols, const char* const* names, co
       second.join();
       ok = ok && std::fwrite(buf[1].data(), 1, buf[1].size(), f) == buf[1].size();
     }
+    if (!ok && !first_errno) first_errno = errno;
   }
-  if (std::fclose(f) != 0) ok = false;
-  if (!ok) std::snprintf(err, static_cast<size_t>(err_len), "writing %s failed", path);
-  return ok ? 0 : 1;
+  if (!ok && !first_errno) first_errno = errno;
+  if (std::fclose(f) != 0) {
+    if (ok) first_errno = errno;
+    ok = false;
+  }
+  if (ok) return 0;
+  const int e = first_errno ? first_errno : EIO;
+  std::snprintf(err, static_cast<size_t>(err_len), "%s", std::strerror(e));
+  return e;
 }

@@ -10,6 +10,8 @@
 #include <cstdlib>
 #include <cstring>
 #include <tuple>
+#include <utility>
+#include <vector>
 #include <limits>
 #include <string>
 
@@ -210,8 +212,15 @@ class ControllerModel final : public Model {
       nonfinite_ = 0;
     }
     const double T = ctl_.p.sample_period;
-    // t and h are finite and h <= max_step_size (the glue checked): due_d < 2^53, exact.
-    const double due_d = std::floor((t + h - t0_) / T + 1e-9);
+    // t and h are finite and h <= max_step_size (the glue checked); the tick count stays within
+    // AHC_TICK_MAX (2^53, where a double still counts every tick) so the cast is exact.
+    const double due_d = ticksDue(t + h);
+    if (!(due_d <= static_cast<double>(AHC_TICK_MAX))) {
+      ctx.log(kLogStatusError, fmi2Error, "t=%.9g: a step to %.17g s passes the controller's last tick (%llu ticks of %g s)",
+              t, t + h, AHC_TICK_MAX, T);
+      r.status = fmi2Error;
+      return r;
+    }
     const unsigned long long due = due_d > 0.0 ? static_cast<unsigned long long>(due_d) : 0ull;
     ahc_outputs o = ctl_.last_out;
     bool ticked = false;
@@ -246,6 +255,12 @@ class ControllerModel final : public Model {
     w.i32(nonfinite_);
   }
 
+  // A state's bytes are untrusted (the checksum catches accidents): the controller struct must be
+  // one ahc_init and ahc_step produce (ahc_state_validate) and must fit the instance it is restored
+  // into (ahc_state_validate_for): the parameters the restored variables hold (a state carries its
+  // parameters, docs/fmu.md section 4) and the tick count of the restored time, so that the next
+  // step runs the ticks of its own length and no more. The FMU's own counters and the outputs in
+  // the store must be the ones the controller's state implies.
   bool load_state(Context& ctx, StateReader& r, std::string& err) override {
     std::uint64_t size = 0;
     if (!r.u64(size) || size != sizeof(ahc_controller)) {
@@ -261,20 +276,44 @@ class ControllerModel final : public Model {
       err = "controller state truncated";
       return false;
     }
-    if (phase < 0 || phase > 3 || t0 != ctx.start_time()) {
-      err = "controller state corrupt";
+    if (nonfinite < 0 || nonfinite > 1) {
+      err = "controller state corrupt (input flag)";
       return false;
     }
-    // The checksum only catches accidental corruption: the controller struct must be one that
-    // ahc_init and ahc_step could have produced, and the FMU's counters must agree with it.
     char msg[256] = {0};
-    if (ahc_state_validate(&c, msg, sizeof msg) != AHC_OK) {
-      err = std::string("controller state rejected: ") + msg;
-      return false;
-    }
-    if (ticks != c.tick || (!c.valid && ticks != 0) || (fault & ~unsigned(AHC_FAULT_ALL_MASK)) || nonfinite < 0 || nonfinite > 1) {
-      err = "controller state corrupt (tick counter, fault mask or input flag)";
-      return false;
+    if (!ctx.initialized()) {
+      // before fmi2ExitInitializationMode the controller is what reset() left: nothing
+      static const ahc_controller kEmpty{};
+      if (std::memcmp(&c, &kEmpty, sizeof c) != 0 || ticks != 0 || t0 != 0.0 || phase != 0 || fault != 0 ||
+          nonfinite != 0) {
+        err = "controller state rejected: an instance that is not initialized holds no controller state";
+        return false;
+      }
+    } else {
+      ahc_params p;
+      readParams(ctx, p);
+      const double due = ticksDue(ctx.time(), t0, p.sample_period);
+      if (t0 != ctx.start_time()) {
+        err = "controller state rejected: its start time is not the instance's";
+        return false;
+      }
+      if (!(due >= 0.0 && due <= static_cast<double>(AHC_TICK_MAX))) {
+        char buf[200];
+        std::snprintf(buf, sizeof buf, "controller state rejected: the instance's clock (t = %.17g s) is beyond the "
+                      "controller's last tick (%llu ticks of %g s)", ctx.time(), AHC_TICK_MAX, p.sample_period);
+        err = buf;
+        return false;
+      }
+      if (ahc_state_validate_for(&c, &p, static_cast<unsigned long long>(due), msg, sizeof msg) != AHC_OK) {
+        err = std::string("controller state rejected: ") + msg;
+        return false;
+      }
+      const bool ran = c.tick > 0;
+      if (ticks != c.tick || phase != (ran ? c.last_out.phase : 0) || fault != (ran ? c.last_out.fault : 0u)) {
+        err = "controller state rejected: the FMU's tick, phase or fault counters disagree with the controller's";
+        return false;
+      }
+      if (!outputsMatch(ctx, c, p, err)) return false;
     }
     ctl_ = c;
     ticks_ = ticks;
@@ -293,41 +332,70 @@ class ControllerModel final : public Model {
     ahcfmu::readParamVariables(ctx, table, count, vr::first_param, &p, tunableOnly ? isTunable : nullptr);
   }
 
+  // The number of ticks whose times t0 + k T fall in (t0, t], by the rule of the file's header.
+  double ticksDue(double t) const { return ticksDue(t, t0_, ctl_.p.sample_period); }
+  static double ticksDue(double t, double t0, double T) { return std::floor((t - t0) / T + 1e-9); }
+
   // Outputs before the first tick: hold the measured posture (bumpless start), rates 0.
-  static void writeInitialOutputs(Context& ctx, const ahc_params& p) {
+  static ahc_outputs initialOutputs(const ahc_params& p, double theta_ankle, double theta_hip) {
     auto fin = [](double x) { return std::isfinite(x) ? x : 0.0; };
-    const double th1 = fin(ctx.real(vr::theta_ankle)), th2 = fin(ctx.real(vr::theta_hip));
+    ahc_outputs o{};
+    o.theta_ankle_ref = fin(theta_ankle);
+    o.theta_hip_ref = fin(theta_hip);
     double rx = 0.0, rz = 0.0;
-    ahc_com(&p, th1, th2, &rx, &rz);
-    ctx.set_real(vr::theta_ankle_ref, th1);
-    ctx.set_real(vr::theta_hip_ref, th2);
-    ctx.set_real(vr::dtheta_ankle_ref, 0.0);
-    ctx.set_real(vr::dtheta_hip_ref, 0.0);
-    ctx.set_integer(vr::phase, AHC_PHASE_ANKLE);
-    ctx.set_real(vr::com_x, fin(rx));
-    ctx.set_real(vr::com_z, fin(rz));
-    ctx.set_real(vr::disturbance_moment, 0.0);
-    ctx.set_real(vr::k_w, 0.0);
-    ctx.set_real(vr::com_x_desired, fin(rx));
-    ctx.set_integer(vr::fault, 0);
+    ahc_com(&p, o.theta_ankle_ref, o.theta_hip_ref, &rx, &rz);
+    o.phase = AHC_PHASE_ANKLE;
+    o.com_x = fin(rx);
+    o.com_z = fin(rz);
+    o.com_x_desired = fin(rx);
+    return o;
+  }
+  static void writeInitialOutputs(Context& ctx, const ahc_params& p) {
+    writeOutputs(ctx, initialOutputs(p, ctx.real(vr::theta_ankle), ctx.real(vr::theta_hip)));
     double e1 = 0.0, e2 = 0.0;
     ahc_erect_posture(&p, &e1, &e2);
     ctx.set_real(vr::theta_ankle_erect, e1);
     ctx.set_real(vr::theta_hip_erect, e2);
   }
 
+  // The output variables' values for o, in one table (written by writeOutputs, compared by outputsMatch).
+  static std::vector<std::pair<fmi2ValueReference, double>> outputValues(const ahc_outputs& o) {
+    return {{vr::theta_ankle_ref, o.theta_ankle_ref}, {vr::theta_hip_ref, o.theta_hip_ref},
+            {vr::dtheta_ankle_ref, o.dtheta_ankle_ref}, {vr::dtheta_hip_ref, o.dtheta_hip_ref},
+            {vr::phase, o.phase}, {vr::com_x, o.com_x}, {vr::com_z, o.com_z},
+            {vr::disturbance_moment, o.disturbance_moment}, {vr::k_w, o.k_w}, {vr::com_x_desired, o.com_x_desired},
+            {vr::fault, static_cast<double>(o.fault)}};
+  }
+  static bool isInteger(fmi2ValueReference r) { return r == vr::phase || r == vr::fault; }
+
   static void writeOutputs(Context& ctx, const ahc_outputs& o) {
-    ctx.set_real(vr::theta_ankle_ref, o.theta_ankle_ref);
-    ctx.set_real(vr::theta_hip_ref, o.theta_hip_ref);
-    ctx.set_real(vr::dtheta_ankle_ref, o.dtheta_ankle_ref);
-    ctx.set_real(vr::dtheta_hip_ref, o.dtheta_hip_ref);
-    ctx.set_integer(vr::phase, o.phase);
-    ctx.set_real(vr::com_x, o.com_x);
-    ctx.set_real(vr::com_z, o.com_z);
-    ctx.set_real(vr::disturbance_moment, o.disturbance_moment);
-    ctx.set_real(vr::k_w, o.k_w);
-    ctx.set_real(vr::com_x_desired, o.com_x_desired);
-    ctx.set_integer(vr::fault, static_cast<int>(o.fault));
+    for (const auto& [r, v] : outputValues(o)) {
+      if (isInteger(r)) ctx.set_integer(r, static_cast<int>(v));
+      else ctx.set_real(r, v);
+    }
+  }
+
+  // Whether the restored store's outputs are those the controller's state implies: the last tick's
+  // (after one), else the initial ones of the held posture; the erect posture of the parameters.
+  static bool outputsMatch(const Context& ctx, const ahc_controller& c, const ahc_params& p, std::string& err) {
+    const ahc_outputs o = c.tick > 0 ? c.last_out
+                                     : initialOutputs(p, ctx.real(vr::theta_ankle_ref), ctx.real(vr::theta_hip_ref));
+    double e1 = 0.0, e2 = 0.0;
+    ahc_erect_posture(&p, &e1, &e2);
+    auto values = outputValues(o);
+    values.emplace_back(vr::theta_ankle_erect, e1);
+    values.emplace_back(vr::theta_hip_erect, e2);
+    for (const auto& [r, v] : values) {
+      const double stored = isInteger(r) ? ctx.integer(r) : ctx.real(r);
+      if (stored != v) {
+        char buf[200];
+        std::snprintf(buf, sizeof buf, "controller state rejected: output %u = %.17g, the controller's state gives %.17g",
+                      r, stored, v);
+        err = buf;
+        return false;
+      }
+    }
+    return true;
   }
 
   ahc_controller ctl_{};

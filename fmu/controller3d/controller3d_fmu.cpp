@@ -269,6 +269,12 @@ class Controller3DModel final : public Model {
     }
     const double T = ctl_.sag.p.sample_period;
     const double due_d = std::floor((t + h - t0_) / T + 1e-9);
+    if (!(due_d <= static_cast<double>(AHC_TICK_MAX))) {  // as the sagittal FMU: the cast below stays exact
+      ctx.log(kLogStatusError, fmi2Error, "t=%.9g: a step to %.17g s passes the controller's last tick (%llu ticks of %g s)",
+              t, t + h, AHC_TICK_MAX, T);
+      r.status = fmi2Error;
+      return r;
+    }
     const unsigned long long due = due_d > 0.0 ? static_cast<unsigned long long>(due_d) : 0ull;
     bool ticked = false;
     while (ticks_ < due) {
@@ -323,9 +329,47 @@ class Controller3DModel final : public Model {
       err = std::string("controller state rejected: ") + msg;
       return false;
     }
-    if (t0 != ctx.start_time() || ticks != c.sag.tick || ticks != c.frontal.tick || phase < 0 || phase > 3 ||
-        phase_y < 0 || phase_y > 3 || nonfinite < 0 || nonfinite > 1) {
+    // the start time is the instance's once initialized (before, t0 is 0 whatever the set-up says)
+    if (t0 != (ctx.initialized() ? ctx.start_time() : 0.0) || ticks != c.sag.tick || ticks != c.frontal.tick ||
+        phase < 0 || phase > 3 || phase_y < 0 || phase_y > 3 || nonfinite < 0 || nonfinite > 1) {
       err = "controller state corrupt (start time, tick counters, phases or input flag)";
+      return false;
+    }
+    // As the sagittal FMU (issue 33, findings 1-2): an initialized state must fit the instance it
+    // is restored into: the parameters its restored variables hold (both planes', and the frontal
+    // controller's copy of the sagittal ones) and the tick count of the restored time, so that the
+    // next step runs the ticks of its own length and no more.
+    if (ctx.initialized() && c.sag.valid) {
+      ahc_params p;
+      ahc_frontal_params f;
+      readParams(ctx, p, f);
+      const double due = std::floor((ctx.time() - t0) / p.sample_period + 1e-9);
+      if (!(due >= 0.0 && due <= static_cast<double>(AHC_TICK_MAX))) {
+        char buf[200];
+        std::snprintf(buf, sizeof buf, "controller state rejected: the instance's clock (t = %.17g s) is beyond the "
+                      "controller's last tick (%llu ticks of %g s)", ctx.time(), AHC_TICK_MAX, p.sample_period);
+        err = buf;
+        return false;
+      }
+      if (ahc_state_validate_for(&c.sag, &p, static_cast<unsigned long long>(due), msg, sizeof msg) != AHC_OK) {
+        err = std::string("controller state rejected: ") + msg;
+        return false;
+      }
+      size_t n = 0;
+      const ahc_param_info* table = ahc_frontal_param_table(&n);
+      std::string why = ahcfmu::firstDifferingParam(table, n, &c.frontal.f, &f);
+      if (why.empty()) {
+        table = ahc_param_table(&n);
+        why = ahcfmu::firstDifferingParam(table, n, &c.frontal.sp, &p);
+      }
+      if (!why.empty()) {
+        err = "controller state rejected: " + why;
+        return false;
+      }
+    } else if (ctx.initialized() != (c.sag.valid != 0)) {
+      err = ctx.initialized() ? "controller state rejected: the state is not initialized (valid = 0)"
+                              : "controller state rejected: an instance that is not initialized holds no controller "
+                                "state";
       return false;
     }
     ctl_ = c;

@@ -3,9 +3,11 @@
 input format of fmi_fuzz.cpp that take each FMU through the paths a real importer takes, so the
 fuzzer starts from deep states instead of discovering the call protocol byte by byte.
 
-    python3 fmu/fuzz/make_seeds.py            # rewrites fmu/fuzz/corpus/*.bin
+    python3 fmu/fuzz/make_seeds.py            # rewrites fmu/fuzz/corpus/*.bin (not the found ones)
 
-Opcodes (low 5 bits; bit 7 selects the second instance), as decoded by Program::run.
+The first byte chooses the decoder (fmi_fuzz.cpp): 0 a shallow program (ShallowProgram: opcodes
+in the low 5 bits, bit 7 the second instance), 1 or 3 a deep program through FMI 2.0, 2 through
+FMI 3.0 (DeepProgram: an initialization, then operations, mostly steps with plausible inputs).
 """
 from __future__ import annotations
 
@@ -52,12 +54,54 @@ SEEDS = {
 }
 
 
+# Deep programs (DeepProgram::run). The initialization reads: logging, number of parameters set
+# (then per parameter: which, kind, value bytes), start time, stop flag. Operations (op % 20): 0-9 a
+# step (size byte, then input bytes), 10-11 a run of 1 ms steps, 12 a parameter change, 13 get a
+# state, 14 set one, 15-16 restore into the twin and compare, 17 a forged state, 18 reset and
+# initialize, 19 terminate.
+STEP, RUN, PARAM, GET, SET, COMPARE, FORGE, RESET, TERMINATE = 0, 10, 12, 13, 14, 15, 17, 18, 19
+INIT_DEFAULTS = [0, 0, 0, 1]             # no logging, no parameter set, start 0, no stop time
+
+
+def steps(n: int, size: int = 0, wiggle: int = 126) -> list[int]:
+    """n single steps (size byte: 0 = 1 ms) with inputs near their nominal values."""
+    out = []
+    for k in range(n):
+        out += [STEP, size] + [(wiggle + 7 * k) % 250, 100, 130, 120]
+    return out
+
+
+def deep(fmi: int, body: list[int], init: list[int] = INIT_DEFAULTS) -> list[int]:
+    return [1 if fmi == 2 else 2] + init + body
+
+
+DEEP = {
+    # a long run of plausible steps, then a push, then steps again
+    "deep_run": deep(2, steps(60) + [RUN, 31] + [120] * 160 + steps(40)),
+    "deep_run_fmi3": deep(3, steps(60) + [RUN, 31] + [120] * 160 + steps(40)),
+    # states: got and set back, restored into the twin and compared bit for bit, mid-run
+    "deep_states": deep(2, steps(30) + [GET] + steps(20) + [COMPARE, 15, 0] + [120] * 64 + [SET, 0] + steps(20)
+                        + [COMPARE, 8, 0] + [130] * 40),
+    "deep_states_fmi3": deep(3, steps(30) + [GET] + steps(20) + [COMPARE, 15, 0] + [120] * 64 + [SET, 0]
+                             + steps(20)),
+    # forged-but-re-signed states at several places, between steps
+    "deep_forged": deep(2, steps(25) + [FORGE, 0x10, 0x00, 0, 1, 200] + steps(5) + [FORGE, 0x80, 0x01, 0, 0, 13]
+                        + steps(5) + [FORGE, 0x33, 0x02, 0, 17, 64] + steps(10)),
+    # parameters at their bounds and outside at initialization, changed while running, reset
+    "deep_params": deep(2, steps(20) + [PARAM, 1, 3, 8, 128] + steps(20) + [PARAM, 0, 7, 14, 200] + steps(10)
+                        + [RESET, 0, 3, 5, 6, 0, 9, 7, 0, 11, 12, 50, 0, 1] + steps(30) + [TERMINATE] + steps(10),
+                        init=[1, 3, 4, 6, 0, 9, 7, 0, 2, 8, 77, 0, 1]),
+}
+
+
 def main() -> None:
     out = Path(__file__).resolve().parent / "corpus"
     out.mkdir(exist_ok=True)
-    for name, program in SEEDS.items():
+    for name, program in SEEDS.items():   # shallow programs: decoder byte 0
+        (out / f"{name}.bin").write_bytes(bytes([0] + [b & 0xFF for b in program]))
+    for name, program in DEEP.items():
         (out / f"{name}.bin").write_bytes(bytes(b & 0xFF for b in program))
-    print(f"wrote {len(SEEDS)} seeds to {out}")
+    print(f"wrote {len(SEEDS) + len(DEEP)} seeds to {out}")
 
 
 if __name__ == "__main__":

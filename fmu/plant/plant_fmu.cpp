@@ -52,6 +52,31 @@ struct RealParam {
 
 // The relative tolerances the integrators are used with (the parameter rtol, or the importer's).
 constexpr double kMinRtol = 1e-14, kMaxRtol = 1e-2;
+// The smallest servo velocity gain other than 0 (the 3D plant's minimum).
+constexpr double kMinServoKd = 1e-6;
+
+// The parameter `integrator`: 0 ERK, 1 BDF (hoap2plant::Integrator), 2 automatic.
+constexpr int kIntegratorAuto = 2;
+// The fastest rate |lambda| of the linearised equations (Model::fastest_rate) above which the
+// automatic choice takes BDF: about where the explicit method's stability-limited steps start to
+// cost more than BDF's (docs/plant.md section 7, "Stiff servo gains": scripts/stiff_crossover.py).
+constexpr double kStiffRate = 3e5;
+
+// Explicit integration is refused above this rate (ten times kStiffRate): its stability limits its
+// steps to about 3.3 / rate (1e-6 s there), and it takes far longer than BDF (the audit's gains,
+// kp = 1e6 and kd = 1e5: 7 times for 20 ms of motion, 300 times for a 0.5 s step).
+constexpr double kErkRefusedRate = 10.0 * kStiffRate;
+// The explicit integrator's steps in one fmi2DoStep (about 5 s of computation): beyond, the step
+// fails with the reason. At the HOAP-2's gains a communication step of an hour at rest takes few.
+constexpr long kMaxErkStepsPerStep = 1000000;
+
+// The fastest rate of the plant built from p in its initial posture at rest (foot flat, the joints
+// at their initial set points): what decides the automatic integrator and refuses ERK.
+double fastestRate(const Params& p) {
+  hoap2plant::Vec5 q;
+  q << 0.0, p.ankle_height, 0.0, p.theta_ankle_init, p.theta_hip_init;
+  return hoap2plant::Model(p).fastest_rate(q);
+}
 
 const RealParam kParams[] = {
     {"g", &Params::g, "m/s2", "Gravitational acceleration", 0.0, 100.0},
@@ -160,9 +185,10 @@ ModelInfo makeInfo() {
       "faster than the contact); false = no impulsive joint torque (for slow servos)", def.lock_joints_at_impact ? 1 : 0);
   add("seed", vr::seed, Type::Integer, Par, Fix, "", "Seed of the sensor-noise generator (splitmix64)", double(def.seed), 0, 2147483647);
   add("integrator", vr::integrator, Type::Integer, Par, Fix, "",
-      "0: explicit Runge-Kutta (ARKODE ERKStep, Cash-Karp 6(4)5; fast where the inputs change at every "
-      "communication point); 1: BDF (CVODE, dense Newton; for stiff settings such as very high servo gains)",
-      double(static_cast<int>(def.integrator)), 0, 1);
+      "2 (default): automatic, explicit Runge-Kutta unless the servo gains make the equations stiff for it, "
+      "then BDF (docs/plant.md section 7); 0: explicit Runge-Kutta (ARKODE ERKStep, Cash-Karp 6(4)5; fast where "
+      "the inputs change at every communication point; refused with stiff gains); 1: BDF (CVODE, dense Newton)",
+      kIntegratorAuto, 0, 2);
   return m;
 }
 
@@ -176,8 +202,11 @@ bool paramsFromStore(const Context& ctx, Params& p, std::string& why) {
   p.servo_on = ctx.boolean(vr::servo_on);
   p.lock_joints_at_impact = ctx.boolean(vr::lock_joints_at_impact);
   p.seed = static_cast<std::uint64_t>(ctx.integer(vr::seed));
-  p.integrator = static_cast<hoap2plant::Integrator>(ctx.integer(vr::integrator));
-  char buf[160];
+  const int integrator = ctx.integer(vr::integrator);
+  const double rate = fastestRate(p);
+  p.integrator = integrator == 1 || (integrator == kIntegratorAuto && rate > kStiffRate) ? hoap2plant::Integrator::Bdf
+                                                                                        : hoap2plant::Integrator::Erk;
+  char buf[400];
   // The integrator's relative tolerance: the parameter rtol when set (> 0, the user's explicit
   // choice); else the importer's fmi2SetupExperiment tolerance when it defines one; else the
   // model's default, which the DefaultExperiment advertises.
@@ -186,6 +215,15 @@ bool paramsFromStore(const Context& ctx, Params& p, std::string& why) {
   if (!(p.rtol >= kMinRtol && p.rtol <= kMaxRtol)) {
     std::snprintf(buf, sizeof buf, "relative tolerance %g (%s) is outside [%g, %g]", p.rtol,
                   rtol_is_parameter ? "parameter rtol" : "fmi2SetupExperiment's tolerance", kMinRtol, kMaxRtol);
+  } else if ((p.kd_ankle > 0.0 && p.kd_ankle < kMinServoKd) || (p.kd_hip > 0.0 && p.kd_hip < kMinServoKd)) {
+    // the servo's position loop commands kp / kd times the error as a rate: a denormal kd made it
+    // infinite and the right-hand side NaN (found by forging states within the ranges)
+    std::snprintf(buf, sizeof buf, "kd_ankle = %g, kd_hip = %g N.m.s/rad: a servo velocity gain is 0 (no velocity "
+                  "loop) or at least %g", p.kd_ankle, p.kd_hip, kMinServoKd);
+  } else if (integrator == 0 && rate > kErkRefusedRate) {
+    std::snprintf(buf, sizeof buf, "integrator = 0 (explicit Runge-Kutta) with these servo gains: the fastest mode of "
+                  "the plant decays at %.3g 1/s, which limits its steps to about %.2g s (%.3g steps per simulated "
+                  "second); use integrator = 2 (automatic) or 1 (BDF)", rate, 3.3 / rate, rate / 3.3);
   } else if (!(p.toe_x > p.heel_x)) {
     std::snprintf(buf, sizeof buf, "toe_x (%g) must be > heel_x (%g)", p.toe_x, p.heel_x);
   } else if (p.h_push <= p.ankle_height + p.l1) {
@@ -225,6 +263,10 @@ class PlantFmu : public Model {
     }
     plant_ = std::make_unique<Plant>(p);
     attach(ctx);
+    if (ctx.integer(vr::integrator) == kIntegratorAuto)
+      ctx.log(kLogEvents, fmi2OK, "integrator = 2 (automatic): %s (the fastest mode decays at %.3g 1/s; BDF above %g)",
+              p.integrator == hoap2plant::Integrator::Bdf ? "BDF (CVODE)" : "explicit Runge-Kutta (ARKODE ERKStep)",
+              fastestRate(p), kStiffRate);
     const bool ok = plant_->initialize(ctx.start_time());
     if (!ok) {
       ctx.log(kLogStatusError, fmi2Error, "plant initialization failed: %s", plant_->message().c_str());
@@ -296,6 +338,7 @@ class PlantFmu : public Model {
     // no mode-switch history: it would grow the memory of a long run with every contact switch
     // (found by the soak, docs/reliability.md); the switches are logged under logEvents
     plant_->history_limit = 0;
+    plant_->max_steps_per_call = kMaxErkStepsPerStep;
     plant_->logger = [this](const std::string& s) {
       if (!ctx_) return;
       if (s.rfind("SUNDIALS", 0) == 0) ctx_->log(kFirstModelCategory, fmi2Warning, "%s", s.c_str());

@@ -50,6 +50,16 @@ enum : fmi2ValueReference {
 };
 }
 
+// The shortest ODE step (internal_step, rocking_step) [s]: 1/84 of the contacts' time constant
+// c/k = 0.84 ms and a third of the 1/32 ms reference step of the step studies (docs/plant3d.md
+// section 2): ODE's first-order error is resolved there; shorter steps only cost time.
+constexpr double kMinOdeStep = 1e-5;
+
+// The most ODE steps one call may take: one fmi2DoStep (max_step_size) and the settling into the
+// initial posture in fmi2ExitInitializationMode (settle_time / internal_step), 1 to 3 s of
+// computation at 10-25 us per step.
+constexpr double kMaxOdeStepsPerCall = 1e5;
+
 // A Real parameter: name, unit, description, bounds, and where it lives in Params.
 struct RealParam {
   std::string name, unit, description;
@@ -68,7 +78,7 @@ const std::vector<RealParam>& realParams() {
         {"contact_damping", "N.s/m", "Normal damping of each sole-corner contact", 0.0, 1e7,
          [](Params& p) -> double& { return p.contact_damping; }},
         {"internal_step", "s",
-         "ODE step while both feet are held flat (upper bound; equal steps in a communication step)", 1e-6, 0.01,
+         "ODE step while both feet are held flat (upper bound; equal steps in a communication step)", kMinOdeStep, 0.01,
          [](Params& p) -> double& { return p.internal_step; }},
         {"h_push", "m", "Height of the push point above the sole (erect posture), on the trunk above the hips", 0.0, 10.0,
          [](Params& p) -> double& { return p.h_push; }},
@@ -117,7 +127,7 @@ const std::vector<RealParam>& realParams() {
     t.push_back({"rocking_step", "s",
                  "ODE step while a foot rocks or lifts, and for a step in which a held foot is released (upper bound; "
                  "equal steps in an internal step)",
-                 1e-6, 0.01, [](Params& p) -> double& { return p.rocking_step; }});
+                 kMinOdeStep, 0.01, [](Params& p) -> double& { return p.rocking_step; }});
     return t;
   }();
   return table;
@@ -301,9 +311,22 @@ Params paramsFromStore(const Context& ctx) {
 
 // The checks that involve several parameters; false with the reason in `why`.
 bool paramsConsistent(const Params& p, std::string& why) {
-  if (p.h_push > HOAP2_ANKLE_HEIGHT + HOAP2_L1) return true;
-  char buf[160];
-  std::snprintf(buf, sizeof buf, "h_push (%g m) must be above the hips (%g m)", p.h_push, HOAP2_ANKLE_HEIGHT + HOAP2_L1);
+  char buf[320];
+  // the settling's ODE steps, counted as Plant3D::initialize counts them
+  const double settle_steps = std::ceil(p.settle_time / p.internal_step - 1e-9);
+  if (!(p.h_push > HOAP2_ANKLE_HEIGHT + HOAP2_L1)) {
+    std::snprintf(buf, sizeof buf, "h_push (%g m) must be above the hips (%g m)", p.h_push,
+                  HOAP2_ANKLE_HEIGHT + HOAP2_L1);
+  } else if (settle_steps > kMaxOdeStepsPerCall) {
+    std::snprintf(buf, sizeof buf,
+                  "settle_time = %g s at internal_step = %g s is %.0f ODE steps: the settling in "
+                  "fmi2ExitInitializationMode takes at most %.0f (settle_time / internal_step <= %.0f); shorten "
+                  "settle_time (with the default servos the robot is at rest to round-off after 5 s) or lengthen "
+                  "internal_step",
+                  p.settle_time, p.internal_step, settle_steps, kMaxOdeStepsPerCall, kMaxOdeStepsPerCall);
+  } else {
+    return true;
+  }
   why = buf;
   return false;
 }
@@ -385,11 +408,10 @@ class Plant3DFmu : public Model {
     return fmi2OK;
   }
 
-  // At most kMaxOdeStepsPerStep ODE steps per fmi2DoStep (25 s at the default 0.25 ms rocking
-  // step, a few seconds of computation): a longer step is refused before anything runs.
-  static constexpr double kMaxOdeStepsPerStep = 1e5;
+  // At most kMaxOdeStepsPerCall ODE steps per fmi2DoStep (25 s at the default 0.25 ms rocking
+  // step): a longer step is refused before anything runs.
   double max_step_size(const Context&) const override {
-    return plant_ ? kMaxOdeStepsPerStep * std::min(plant_->params().internal_step, plant_->params().rocking_step)
+    return plant_ ? kMaxOdeStepsPerCall * std::min(plant_->params().internal_step, plant_->params().rocking_step)
                   : std::numeric_limits<double>::infinity();
   }
 

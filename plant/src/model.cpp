@@ -3,6 +3,10 @@
 // and the constrained dynamics of the contact modes (see model.hpp for the coordinates).
 #include "hoap2plant/model.hpp"
 
+#include <algorithm>
+
+#include <Eigen/Eigenvalues>
+
 #include <cmath>
 
 #include "hoap2/servo.h"
@@ -262,6 +266,53 @@ Vec5 Model::impact(ContactMode mode, const Vec5& q, const Vec5& qd) const {
   if (mode == ContactMode::Flat) out.head<3>().setZero();
   if (nj) out.tail<2>() = qd.tail<2>();
   return out;
+}
+
+double Model::fastest_rate(const Vec5& q) const {
+  // Central differences of the right-hand side about rest (each mode's state: flat the two joints,
+  // rocking all five coordinates), then the eigenvalues of that Jacobian.
+  const double ref1 = q[3], ref2 = q[4], eps = 1e-7;
+  double fastest = 0.0;
+  {
+    auto f = [&](const Eigen::Vector4d& x) {
+      Vec5 qq = q, qd = Vec5::Zero();
+      qq[3] = x[0]; qq[4] = x[1]; qd[3] = x[2]; qd[4] = x[3];
+      const Vec2 a = flat_joint_accelerations(qq, qd, ref1, ref2, 0.0);
+      return Eigen::Vector4d(x[2], x[3], a[0], a[1]);
+    };
+    const Eigen::Vector4d x0(q[3], q[4], 0.0, 0.0);
+    Eigen::Matrix4d J;
+    for (int i = 0; i < 4; ++i) {
+      Eigen::Vector4d a = x0, b = x0;
+      a[i] += eps;
+      b[i] -= eps;
+      J.col(i) = (f(a) - f(b)) / (2.0 * eps);
+    }
+    fastest = Eigen::EigenSolver<Eigen::Matrix4d>(J, false).eigenvalues().cwiseAbs().maxCoeff();
+  }
+  for (ContactMode mode : {ContactMode::Toe, ContactMode::Heel}) {
+    const Vec2 pivot = foot_point(q, mode == ContactMode::Toe ? P.toe_x : P.heel_x, -P.ankle_height);
+    using Vec10 = Eigen::Matrix<double, 10, 1>;
+    using Mat10 = Eigen::Matrix<double, 10, 10>;
+    auto f = [&](const Vec10& x) {
+      const Vec5 qq = x.head<5>(), qd = x.tail<5>();
+      Vec10 y;
+      y.head<5>() = qd;
+      y.tail<5>() = dynamics(mode, qq, qd, ref1, ref2, 0.0, pivot).qdd;
+      return y;
+    };
+    Vec10 x0 = Vec10::Zero();
+    x0.head<5>() = q;
+    Mat10 J;
+    for (int i = 0; i < 10; ++i) {
+      Vec10 a = x0, b = x0;
+      a[i] += eps;
+      b[i] -= eps;
+      J.col(i) = (f(a) - f(b)) / (2.0 * eps);
+    }
+    fastest = std::max(fastest, Eigen::EigenSolver<Mat10>(J, false).eigenvalues().cwiseAbs().maxCoeff());
+  }
+  return fastest;
 }
 
 }  // namespace hoap2plant

@@ -67,7 +67,9 @@ const char* mode_name(ContactMode m) {
 
 Plant::Plant(const Params& p) : model_(p) {}
 
-Plant::~Plant() {
+Plant::~Plant() { free_solver(); }
+
+void Plant::free_solver() {
   if (solver_ && model_.P.integrator == Integrator::Bdf) CVodeFree(&solver_);
   if (solver_ && model_.P.integrator == Integrator::Erk) ERKStepFree(&solver_);
   if (ls_) SUNLinSolFree(static_cast<SUNLinearSolver>(ls_));
@@ -78,6 +80,8 @@ Plant::~Plant() {
     SUNContext ctx = static_cast<SUNContext>(sunctx_);
     SUNContext_Free(&ctx);
   }
+  solver_ = ls_ = mat_ = nv_ = atol_ = sunctx_ = nullptr;
+  solver_steps_counted_ = 0;
 }
 
 Vec5 Plant::q() const { return Eigen::Map<const Vec5>(y_); }
@@ -205,6 +209,13 @@ int Plant::solver_advance(double tout, double& tret) {
     if (flag == CV_ROOT_RETURN) return 1;
   } else {
     ERKStepSetStopTime(solver_, tout);
+    if (max_steps_per_call > 0) {  // what is left of this communication step's budget
+      long int n = 0;
+      ERKStepGetNumSteps(solver_, &n);
+      const long int left = max_steps_per_call - (n - call_steps0_);
+      if (left < 1) return ARK_TOO_MUCH_WORK;
+      ERKStepSetMaxNumSteps(solver_, left);
+    }
     flag = ERKStepEvolve(solver_, tout, y, &tret, ARK_NORMAL);
     ERKStepGetCurrentStep(solver_, &h_next_);
     if (flag == ARK_ROOT_RETURN) return 1;
@@ -340,9 +351,9 @@ bool Plant::ensure_solver() {
       ERKStepSetUserData(solver_, this);
       ERKStepRootInit(solver_, kNumRoots, solver_roots);
       ERKStepSetNoInactiveRootWarn(solver_);
-      // No step-count limit: at rest the explicit method takes stability-limited steps (about
-      // 3 / 423 s with the default servos), so a long communication step needs many; the work per
-      // call stays bounded by the step's length.
+      // No step-count limit per ERKStepEvolve call: at rest the explicit method takes
+      // stability-limited steps (about 3 / 423 s with the default servos), so a long communication
+      // step needs many; the whole communication step's count is bounded by max_steps_per_call.
       ERKStepSetMaxNumSteps(solver_, -1);
     }
   }
@@ -496,8 +507,17 @@ Plant::Result Plant::do_step(double h) {
   step_t0_ = t_;
   std::memcpy(step_impulse0_, impulse_, sizeof impulse_);
   step_started_ = true;
+  if (fresh_solver_) {
+    // after a snapshot: the integrator a restored copy has, built anew (a reset one keeps its step
+    // count, which sets how far its first step may grow: ARKODE's etamx1 vs growth)
+    accumulate_stats();
+    free_solver();
+    if (!ensure_solver()) return Result::Error;
+    fresh_solver_ = false;
+  }
   if (restart_) resolve_mode("inputs changed");
   if (restart_ && !solver_restart()) return msg_ = "integrator restart failed", Result::Error;
+  if (model_.P.integrator == Integrator::Erk) ERKStepGetNumSteps(solver_, &call_steps0_);
   N_Vector y = static_cast<N_Vector>(nv_);
   int guard = 0;
   while (true) {
@@ -505,9 +525,16 @@ Plant::Result Plant::do_step(double h) {
     const int flag = solver_advance(tout, tret);
     if (flag < 0) {
       accumulate_stats();
-      char buf[120];
-      std::snprintf(buf, sizeof buf, "%s failed with flag %d at t=%.9f",
-                    model_.P.integrator == Integrator::Bdf ? "CVode" : "ERKStepEvolve", flag, tret);
+      char buf[400];
+      if (model_.P.integrator == Integrator::Erk && flag == ARK_TOO_MUCH_WORK && max_steps_per_call > 0)
+        std::snprintf(buf, sizeof buf,
+                      "the explicit integrator took %ld steps in the communication step from t=%.9f to %.9f without "
+                      "reaching its end, the most one step may take: the equations are stiff for it (servo gains "
+                      "far above the HOAP-2's?); use the BDF integrator or shorter communication steps",
+                      max_steps_per_call, step_t0_, tout);
+      else
+        std::snprintf(buf, sizeof buf, "%s failed with flag %d at t=%.9f",
+                      model_.P.integrator == Integrator::Bdf ? "CVode" : "ERKStepEvolve", flag, tret);
       msg_ = buf;
       return Result::Error;
     }
@@ -604,7 +631,8 @@ void Plant::evaluate_outputs() {
 }
 
 Snapshot Plant::snapshot() const {
-  restart_ = true;  // the original restarts at its next step exactly as a restored copy will
+  // the original restarts at its next step exactly as a restored copy will: with a new integrator
+  restart_ = fresh_solver_ = true;
   Snapshot s;
   s.t = t_;
   std::memcpy(s.y, y_, sizeof y_);
@@ -628,16 +656,22 @@ bool Plant::restore(const Snapshot& s) {
     return false;
   if (!std::isfinite(s.t) || !std::isfinite(s.t_fall) || !std::isfinite(s.pivot[0]) || !std::isfinite(s.pivot[1]))
     return false;
-  // every value within what a running plant can hold (a forged state must not reach the integrator:
-  // a position beyond 1e3 m or rad, a rate beyond 1e4 per s, an impulse beyond 1e12 N s, or a
-  // negative or non-finite first step is none a step produced)
-  for (int i = 0; i < 10; ++i)
-    if (!(std::fabs(s.y[i]) <= (i < 5 ? 1e3 : 1e4))) return false;
+  // every value within what a running plant can hold (a forged state must not reach the integrator;
+  // finite values far beyond these made the next step's right-hand side fail): the foot within 1 km,
+  // angles within 100 rad (the robot falls long before), speeds below 1 km/s and 1e4 rad/s, as the
+  // 3D plant's bodies; impulses within 1e12 N s
+  for (int i = 0; i < 10; ++i) {
+    const double bound = i < 2 ? 1e3 : i < 5 ? 1e2 : i < 7 ? 1e3 : 1e4;
+    if (!(std::fabs(s.y[i]) <= bound)) return false;
+  }
   for (double x : s.impulse)
     if (!(std::fabs(x) <= 1e12)) return false;
   for (double x : s.inputs)
     if (!std::isfinite(x)) return false;
-  if (!(s.h_next >= 0.0 && s.h_next <= 1e3)) return false;
+  // ERK's proposed step: 0 (estimate one) or a step that advances the time, at most 1e3 s (forged
+  // ones failed the next step: a negative one with "h0 and tout - t0 inconsistent", a denormal one
+  // never left t)
+  if (!(s.h_next == 0.0 || (s.h_next >= 1e-12 * (1.0 + std::fabs(s.t)) && s.h_next <= 1e3))) return false;
   t_ = s.t;
   std::memcpy(y_, s.y, sizeof y_);
   std::memcpy(impulse_, s.impulse, sizeof impulse_);

@@ -319,11 +319,30 @@ int ahc_update_params(ahc_controller *c, const ahc_params *p);
  * Never writes NaN/Inf to the outputs. s and out must not be NULL. */
 void ahc_step(ahc_controller *c, const ahc_sensors *s, ahc_outputs *out);
 
+/* Largest tick count a state may hold: 2^53, where a double still counts every tick (285 000
+ * years at 1 ms). ahc_state_validate refuses a larger one; a caller that converts a time into a
+ * tick count (the FMU) refuses a step that would pass it. */
+#define AHC_TICK_MAX 9007199254740992ULL
+
 /* Whether c holds a state that ahc_init and ahc_step could have produced: valid parameters,
  * derived constants that match them, flags 0/1, phase and counters in range, every stored value
- * finite and within its physical range. For snapshots restored from untrusted bytes (a checksum
- * catches accidents, not forgeries). AHC_OK, or AHC_ERR_* with a message naming the field. */
+ * finite and within its physical range, and the invariants the controller keeps between them:
+ * the splines are the quintics their endpoints define (k_w: 0 -> 1 over T; r_x_d: from its
+ * stored start to rest), k_w is 0 in phase 0 and 1 in phases 2-3, the last outputs are the
+ * reference states, the timers fit in the ticks run, tick <= AHC_TICK_MAX. For snapshots restored
+ * from untrusted bytes (a checksum catches accidents, not forgeries). AHC_OK, or AHC_ERR_* with a
+ * message naming the field. */
 int ahc_state_validate(const ahc_controller *c, char *msg, size_t msg_size);
+
+/* ahc_state_validate, and whether c fits the instance it is restored into: an initialized state
+ * (valid = 1) whose parameters equal *p field by field, bit for bit (a snapshot carries its
+ * parameters: restore them together with it, or refuse it), and whose tick count is `tick`, the
+ * number of ticks the instance's clock has run (AHC_TICK_ANY: not checked). A state with another
+ * tick count would make the next call run the difference at once. AHC_OK, or AHC_ERR_* with a
+ * message naming the field (e.g. "Ka = 41 in the state, 40 in the instance"). */
+#define AHC_TICK_ANY (~0ULL)
+int ahc_state_validate_for(const ahc_controller *c, const ahc_params *p, unsigned long long tick, char *msg,
+                           size_t msg_size);
 
 /* Time of the controller [s] = tick * sample_period. */
 double ahc_time(const ahc_controller *c);

@@ -35,6 +35,7 @@ fmi2Status setupExperiment(Instance* inst, const char* fn, bool toleranceDefined
   if (toleranceDefined && !(tolerance > 0.0)) return inst->error("%s: tolerance %g must be positive", fn, tolerance);
   inst->startTime = startTime;
   inst->time = startTime;
+  inst->lastSuccessfulTime = startTime;  // a state got now has time = last successful time (decodeState)
   inst->stopTimeDefined = stopTimeDefined;
   inst->stopTime = stopTime;
   inst->toleranceDefined = toleranceDefined;

@@ -244,6 +244,9 @@ const std::string& Context::resource_location() const { return inst_.resources; 
 double Context::start_time() const { return inst_.startTime; }
 double Context::time() const { return inst_.time; }
 double Context::last_step_size() const { return inst_.lastStepSize; }
+bool Context::initialized() const {
+  return inst_.state != State::Instantiated && inst_.state != State::InitializationMode;
+}
 bool Context::stop_time_defined() const { return inst_.stopTimeDefined; }
 double Context::stop_time() const { return inst_.stopTime; }
 bool Context::tolerance_defined() const { return inst_.toleranceDefined; }

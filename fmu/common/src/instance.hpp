@@ -103,6 +103,10 @@ bool valueAllowed(const Variable& v, double x, std::string& why);
 std::vector<std::uint8_t> encodeState(Instance& inst);
 // Decodes and applies; on failure nothing is changed and `err` says why.
 bool decodeState(Instance& inst, const std::uint8_t* p, std::size_t n, std::string& err);
-std::uint64_t fnv1a64(const void* p, std::size_t n, std::uint64_t h = 1469598103934665603ull);
+// FNV-1a, 64 bits (Fowler, Noll, Vo; http://www.isthe.com/chongo/tech/comp/fnv/): offset basis
+// 14695981039346656037, prime 1099511628211. The checksum of serialized FMU states (format 3; formats
+// 1-2 used the basis 1469598103934665603, one digit short) and the GUID's hash.
+inline constexpr std::uint64_t kFnv1a64OffsetBasis = 14695981039346656037ull;
+std::uint64_t fnv1a64(const void* p, std::size_t n, std::uint64_t h = kFnv1a64OffsetBasis);
 
 }  // namespace fmuglue

@@ -8,7 +8,7 @@
 namespace fmuglue {
 
 static const char kMagic[8] = {'A', 'H', 'F', 'M', 'U', 'S', 'T', '1'};
-static const std::uint32_t kFormatVersion = 2;  // 2: the last communication step size (the time rule's h)
+static const std::uint32_t kFormatVersion = 3;  // 2: the last communication step size (the time rule's h); 3: FNV-1a-64's own offset basis
 
 std::uint64_t fnv1a64(const void* p, std::size_t n, std::uint64_t h) {
   const auto* b = static_cast<const std::uint8_t*>(p);
@@ -142,7 +142,9 @@ bool decodeState(Instance& inst, const std::uint8_t* p, std::size_t n, std::stri
   std::uint64_t mlen = 0;
   if (!ok || !r.u64(mlen) || mlen != r.remaining()) { err = "corrupt state payload (values)"; return false; }
   // A checksum only catches accidents: a state is validated like the calls that would have made it.
-  const bool stopOk = stopDef == 0 || (std::isfinite(stop) && stop >= start);
+  // a defined stop time at or after the time (a step never passes it: doStep's rule)
+  const bool stopOk = stopDef == 0 || (std::isfinite(stop) && stop >= start &&
+                                       (time <= stop || timesMatch(time, stop, lastStep)));
   const bool tolOk = tolDef == 0 || (std::isfinite(tol) && tol > 0.0);
   if (!std::isfinite(time) || !std::isfinite(start) || time < start || lst != time ||
       !(lastStep >= 0.0 && lastStep <= time - start + timeTolerance(time, 0.0)) ||

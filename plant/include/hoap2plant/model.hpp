@@ -127,6 +127,11 @@ class Model {
   // Plastic impact onto the constraint set of `mode` (velocities satisfying J qd = 0); with
   // P.lock_joints_at_impact the joint rates are held too (impulsive joint torques).
   Vec5 impact(ContactMode mode, const Vec5& q, const Vec5& qd) const;
+  // The largest |lambda| [1/s] of the equations of motion linearised at rest in posture q, the
+  // set points at q's joint angles, over the contact modes the foot stands or rocks in (flat, on
+  // the toe, on the heel): the rate that bounds an explicit integrator's stable step (docs/plant.md
+  // section 7, "Stiff servo gains").
+  double fastest_rate(const Vec5& q) const;
 };
 
 }  // namespace hoap2plant

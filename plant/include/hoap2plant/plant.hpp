@@ -125,6 +125,9 @@ class Plant {
   std::function<void(const std::string&)> logger;  // events (mode switches, falls)
   std::vector<ModeEvent> history;  // diagnostics (the first history_limit switches), not in the snapshot
   std::size_t history_limit = 100000;
+  // The explicit integrator's steps one do_step may take (0: no limit); beyond, the step fails with
+  // the reason (stiff equations). Not in the snapshot: a setting of the owner (the FMU: 1e6).
+  long max_steps_per_call = 0;
 
   // integrator callbacks
   int rhs(double t, const double* y, double* ydot);
@@ -140,6 +143,7 @@ class Plant {
   bool solver_restart();
   int solver_advance(double tout, double& tret);
   bool ensure_solver();
+  void free_solver();
   void accumulate_stats();
   void log(const std::string& s) {
     if (logger) logger(s);
@@ -167,9 +171,14 @@ class Plant {
   // Restart the integrator at the next step: the RHS jumped or the state changed from outside. Mutable:
   // taking a snapshot marks a restart point (const snapshot(), bit-for-bit restores).
   mutable bool restart_ = true;
+  // Build the integrator anew at the next step (after a snapshot, as a restored copy does): one that
+  // is only reset keeps state the snapshot does not carry (its step count, which bounds how far
+  // its first step may grow), and the copies parted by 1e-11 rad.
+  mutable bool fresh_solver_ = false;
   bool event_ = false;  // a mode switch or impact since the last restart (plant.cpp, solver_restart)
   long int solver_steps_counted_ = 0;  // the integrator's step count already in stats_.steps
   double h_next_ = 0;  // ERK: the step size its controller proposed last (0: estimate one)
+  long int call_steps0_ = 0;  // ERK's step count when the current do_step began
   // SUNDIALS
   void* sunctx_ = nullptr;
   void* solver_ = nullptr;  // CVODE (Integrator::Bdf) or ARKODE ERKStep (Integrator::Erk) memory

@@ -247,6 +247,9 @@ class Context {
   double start_time() const;                     // from fmi2SetupExperiment
   double time() const;                           // the current communication point
   double last_step_size() const;                 // h of the last successful fmi2DoStep (0 before the first)
+  // Whether the instance has left initialization mode (step complete, failed, canceled or
+  // terminated): what a restored state's model part must then hold is an initialized model.
+  bool initialized() const;
   bool stop_time_defined() const;
   double stop_time() const;
   bool tolerance_defined() const;

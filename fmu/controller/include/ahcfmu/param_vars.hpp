@@ -89,6 +89,31 @@ inline std::string differingRows(const ahc_param_info* table, size_t count, cons
   return s;
 }
 
+// The first row of a parameter table whose value differs bit for bit between a (a restored state's
+// copy) and b (the instance's variables), as "name = x in the state, y in the instance"; "" if none.
+inline std::string firstDifferingParam(const ahc_param_info* table, size_t count, const void* a, const void* b) {
+  for (size_t i = 0; i < count; ++i) {
+    const char* pa = static_cast<const char*>(a) + table[i].offset;
+    const char* pb = static_cast<const char*>(b) + table[i].offset;
+    char line[200];
+    if (table[i].is_int) {
+      int x, y;
+      std::memcpy(&x, pa, sizeof x);
+      std::memcpy(&y, pb, sizeof y);
+      if (x == y) continue;
+      std::snprintf(line, sizeof line, "%s = %d in the state, %d in the instance", table[i].name, x, y);
+    } else {
+      if (std::memcmp(pa, pb, sizeof(double)) == 0) continue;
+      double x, y;
+      std::memcpy(&x, pa, sizeof x);
+      std::memcpy(&y, pb, sizeof y);
+      std::snprintf(line, sizeof line, "%s = %.17g in the state, %.17g in the instance", table[i].name, x, y);
+    }
+    return line;
+  }
+  return "";
+}
+
 // resources/configurations.toml: every named configuration of the C library (ahc_params_named)
 // with the parameter values that differ from the defaults, for importers that select a
 // configuration by name (anklehip: `controller_config = "paper"`); `more_rows`, when given, adds an
