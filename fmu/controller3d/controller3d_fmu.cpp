@@ -166,6 +166,7 @@ class Controller3DModel final : public Model {
     ticks_ = 0;
     t0_ = 0.0;
     lastPhase_ = lastPhaseY_ = 0;
+    lastFault_ = lastFaultY_ = 0;
     nonfinite_ = 0;
   }
 
@@ -186,6 +187,7 @@ class Controller3DModel final : public Model {
     t0_ = ctx.start_time();
     ticks_ = 0;
     lastPhase_ = lastPhaseY_ = AHC_PHASE_ANKLE;
+    lastFault_ = lastFaultY_ = 0;
     nonfinite_ = 0;
     writeInitialOutputs(ctx, p);
     return fmi2OK;
@@ -276,6 +278,21 @@ class Controller3DModel final : public Model {
                 ahc_phase_name(lastPhaseY_), out_.frontal.phase, ahc_phase_name(out_.frontal.phase));
         lastPhaseY_ = out_.frontal.phase;
       }
+      // a change of either fault mask is logged with its bits' names, as the sagittal FMU does
+      if (out_.sag.fault != lastFault_) {
+        char buf[256];
+        ahc_fault_string(out_.sag.fault, buf, sizeof buf);
+        ctx.log(kLogEvents, fmi2OK, "t=%.9g: fault mask 0x%x (%s)", tk, out_.sag.fault,
+                out_.sag.fault ? buf : "healthy");
+        lastFault_ = out_.sag.fault;
+      }
+      if (out_.frontal.fault != lastFaultY_) {
+        char buf[256];
+        ahc_frontal_fault_string(out_.frontal.fault, buf, sizeof buf);
+        ctx.log(kLogEvents, fmi2OK, "t=%.9g: frontal fault mask 0x%x (%s)", tk, out_.frontal.fault,
+                out_.frontal.fault ? buf : "healthy");
+        lastFaultY_ = out_.frontal.fault;
+      }
     }
     if (ticked) writeOutputs(ctx, out_);
     return r;
@@ -289,6 +306,8 @@ class Controller3DModel final : public Model {
     w.f64(t0_);
     w.i32(lastPhase_);
     w.i32(lastPhaseY_);
+    w.u32(lastFault_);
+    w.u32(lastFaultY_);
     w.i32(nonfinite_);
   }
 
@@ -303,8 +322,9 @@ class Controller3DModel final : public Model {
     std::uint64_t ticks = 0;
     double t0 = 0;
     std::int32_t phase = 0, phase_y = 0, nonfinite = 0;
+    std::uint32_t fault = 0, fault_y = 0;
     if (!r.pod(c) || !r.pod(o) || !r.u64(ticks) || !r.f64(t0) || !r.i32(phase) || !r.i32(phase_y) ||
-        !r.i32(nonfinite)) {
+        !r.u32(fault) || !r.u32(fault_y) || !r.i32(nonfinite)) {
       err = "controller state truncated";
       return false;
     }
@@ -314,8 +334,9 @@ class Controller3DModel final : public Model {
       return false;
     }
     if (t0 != ctx.start_time() || ticks != c.sag.tick || ticks != c.frontal.tick || phase < 0 || phase > 3 ||
-        phase_y < 0 || phase_y > 3 || nonfinite < 0 || nonfinite > 1) {
-      err = "controller state corrupt (start time, tick counters, phases or input flag)";
+        phase_y < 0 || phase_y > 3 || (fault & ~unsigned(AHC_FAULT_ALL_MASK)) ||
+        (fault_y & ~unsigned(AHC_FFAULT_ALL_MASK)) || nonfinite < 0 || nonfinite > 1) {
+      err = "controller state corrupt (start time, tick counters, phases, fault masks or input flag)";
       return false;
     }
     ctl_ = c;
@@ -324,6 +345,8 @@ class Controller3DModel final : public Model {
     t0_ = t0;
     lastPhase_ = phase;
     lastPhaseY_ = phase_y;
+    lastFault_ = fault;
+    lastFaultY_ = fault_y;
     nonfinite_ = nonfinite;
     return true;
   }
@@ -389,6 +412,7 @@ class Controller3DModel final : public Model {
   unsigned long long ticks_ = 0;
   double t0_ = 0.0;
   int lastPhase_ = 0, lastPhaseY_ = 0;
+  unsigned lastFault_ = 0, lastFaultY_ = 0;  // the fault masks last logged
   int nonfinite_ = 0;
 };
 
