@@ -21,7 +21,9 @@ import xml.etree.ElementTree as ET
 from collections import defaultdict
 from pathlib import Path
 
-FMU_BINARIES = ("AnkleHipController.so", "Hoap2Plant.so", "Hoap2Plant3D.so")
+from anklehip.files.paths import SHIPPED  # every FMU the project ships
+
+FMU_BINARIES = tuple(f"{name}.so" for name in SHIPPED)
 
 
 def ours(error: ET.Element) -> str | None:
