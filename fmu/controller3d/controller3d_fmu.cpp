@@ -155,7 +155,8 @@ ModelInfo makeInfo() {
   table = ahc_frontal_param_table(&count);
   ahcfmu::addParamVariables(m, table, count, vr::first_frontal_param, &fdef, isTunable);
   // the named configurations of both planes
-  m.resources.emplace_back("configurations.toml", ahcfmu::configurationsToml("AnkleHipController3D", /*frontal=*/true));
+  m.resources.emplace_back("configurations.toml",
+                           ahcfmu::configurationsToml("AnkleHipController3D", ahcfmu::frontalConfigRows));
   return m;
 }
 

@@ -90,18 +90,27 @@ inline std::string differingRows(const ahc_param_info* table, size_t count, cons
   return s;
 }
 
+// The frontal plane's rows of named configuration `name` (ahc_frontal_params_named), for
+// configurationsToml. A function of its own: only AnkleHipController3D uses it, so the sagittal
+// FMU's binary (and its source FMU, which has no frontal.c) references no frontal symbol.
+inline std::string frontalConfigRows(const char* name) {
+  ahc_frontal_params fdef, f;
+  ahc_frontal_params_default(&fdef);
+  ahc_frontal_params_named(&f, name);
+  size_t count = 0;
+  const ahc_param_info* table = ahc_frontal_param_table(&count);
+  return differingRows(table, count, &f, &fdef);
+}
+
 // resources/configurations.toml: every named configuration of the C library (ahc_params_named,
-// and with `frontal` ahc_frontal_params_named too) with the parameter values that differ from the
-// defaults, for importers that select a configuration by name (anklehip: `controller_config =
+// and the rows `more` adds, e.g. frontalConfigRows) with the parameter values that differ from
+// the defaults, for importers that select a configuration by name (anklehip: `controller_config =
 // "paper"`). Generated, never edited.
-inline std::string configurationsToml(const char* model, bool frontal = false) {
+inline std::string configurationsToml(const char* model, std::string (*more)(const char* name) = nullptr) {
   ahc_params def;
   ahc_params_default(&def);
-  ahc_frontal_params fdef;
-  ahc_frontal_params_default(&fdef);
-  size_t count = 0, fcount = 0;
+  size_t count = 0;
   const ahc_param_info* table = ahc_param_table(&count);
-  const ahc_param_info* ftable = ahc_frontal_param_table(&fcount);
   std::string s =
       std::string("# Named configurations of ") + model + ": parameter values that differ from the defaults.\n"
       "# Generated from controller_c (ahc_params_named); see documentation/ and docs/controller.md.\n";
@@ -110,11 +119,7 @@ inline std::string configurationsToml(const char* model, bool frontal = false) {
     ahc_params_named(&p, ahc_config_name(c));
     s += std::string("\n[") + ahc_config_name(c) + "]\ndescription = \"" + ahc_config_description(c) + "\"\n";
     s += differingRows(table, count, &p, &def);
-    if (frontal) {
-      ahc_frontal_params f;
-      ahc_frontal_params_named(&f, ahc_config_name(c));
-      s += differingRows(ftable, fcount, &f, &fdef);
-    }
+    if (more) s += more(ahc_config_name(c));
   }
   return s;
 }
