@@ -33,7 +33,7 @@ import pytest
 
 from conftest import REPO_ROOT, SHIPPED
 from test_linux_binaries import GLIBC_BASELINE, version_tuple
-from test_win64 import DISCRETE, SOLVER_COUNTERS, _replay, _write_inputs
+from test_win64 import DISCRETE, SOLVER_COUNTERS, _replay, _write_inputs, controller_tolerance
 
 REQUIRED = os.environ.get("ANKLEHIP_REQUIRE_AARCH64") == "1"
 SYSROOT = "/usr/aarch64-linux-gnu"      # Debian's libc6-arm64-cross
@@ -152,7 +152,7 @@ def test_aarch64_binaries_replay_a_closed_loop_like_x86_64(arm_fmus, qemu, arm_r
             if name in SOLVER_COUNTERS:   # libm's last bits may move one step-size decision
                 assert np.max(np.abs(a - b)) <= 1e-3 * np.max(np.abs(a)) + 2, f"{role} {name}"
                 continue
-            tol = 1e-12 if role == "controller" else 1e-8 * float(np.max(np.abs(a))) + 1e-12
+            tol = controller_tolerance(name) if role == "controller" else 1e-8 * float(np.max(np.abs(a))) + 1e-12
             err = float(np.max(np.abs(a - b)))
             worst[name] = err
             assert err <= tol, f"{info.name} {name}: |x86_64 - aarch64| = {err:.3g} > {tol:.3g}"

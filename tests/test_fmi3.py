@@ -111,9 +111,12 @@ def test_closed_loop_on_fmi3_is_bit_identical(fmu_dir, scenario):
     from anklehip.files.paths import find_scenario
     from anklehip.files.scenario import load_scenario
     sc = load_scenario(find_scenario(scenario))
-    runs = {fmi: simulate(sc, Models.for_scenario(sc, fmu_dir, fmi=fmi), progress=False,
-                          stop_time=min(sc.stop_time, 4.0)) for fmi in (2, 3)}
+    models = {fmi: Models.for_scenario(sc, fmu_dir, fmi=fmi) for fmi in (2, 3)}
+    runs = {fmi: simulate(sc, models[fmi], progress=False, stop_time=min(sc.stop_time, 4.0)) for fmi in (2, 3)}
     a, b = runs[2], runs[3]
+    # the run names every input of its controller (what a replay or a recorded step test feeds it)
+    inputs = tuple(v.name for v in models[2].controller.by_causality("input"))
+    assert a.controller_inputs == b.controller_inputs == inputs
     assert (a.outcome, a.fell_at, a.message) == (b.outcome, b.fell_at, b.message)
     assert a.data.dtype == b.data.dtype and len(a.data) == len(b.data) > 1000
     for n in a.data.dtype.names:

@@ -147,6 +147,17 @@ def _replay(cmd_prefix, env, runner, unzipdir, csv_in, csv_out, step, stop, para
 
 
 DISCRETE = {"phase", "fault", "phase_y", "fault_y", "fallen", "contact", "contact_mode", "terminated"}
+# AnkleHipController3D's per-leg set points q_<side>_<joint>_ref come from the legs' inverse
+# kinematics, which is singular at a straight knee: the knee angle is acos of a cosine near 1,
+# q ~ sqrt(2 (1 - c)), so a last-bit difference of the libm-computed hip-ankle distance becomes
+# ~1e-8 rad (5.2e-8 rad seen on aarch64, side_push_frontal) while the frontal references it is
+# computed from agree to 1e-15. Bound for those outputs: 1e-7 rad, far below any servo's resolution.
+LEG_IK_TOL = 1e-7
+
+
+def controller_tolerance(name: str) -> float:
+    """|difference| allowed between two platforms' controller outputs `name` [rad]."""
+    return LEG_IK_TOL if name.startswith("q_") and name.endswith("_ref") else 1e-12
 
 
 @pytest.mark.parametrize("fmi", [2, 3])
@@ -209,7 +220,7 @@ def test_windows_binaries_replay_a_closed_loop_like_the_linux_ones(win64_fmus, w
             if name in SOLVER_COUNTERS:   # libm's last bits may move one step-size decision
                 assert np.max(np.abs(a - b)) <= 1e-3 * np.max(np.abs(a)) + 2, f"{role} {name}"
                 continue
-            tol = 1e-12 if role == "controller" else 1e-8 * float(np.max(np.abs(a))) + 1e-12
+            tol = controller_tolerance(name) if role == "controller" else 1e-8 * float(np.max(np.abs(a))) + 1e-12
             err = float(np.max(np.abs(a - b)))
             worst[name] = err
             assert err <= tol, f"{info.name} {name}: |linux - win64| = {err:.3g} > {tol:.3g}"
