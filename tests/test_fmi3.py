@@ -26,7 +26,7 @@ import pytest
 from fmpy import read_model_description, simulate_fmu
 from fmpy.validation import validate_fmu
 
-from conftest import REPO_ROOT, SHIPPED, fmu_inputs
+from conftest import SHIPPED, fmu_inputs
 
 NAMES = SHIPPED
 FMI3_TYPES = {"Float64": "Real", "Int32": "Integer"}
