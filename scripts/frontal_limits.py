@@ -1,12 +1,12 @@
 #!/usr/bin/env python3
 """The largest side push each controller configuration stands (docs/controller.md §11.5).
 
-Three push shapes toward +y on side_push_3d's base (the 3D plant, the push at the trunk's push
+Three push shapes, toward +y and toward -y, on side_push_3d's base (the 3D plant, the push at the trunk's push
 point): a short pulse (0.2 s, 50 ms ramps), a 1 s pulse (0.3 s ramps: the scenario's own) and a
 slow push (5 s, 1 s ramps). Each is scaled in 1 N steps upward from --from until the first fall;
 the last force that stood is printed per configuration: the sagittal controller (its roll servos
 hold the legs still), the 3D controller with its defaults, and the defaults with one setting
-changed at a time. Runs on the native engine (about 6 minutes for the whole table).
+changed at a time. Runs on the native engine (about 12 minutes for the whole table).
 
     .venv/bin/python scripts/frontal_limits.py [--from 6] [--shape 0.2s|1s|slow ...] [--set NAME=VALUE ...]
 
@@ -38,8 +38,11 @@ CONFIGURATIONS = [
     ("Ka_y 19 (Ca_y 4.75, the sagittal gains')", "3d", {"Ka_y": 19.0, "Ca_y": 4.75}),
     ("Ka_y 160 (Ca_y 13.7)", "3d", {"Ka_y": 160.0, "Ca_y": 13.7}),
     ("Ka_y 400 (Ca_y 21.6)", "3d", {"Ka_y": 400.0, "Ca_y": 21.6}),
+    ("lean_tau_y 0.1 s", "3d", {"lean_tau_y": 0.1}),
     ("lean_tau_y 0.15 s", "3d", {"lean_tau_y": 0.15}),
     ("lean_tau_y 0.3 s (the sagittal lean's)", "3d", {"lean_tau_y": 0.3}),
+    ("lean_margin_y 0 (the lean up to the edges)", "3d", {"lean_margin_y": 0.0}),
+    ("lean_margin_y 5 mm", "3d", {"lean_margin_y": 0.005}),
     ("lean_margin_y 15 mm (the sagittal lean's)", "3d", {"lean_margin_y": 0.015}),
     ("fz_rocking_y 0 (the lean never holds)", "3d", {"fz_rocking_y": 0.0}),
 ]
@@ -49,15 +52,15 @@ SHAPES = {"0.2s": (0.2, 0.05, 4.0), "1s": (1.0, 0.3, 4.0), "slow": (5.0, 1.0, 9.
 
 
 def largest_standing(scenario, model: str, overrides: dict, shape: str, start: float, fmu_dir=None,
-                     top: float = 60.0) -> float:
-    """The last force (1 N steps from `start`) at which the push shape stands; start - 1 if even
-    `start` falls."""
+                     top: float = 60.0, sign: float = 1.0) -> float:
+    """The last force (1 N steps from `start`) at which the push shape toward +y (sign -1: toward
+    -y) stands; start - 1 if even `start` falls."""
     duration, rise, stop = SHAPES[shape]
     models = Models.load(fmu_dir, plant_model="3d", controller_model=model)
     engine = native.default_engine()
     f = start
     while f <= top:
-        push_y = PushProfile.from_segments([PushSegment("pulse", t=1.0, force=f, duration=duration, rise=rise)])
+        push_y = PushProfile.from_segments([PushSegment("pulse", t=1.0, force=sign * f, duration=duration, rise=rise)])
         sc = dataclasses.replace(scenario, controller_model=model, push_y=push_y, stop_time=stop)
         if simulate(sc, models, controller_overrides=overrides, progress=False, engine=engine).outcome != "completed":
             break
@@ -85,11 +88,12 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     shapes = a.shape or list(SHAPES)
     configs = [("3D controller, " + ", ".join(a.set), "3d", over)] if a.set else CONFIGURATIONS
-    print(f"largest peak side force that stands [N], 1 N steps from {a.start:g} N")
-    print(f"  {'configuration':<44}" + "".join(f"{s:>7}" for s in shapes))
+    print(f"largest peak side force that stands [N], 1 N steps from {a.start:g} N, toward +y / toward -y")
+    print(f"  {'configuration':<44}" + "".join(f"{s:>9}" for s in shapes))
     for label, model, o in configs:
-        row = [largest_standing(sc, model, o, shape, a.start) for shape in shapes]
-        print(f"  {label:<44}" + "".join(f"{x:7.0f}" for x in row), flush=True)
+        row = [f"{largest_standing(sc, model, o, shape, a.start, sign=+1):.0f}/"
+               f"{largest_standing(sc, model, o, shape, a.start, sign=-1):.0f}" for shape in shapes]
+        print(f"  {label:<44}" + "".join(f"{x:>9}" for x in row), flush=True)
     return 0
 
 

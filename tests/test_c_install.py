@@ -14,7 +14,8 @@ import pytest
 from conftest import REPO_ROOT
 
 CONSUMER = REPO_ROOT / "tests" / "c_consumer"
-INSTALLED = {"include/ahc/controller.h", "include/hoap2/nominal.h", "lib/libahc.a",
+HEADERS = ("ahc/controller.h", "ahc/frontal.h", "ahc/leg_ik.h", "ahc/controller3d.h")
+INSTALLED = {*(f"include/{h}" for h in HEADERS), "include/hoap2/nominal.h", "lib/libahc.a",
              "lib/cmake/ahc/ahcConfig.cmake", "lib/cmake/ahc/ahcConfigVersion.cmake",
              "lib/cmake/ahc/ahcTargets.cmake", "lib/pkgconfig/ahc.pc"}
 
@@ -65,11 +66,13 @@ def _check_consumer(exe):
     assert "nominal mass 6.5041 kg" in r.stdout      # HOAP2_M1 + HOAP2_M2 from the installed nominal.h
 
 
-def test_headers_are_self_contained(prefix):
-    """controller.h compiles with the prefix's include folder alone (the first compile of the issue
-    failed: "hoap2/nominal.h: No such file")."""
+@pytest.mark.parametrize("header", HEADERS)
+def test_headers_are_self_contained(prefix, header):
+    """Each public header (the sagittal controller's, the frontal layer's, the legs' kinematics and
+    the 3D controller's) compiles alone with the prefix's include folder (the first compile of the
+    issue failed: "hoap2/nominal.h: No such file")."""
     src = prefix.parent / "only_header.c"
-    src.write_text('#include "ahc/controller.h"\nint main(void) { return AHC_OK; }\n')
+    src.write_text(f'#include "{header}"\nint main(void) {{ return 0; }}\n')
     _run([shutil.which("cc"), "-std=c99", "-Wall", "-Werror", "-I", prefix / "include", src,
           "-o", prefix.parent / "only_header"], env=_clean_env())
 

@@ -17,11 +17,13 @@ a result (the reliability issue, items 5-7), each held by a test:
 from __future__ import annotations
 
 import json
+import re
 import shutil
 import zipfile
 from pathlib import Path
 
 import numpy as np
+
 import pytest
 
 from anklehip.cli import main
@@ -201,8 +203,9 @@ def test_where_names_the_checkout_and_the_build(fmu_dir, capsys):
     from conftest import REPO_ROOT
     assert main(["where"]) == 0
     out = capsys.readouterr().out
-    assert f"checkout                {REPO_ROOT}" in out
-    assert str(fmu_dir / "AnkleHipController.fmu") in out
+    assert re.search(rf"^checkout +{re.escape(str(REPO_ROOT))}$", out, re.M), out
+    for name in ("AnkleHipController", "AnkleHipController3D", "Hoap2Plant", "Hoap2Plant3D"):
+        assert re.search(rf"^{name}\.fmu +{re.escape(str(fmu_dir / (name + '.fmu')))}$", out, re.M), out
 
 
 def test_export_and_record_default_to_a_results_folder(tmp_path, monkeypatch, capsys):

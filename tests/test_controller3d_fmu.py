@@ -197,6 +197,6 @@ def test_frontal_limits_script(tmp_path):
     r = subprocess.run([sys.executable, script, "--shape", "1s", "--from", "14", "--set", "frontal_enabled=0"],
                        capture_output=True, text=True, timeout=300)
     assert r.returncode == 0, r.stderr
-    assert r.stdout.strip().splitlines()[-1].split()[-1] == "15", r.stdout
+    assert r.stdout.strip().splitlines()[-1].split()[-1] == "15/15", r.stdout
     r = subprocess.run([sys.executable, script, "--set", "Ka_y"], capture_output=True, text=True, timeout=60)
     assert r.returncode == 2 and "--set Ka_y" in r.stderr and "Traceback" not in r.stderr

@@ -43,7 +43,13 @@ def _figures():
         yield f"fig4-{name}", lambda d=d: plots.fig4_figure(d, title="fig4")
 
 
-FIGURES = list(_figures())
+def _frontal():
+    from anklehip.analysis.frontal_cycle import frontal_cycle_figure
+    from test_frontal_figure import _edge, frontal_synthetic
+    yield "fig5-frontal-synthetic", lambda: frontal_cycle_figure(frontal_synthetic(), edge=_edge(), title="frontal")
+
+
+FIGURES = list(_figures()) + list(_frontal())
 
 
 def _intersect(a, b) -> bool:

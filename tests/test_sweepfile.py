@@ -7,6 +7,7 @@ the capability map (anklehip/analysis/capability.py: survive_boundary, plot_capa
 from __future__ import annotations
 
 import csv
+import re
 import random
 from pathlib import Path
 
@@ -16,6 +17,7 @@ from anklehip.analysis.capability import plot_capability, survive_boundary
 from anklehip.cli import main
 from anklehip.files.paths import scenarios_dir
 from anklehip.files.scenario import ScenarioError
+from anklehip.running.sweep import sweep
 from anklehip.running.sweepfile import load_sweep_file, point_setup
 from test_bounds import PARAMS
 
@@ -338,3 +340,58 @@ def test_fixed_angle_duration_map_uses_the_bounds_in_that_direction(tmp_path):
     assert static.get_ydata()[0] == pytest.approx(static_tipping_force_3d(ST, 90.0), rel=1e-12)
     assert "toward 90 deg" in fig.axes[0].get_title()
     plt.close(fig)
+
+
+SIDE = """description = "side push, both controllers"
+scenario = "paper_five_pushes_3d"
+stop_time = 4.0
+[push]
+t = 1.0
+duration = 1.0
+rise = 0.3
+angle = 90
+[[variant]]
+name = "sagittal"
+[[variant]]
+name = "3d"
+controller_model = "3d"
+"""
+
+
+def test_controller_model_variant_runs_the_3d_controller(tmp_path):
+    """Establishes: a variant's `controller_model = "3d"` runs AnkleHipController3D on the base
+    scenario (docs/controller.md section 11.5: a 1 s side push of 16.5 N fells the robot under the
+    sagittal controller, whose roll servos hold it to 15 N, and the 3D controller's lateral lean
+    stands it), in the same sweep as the scenario's own controller; the rows carry the frontal
+    outputs' effect (the lateral ZMP stays inside the sole edge)."""
+    p = _write(tmp_path, SIDE + '[grid]\n"push.force" = [16.5]\n')
+    res = sweep(str(p), workers=1, engine="native", progress=False)
+    rows = {r["variant"]: r for r in res.rows}
+    assert rows["sagittal"]["outcome"] == "fell" and rows["3d"]["outcome"] == "completed", rows
+    assert abs(rows["3d"]["peak_zmp_y"]) < 0.0715
+
+
+@pytest.mark.parametrize("variant,match", [
+    ('controller_model = "4d"', r"variant 3d: unknown controller model '4d'"),
+    ('controller_model = "3d"\ncontroller = { Ka_y = -1 }', r"AnkleHipController3D.fmu: parameter 'Ka_y' = -1 is outside.*variant 3d"),
+])
+def test_controller_model_variant_checked_before_running(tmp_path, capsys, variant, match):
+    p = _write(tmp_path, SIDE.replace('controller_model = "3d"', variant) + '[grid]\n"push.force" = [5]\n')
+    assert main(["sweep", str(p), "--workers", "1", "--out", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err
+    assert re.search(match, err) and "s.toml" in err, err
+    assert not (tmp_path / "out" / "points.jsonl").exists()
+
+
+def test_controller_model_variant_needs_the_3d_plant(tmp_path, capsys):
+    p = _write(tmp_path, BASE.replace('name = "default"', 'name = "frontal"\ncontroller_model = "3d"')
+               + '[grid]\n"push.force" = [6]\n')
+    assert main(["sweep", str(p), "--workers", "1", "--out", str(tmp_path / "out")]) == 2
+    assert re.search(r"s\.toml: variant frontal: the 3D controller needs the 3D plant", capsys.readouterr().err)
+
+
+def test_cli_variant_spec_takes_a_controller_model():
+    from anklehip.running.sweep import parse_variant
+    v = parse_variant("frontal:controller_model=3d,controller.Ka_y=100")
+    assert (v.name, v.controller_model, v.controller) == ("frontal", "3d", {"Ka_y": 100.0})
+    assert parse_variant("x").digest() == parse_variant("x").digest() != v.digest()

@@ -17,7 +17,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["fig4", "fig5", "overview", "frontal", "comparison", "failed_signals", "sweep", "capability",
+__all__ = ["fig4", "fig5", "overview", "frontal", "frontal_cycle", "comparison", "failed_signals", "sweep", "capability",
            "rt_histogram", "save"]
 
 
@@ -80,6 +80,20 @@ def frontal(result: Any, *, title: str | None = None):
     from . import plots
     return _detached(plots.frontal_figure(
         _signals(result), _title(result, "frontal plane and feet") if title is None else title))
+
+
+def frontal_cycle(result: Any, *, window: tuple[float, float] | None = None, edge: float | None = None,
+                  title: str | None = None):
+    """A run of the 3D controller: the frontal plane's Fig. 5 around the first side push (or
+    `window` [s]) -- lateral phases, the frontal and the legs' roll references, p_y, r_y measured
+    and the controller's, r_y^d, the outer sole edges at ±`edge` [m] (default: the robot header's
+    ankle_y + sole_width/2), the sideways push."""
+    from . import frontal_cycle as fc
+    if edge is None:
+        edge = fc.plant_support_edge()
+    return _detached(fc.frontal_cycle_figure(
+        _signals(result), window=window, edge=edge,
+        title=_title(result, "first side push (frontal plane, cf. paper Fig. 5)") if title is None else title))
 
 
 def comparison(report: Any, signals: list[str] | None = None):

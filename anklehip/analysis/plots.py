@@ -118,14 +118,21 @@ def _data_top(ax, default: float) -> float:
     return min(hi, max(tops) + 0.03 * (hi - lo))
 
 
+def _phase_axes(d: np.ndarray, t: np.ndarray, n: int, figsize, height_ratios, phase: str = "phase"):
+    """n stacked axes sharing time, the phases of the column `phase` shaded on each (one phase
+    legend below the panels)."""
+    fig, ax = plt.subplots(n, 1, figsize=figsize, sharex=True, gridspec_kw={"height_ratios": height_ratios})
+    for i, x in enumerate(ax):
+        if _has(d, phase):
+            shade_phases(x, t, d[phase], legend=i == 0)
+        x.grid(alpha=0.3)
+    return fig, ax
+
+
 def _phase_axes_with_angles(d: np.ndarray, t: np.ndarray, figsize, height_ratios):
     """Four stacked axes sharing time, the phases shaded on each (one phase legend below the
     panels), the joint angles in the first."""
-    fig, ax = plt.subplots(4, 1, figsize=figsize, sharex=True, gridspec_kw={"height_ratios": height_ratios})
-    for i, x in enumerate(ax):
-        if _has(d, "phase"):
-            shade_phases(x, t, d["phase"], legend=i == 0)
-        x.grid(alpha=0.3)
+    fig, ax = _phase_axes(d, t, 4, figsize, height_ratios)
     ax[0].plot(t, np.degrees(d["theta_ankle"]), color="tab:blue", label="ankle θ1")
     ax[0].plot(t, np.degrees(d["theta_hip"]), color="tab:red", label="hip θ2")
     return fig, ax
@@ -166,17 +173,19 @@ def fig4(d: np.ndarray, out: Path, title: str = "") -> Path:
     return _save(fig4_figure(d, title), out)
 
 
-def first_cycle_window(d: np.ndarray, pad_before: float = 0.5, pad_after: float = 1.5) -> tuple[float, float]:
-    """From just before the first push until the controller is back in phase 0 (plus a margin)."""
+def first_cycle_window(d: np.ndarray, pad_before: float = 0.5, pad_after: float = 1.5,
+                       force: str = "push_force", phase: str = "phase") -> tuple[float, float]:
+    """From just before the first push (column `force`) until the controller is back in phase 0
+    (column `phase`; 2 s after the push when it never left it), plus a margin."""
     t = d["time"]
-    f = d["push_force"] if _has(d, "push_force") else np.zeros(len(t))
+    f = d[force] if _has(d, force) else np.zeros(len(t))
     nz = np.flatnonzero(f != 0)
     if not len(nz):
         return float(t[0]), float(t[-1])
     a = float(t[nz[0]])
     end = None
-    if _has(d, "phase"):
-        ph = d["phase"]
+    if _has(d, phase):
+        ph = d[phase]
         left = np.flatnonzero((ph != 0) & (t >= a))
         if len(left):
             back = np.flatnonzero((ph == 0) & (t > t[left[0]]))
@@ -329,6 +338,8 @@ class Geometry:
     push_height: float = 0.335   # above the sole
     hip_half_width: float = 0.039   # frontal view (3D plant): ankle and hip axes from the middle
     sole_width: float = 0.065
+    thigh: float | None = None      # hip -> knee, knee -> ankle [m] (frontal view); None: l1 / 2 each
+    shank: float | None = None
 
     _names = {
         "l1": ("l1",),
@@ -337,6 +348,8 @@ class Geometry:
         "heel": ("foot_heel", "heel_x", "x_heel", "l_heel", "heel"),
         "ankle_height": ("ankle_height", "h_ankle", "foot_height", "ankle_z"),
         "push_height": ("push_height", "h_push", "push_z"),
+        "thigh": ("thigh", "thigh_length"),
+        "shank": ("shank", "shank_length"),
     }
 
     @classmethod
@@ -397,13 +410,49 @@ class _PaletteMapper:
 ANIMATION_DPI = 80      # 4.2 x 5 in -> 336 x 400 pixels (two views: 640 x 400)
 
 
+def _rx(a: float) -> np.ndarray:
+    c, s_ = math.cos(a), math.sin(a)
+    return np.array([[1.0, 0.0, 0.0], [0.0, c, -s_], [0.0, s_, c]])
+
+
+def _ry(a: float) -> np.ndarray:
+    c, s_ = math.cos(a), math.sin(a)
+    return np.array([[c, 0.0, s_], [0.0, 1.0, 0.0], [-s_, 0.0, c]])
+
+
+def _rz(a: float) -> np.ndarray:
+    c, s_ = math.cos(a), math.sin(a)
+    return np.array([[c, -s_, 0.0], [s_, c, 0.0], [0.0, 0.0, 1.0]])
+
+
+LEG_JOINTS = ("hip_yaw", "hip", "hip_roll", "knee", "ankle", "ankle_roll")   # Hoap2Plant3D's q_<side>_<joint>
+
+
+def leg_chain(q: dict[str, float], foot_roll: float, thigh: float, shank: float):
+    """One leg of the 3D plant from its foot up (controller_c/include/ahc/leg_ik.h's chain: trunk ->
+    thigh Rz(yaw) Ry(-hip) Rx(hip_roll), thigh -> shank Ry(knee), shank -> foot Ry(-ankle)
+    Rx(ankle_roll)), the foot rolled by foot_roll about +x: the knee and the hip relative to the
+    ankle, and the trunk's orientation, in world axes. Missing joints count as 0."""
+    g = {j: float(q.get(j, 0.0)) for j in LEG_JOINTS}
+    R_shank = _rx(foot_roll) @ _rx(-g["ankle_roll"]) @ _ry(g["ankle"])
+    R_thigh = R_shank @ _ry(-g["knee"])
+    R_trunk = R_thigh @ _rx(-g["hip_roll"]) @ _ry(g["hip"]) @ _rz(-g["hip_yaw"])
+    knee = R_shank @ np.array([0.0, 0.0, shank])
+    return knee, knee + R_thigh @ np.array([0.0, 0.0, thigh]), R_trunk
+
+
 def _frontal_pose(d: np.ndarray, k: int, g: Geometry, y0: float) -> dict:
     """Frontal (y-z) stick figure of the 3D plant at row k: both soles rolled by foot_roll about the
-    outer edge they stand on, each leg at foot roll - ankle roll, the trunk at the IMU's roll."""
+    outer edge they stand on; each leg from its own joint angles q_<side>_<joint> (leg_chain: the
+    ankle roll, the knee and the hip roll, so that the parallelogram of the lateral ankle strategy and
+    the pelvis tilt of the lateral hip strategy show), the pelvis between the two hips, the trunk at
+    the IMU's roll."""
     names = d.dtype.names
     phi = float(d["foot_roll"][k])                       # + = left edge up (rotation about +x)
     yc = float(d["feet_y"][k]) - y0 if "feet_y" in names else 0.0
     w, hw = 0.5 * g.sole_width, g.hip_half_width
+    thigh = g.thigh if g.thigh is not None else 0.5 * g.l1
+    shank = g.shank if g.shank is not None else 0.5 * g.l1
     ya = {"left": yc + hw, "right": yc - hw}
     pivot = ya["right"] - w if phi > 1e-6 else (ya["left"] + w if phi < -1e-6 else yc)
     c, s_ = math.cos(phi), math.sin(phi)
@@ -415,10 +464,11 @@ def _frontal_pose(d: np.ndarray, k: int, g: Geometry, y0: float) -> dict:
     for side in ("left", "right"):
         edge_a, edge_b = turn(ya[side] - w, 0.0), turn(ya[side] + w, 0.0)
         ank = turn(ya[side], g.ankle_height)
-        q_ar = float(d[f"q_{side}_ankle_roll"][k]) if f"q_{side}_ankle_roll" in names else 0.0
-        psi = phi - q_ar                                 # the leg's roll (leg relative to foot = -q)
-        hip = (ank[0] - g.l1 * math.sin(psi), ank[1] + g.l1 * math.cos(psi))
-        pose[side] = (edge_a, edge_b, ank, hip)
+        q = {j: d[f"q_{side}_{j}"][k] for j in LEG_JOINTS if f"q_{side}_{j}" in names}
+        kn, hp, _ = leg_chain(q, phi, thigh, shank)
+        knee = (ank[0] + kn[1], ank[1] + kn[2])
+        hip = (ank[0] + hp[1], ank[1] + hp[2])
+        pose[side] = (edge_a, edge_b, ank, hip, knee)
     mid = tuple(0.5 * (a + b) for a, b in zip(pose["left"][3], pose["right"][3]))
     roll = float(d["imu_roll"][k]) if "imu_roll" in names else phi
     top = (mid[0] - g.trunk * math.sin(roll), mid[1] + g.trunk * math.cos(roll))
@@ -522,9 +572,9 @@ def animate(d: np.ndarray, out: Path, geom: Geometry | None = None, fps: float =
     def update_frontal(k):
         p = _frontal_pose(d, k, g, y0)
         for i, side in enumerate(("left", "right")):
-            ea, eb, ank, hip = p[side]
+            ea, eb, ank, hip, knee = p[side]
             f_soles[i].set_data([ea[0], eb[0]], [ea[1], eb[1]])
-            f_legs[i].set_data([ank[0], hip[0]], [ank[1], hip[1]])
+            f_legs[i].set_data([ank[0], knee[0], hip[0]], [ank[1], knee[1], hip[1]])
         f_pelvis.set_data([p["left"][3][0], p["right"][3][0]], [p["left"][3][1], p["right"][3][1]])
         mid, top, roll = p["trunk"]
         f_trunk.set_data([mid[0], top[0]], [mid[1], top[1]])
@@ -562,6 +612,8 @@ def animate(d: np.ndarray, out: Path, geom: Geometry | None = None, fps: float =
         arrow.set_visible(abs(f) > 1e-9)
         ph = int(d["phase"][k]) if "phase" in names else -1
         extra = f"\npush y {float(d['push_force_y'][k]):+4.1f} N" if frontal and "push_force_y" in names else ""
+        if "phase_y" in names:          # the 3D controller's lateral phase
+            extra += f"\nlateral {PHASE_LABELS.get(int(d['phase_y'][k]), '?')}"
         txt.set_text(f"t = {t[k]:6.2f} s\nphase {PHASE_LABELS.get(ph, '?')}\npush {f:+6.1f} N{extra}")
         if frontal:
             update_frontal(k)

@@ -179,17 +179,20 @@ def cmd_plot(a) -> int:
     csv = Path(a.csv)
     name = csv.name.removesuffix(".csv").removesuffix(".incomplete")
     out = Path(a.out) if a.out else csv.parent
-    params = None
-    if a.animate:
+    params = header = None
+    frontal = "phase_y" in data.dtype.names     # the 3D controller's result: its plant is the 3D one
+    if a.animate or frontal:
         try:
-            from ..files.paths import PLANT_FMU, find_fmu
+            from ..analysis.bounds import plant_header
+            from ..files.paths import PLANT_FMU, PLANT_FMUS, find_fmu
             from ..running.fmu import FMUInfo
-            params = FMUInfo.load(find_fmu(PLANT_FMU, a.fmu_dir)).start_values()
+            info = FMUInfo.load(find_fmu(PLANT_FMUS["3d"] if frontal else PLANT_FMU, a.fmu_dir))
+            params, header = info.start_values(), plant_header(info.unzipdir)   # the header: the stance width
         except Exception:
-            params = None
+            params = header = None
     if all(c in data.dtype.names for c in ("theta_ankle", "theta_hip", "zmp_x", "com_x")):
         try:
-            files = make_figures(name, data, out, animate=a.animate, params=params,
+            files = make_figures(name, data, out, animate=a.animate, params=params, header=header,
                                  anim_args=dict(fps=a.fps, speed=a.speed, t_start=a.anim_start, t_stop=a.anim_stop),
                                  progress=_progress(a))
         except ValueError as e:       # e.g. an animation window outside the result

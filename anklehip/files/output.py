@@ -99,8 +99,8 @@ def result_paths(out_dir: Path, name: str) -> dict[str, Path]:
             "summary": out_dir / f"{name}.summary.json"}
 
 
-FIGURE_SUFFIXES = ("_overview.png", "_fig4_joint_angles.png", "_fig5_first_cycle.png", "_frontal.png", ".gif",
-                   "_reference_failed.png")
+FIGURE_SUFFIXES = ("_overview.png", "_fig4_joint_angles.png", "_fig5_first_cycle.png", "_frontal.png",
+                   "_fig5_frontal.png", ".gif", "_reference_failed.png")
 
 
 def clear_previous(out_dir: Path, name: str, keep: tuple[Path, ...] = ()) -> None:

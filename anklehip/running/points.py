@@ -198,11 +198,13 @@ def dask_client(workers: int, scheduler: str | None):
         with Client(addr, timeout="20s") as client:
             yield client
         return
-    # inherited by the worker processes: SIGINT ignored, Dask's logging at ERROR (a worker whose
-    # task is cancelled at Ctrl-C would log a warning otherwise)
+    # inherited by the worker processes: SIGINT ignored, Dask's logging at CRITICAL (a worker whose
+    # task is cancelled at Ctrl-C logs a warning, and on a loaded machine a worker whose heartbeat
+    # meets the closing scheduler logs an ERROR with a traceback, after every point is done; a
+    # point's own failure reaches this process as its row)
     old = signal.signal(signal.SIGINT, signal.SIG_IGN)
     old_env = os.environ.get("DASK_LOGGING__DISTRIBUTED")
-    os.environ["DASK_LOGGING__DISTRIBUTED"] = "error"
+    os.environ["DASK_LOGGING__DISTRIBUTED"] = "critical"
     try:
         cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None)
     finally:

@@ -266,8 +266,9 @@ class PreparedRun:
         # figures and the step-test case must not lose the summary of a run that has been computed
         if figures or animate:
             try:
+                from ..analysis.bounds import plant_header
                 for p in make_figures(sc.name, res.data, out, res, animate=animate, anim_args=dict(animation or {}),
-                                      figures=figures, progress=progress):
+                                      figures=figures, progress=progress, header=plant_header(self.models.plant.unzipdir)):
                     result.files[p.stem] = p
             except Exception as e:
                 result.warnings.append(f"figures failed: {type(e).__name__}: {e}")
@@ -411,14 +412,17 @@ def zmp_limits(params: dict[str, Any]) -> tuple[float, ...] | None:
 
 def make_figures(sc_name: str, data: np.ndarray, out: Path, res: RunResult | None = None, animate: bool = False,
                  anim_args: dict | None = None, figures: bool = True, params: dict | None = None,
-                 progress: bool | None = None) -> list[Path]:
-    """The standard figures of a result (and the 3D plant's frontal one), the animation if asked;
-    geometry from the run's plant parameters, or `params` for a CSV read back. `progress` as in
+                 progress: bool | None = None, header: dict | None = None) -> list[Path]:
+    """The standard figures of a result (and the 3D plant's frontal one, and for the 3D controller
+    the frontal Fig. 5), the animation if asked; geometry from the run's plant parameters, or
+    `params` for a CSV read back; the support polygon's edges from those and the plant's robot
+    header (`header`: anklehip.analysis.bounds.plant_header). `progress` as in
     master.simulate: on a terminal a bar of the figures, then one of the GIF's frames, and a line per
     file written; nothing with False (`--no-progress`) or when stderr is not a terminal."""
     import time
 
-    from ..analysis import plots
+    from ..analysis import frontal_cycle, plots
+    from ..analysis.bounds import bounds_parameters
     jobs = []
     if figures:
         zl = zmp_limits(res.controller_parameters) if res else None
@@ -430,6 +434,11 @@ def make_figures(sc_name: str, data: np.ndarray, out: Path, res: RunResult | Non
         if plots._has(data, "zmp_y", "com_y", "foot_roll"):   # the 3D plant's results
             jobs.append((f"{sc_name}_frontal.png",
                          lambda p: plots.frontal(data, p, title=f"{sc_name}: frontal plane and feet")))
+        if frontal_cycle.is_frontal(data):                     # the 3D controller's results
+            edge = frontal_cycle.support_edge(bounds_parameters((res.plant_parameters if res else params) or {}, header or {}))
+            jobs.append((f"{sc_name}_fig5_frontal.png",
+                         lambda p: frontal_cycle.frontal_cycle(
+                             data, p, edge=edge, title=f"{sc_name}: first side push (frontal plane, cf. paper Fig. 5)")))
     files = []
     bar = plots.progress_bar(len(jobs), "figures", "fig", progress) if jobs else None
     try:

@@ -14,8 +14,9 @@ from typing import Any
 
 import numpy as np
 
-VARIANTS_HELP = ("NAME or NAME:config=C,controller.P=V,plant.Q=W with C a named controller configuration "
-                 "(e.g. full  ankle_only:controller.hip_strategy_enabled=0  paper:config=paper)")
+VARIANTS_HELP = ("NAME or NAME:config=C,controller_model=M,controller.P=V,plant.Q=W with C a named controller "
+                 "configuration and M the controller FMU (sagittal or 3d; default the scenario's) "
+                 "(e.g. full  ankle_only:controller.hip_strategy_enabled=0  paper:config=paper  frontal:controller_model=3d)")
 
 
 @dataclass
@@ -26,6 +27,41 @@ class Variant:
     controller: dict[str, Any]
     plant: dict[str, Any]
     config: str | None = None     # a named controller configuration (None: the scenario's)
+    controller_model: str | None = None   # a key of paths.CONTROLLER_FMUS (None: the scenario's)
+
+    def as_dict(self) -> dict[str, Any]:
+        """The variant as the points' specs carry it (Variant.from_dict reads it back)."""
+        return {"name": self.name, "controller": self.controller, "plant": self.plant, "config": self.config,
+                "controller_model": self.controller_model}
+
+    @classmethod
+    def from_dict(cls, d: dict[str, Any]) -> "Variant":
+        return cls(d["name"], d["controller"], d["plant"], d["config"], d.get("controller_model"))
+
+    def digest(self) -> str:
+        """A short hash of the variant for point ids (without controller_model when it is the
+        scenario's, so journals written before it existed still resume)."""
+        import hashlib
+        import json
+        key = [self.name, self.controller, self.plant, self.config] + ([self.controller_model] if self.controller_model else [])
+        return hashlib.sha256(json.dumps(key, sort_keys=True).encode()).hexdigest()[:8]
+
+    def apply(self, sc, where: str = "variant"):
+        """The scenario `sc` as this variant runs it (its named configuration and controller model);
+        an InputError naming `where` if the controller model does not fit the scenario's plant."""
+        from ..errors import InputError
+        from ..files.paths import CONTROLLER_FMUS
+        if self.config:
+            sc.controller_config = self.config
+        if self.controller_model:
+            if self.controller_model not in CONTROLLER_FMUS:
+                raise InputError(f"{where}: unknown controller model {self.controller_model!r} "
+                                 f"(known: {', '.join(CONTROLLER_FMUS)})")
+            if self.controller_model == "3d" and sc.plant_model != "3d":
+                raise InputError(f"{where}: the 3D controller needs the 3D plant, and the scenario "
+                                 f"{sc.name} runs plant_model = {sc.plant_model!r}")
+            sc.controller_model = self.controller_model
+        return sc
 
 
 MAX_GRID = 10_000     # grid points: each is a closed-loop run
@@ -57,8 +93,11 @@ def parse_variant(spec: str) -> Variant:
     configs = [s.split("=", 1)[1].strip() for s in items if s.startswith("config=")]
     if len(configs) > 1 or (configs and not configs[0]):
         raise ScenarioError(f"--variant {spec}: give at most one non-empty config=NAME")
-    c, p = parse_set([s for s in items if not s.startswith("config=")])
-    return Variant(name or "default", c, p, configs[0] if configs else None)
+    cms = [s.split("=", 1)[1].strip() for s in items if s.startswith("controller_model=")]
+    if len(cms) > 1 or (cms and not cms[0]):
+        raise ScenarioError(f"--variant {spec}: give at most one non-empty controller_model=MODEL")
+    c, p = parse_set([s for s in items if not s.startswith(("config=", "controller_model="))])
+    return Variant(name or "default", c, p, configs[0] if configs else None, cms[0] if cms else None)
 
 
 @functools.lru_cache(maxsize=4)
@@ -71,9 +110,7 @@ def cached_models(fmu_dir: str | None, plant_model: str, controller_model: str =
 def _one(scenario_path: str, fmu_dir: str | None, peak: float, variant: Variant, engine: str = "fmpy") -> dict[str, Any]:
     from .master import simulate
     from ..files.scenario import load_scenario
-    sc = load_scenario(scenario_path)
-    if variant.config:
-        sc.controller_config = variant.config
+    sc = variant.apply(load_scenario(scenario_path))
     base = sc.push.peak()
     if base == 0:
         raise ValueError(f"{scenario_path}: the scenario has no push to scale")
@@ -93,18 +130,15 @@ def _one(scenario_path: str, fmu_dir: str | None, peak: float, variant: Variant,
             "wall_time": res.wall_time, **({"error": res.message} if res.outcome == "error" else {})}
 
 
-def _variant_hash(v: Variant) -> str:
-    import hashlib
-    import json
-    d = json.dumps([v.name, v.controller, v.plant, v.config], sort_keys=True)
-    return hashlib.sha256(d.encode()).hexdigest()[:8]
-
-
 def sweep_point(spec: dict) -> dict[str, Any]:
     """One point of run_sweep (anklehip.running.points runs it on the workers)."""
-    v = spec["variant"]
-    return _one(spec["scenario"], spec["fmu_dir"], spec["peak_force"],
-                Variant(v["name"], v["controller"], v["plant"], v["config"]), spec["engine"])
+    return _one(spec["scenario"], spec["fmu_dir"], spec["peak_force"], Variant.from_dict(spec["variant"]), spec["engine"])
+
+
+def force_sweep_specs(scenario_path, forces, variants: list[Variant], fmu_dir: str | None, engine: str) -> list[dict]:
+    """The points of a force sweep: every variant at every peak force."""
+    return [{"id": f"{v.name}@{float(f)!r}#{v.digest()}", "scenario": str(scenario_path), "fmu_dir": fmu_dir,
+             "peak_force": float(f), "engine": engine, "variant": v.as_dict()} for v in variants for f in forces]
 
 
 def run_sweep(scenario_path: str, forces: list[float], variants: list[Variant], fmu_dir: str | None = None,
@@ -114,10 +148,7 @@ def run_sweep(scenario_path: str, forces: list[float], variants: list[Variant], 
     scheduler at `scheduler` / $DASK_SCHEDULER_ADDRESS); finished points go to `journal` and a
     rerun with the same `key` skips them. Returns an anklehip.running.points.Outcome."""
     from .points import run_points
-    specs = [{"id": f"{v.name}@{float(f)!r}#{_variant_hash(v)}", "scenario": str(scenario_path), "fmu_dir": fmu_dir,
-              "peak_force": float(f), "engine": engine,
-              "variant": {"name": v.name, "controller": v.controller, "plant": v.plant, "config": v.config}}
-             for v in variants for f in forces]
+    specs = force_sweep_specs(scenario_path, forces, variants, fmu_dir, engine)
     return run_points(sweep_point, specs, workers=workers, scheduler=scheduler, journal=journal, key=key,
                       what=f"sweep of {Path(scenario_path).name}", label="sweep", restart=restart)
 
@@ -156,13 +187,27 @@ def write_points_table(rows: list[dict[str, Any]], out: Path, name: str, complet
     return csv_path, pq_path
 
 
-def sweep_key(scenario_path: Path, models) -> str:
-    """What the rows of a sweep depend on besides the point itself: the scenario file and the FMUs."""
+def sweep_key(scenario_path: Path, *models) -> str:
+    """What the rows of a sweep depend on besides the point itself: the scenario file and the FMUs
+    (of every variant's models)."""
     import hashlib
     h = hashlib.sha256()
-    for p in (scenario_path, models.controller.path, models.plant.path):
+    paths = [scenario_path] + [p for m in models for p in (m.controller.path, m.plant.path)]
+    for p in dict.fromkeys(str(p) for p in paths):
         h.update(Path(p).read_bytes())
     return h.hexdigest()[:16]
+
+
+def variant_models(models, sc, variants: list[Variant], fmu_dir) -> list:
+    """The FMUs each variant runs, in the variants' order (`models`, the scenario's, for those that
+    keep its controller model)."""
+    from .master import Models
+    out = []
+    for v in variants:
+        cm = v.controller_model or sc.controller_model
+        out.append(models if cm == sc.controller_model else
+                   Models.load(fmu_dir, plant_model=sc.plant_model, controller_model=cm))
+    return out
 
 
 def plot_sweep(rows: list[dict[str, Any]], path: Path, title: str = "") -> Path:
@@ -282,7 +327,7 @@ def _check_pushes(models, sc, peaks, where: str) -> None:
 def _force_sweep(scenario, forces, variants, fmu_dir, name):
     from ..files.paths import find_scenario
     from ..files.scenario import Scenario
-    from .master import Models, check_overrides
+    from .master import Models
     from .run import scenario_of
     from ..errors import InputError
     if isinstance(scenario, Scenario):
@@ -297,9 +342,7 @@ def _force_sweep(scenario, forces, variants, fmu_dir, name):
         raise InputError(f"{name['forces']}: finite numbers, got {forces!r}")
     variants = [v if isinstance(v, Variant) else parse_variant(v) for v in (variants or ["default"])]
     models = Models.for_scenario(sc, fmu_dir)
-    for v in variants:    # a bad variant is an error here, not a traceback in every worker
-        models.controller.configuration(v.config or sc.controller_config, f"{name['variants']} {v.name}")
-        check_overrides(models, v.controller, v.plant, f"{name['variants']} {v.name}")
+    _check_variants(models, sc, variants, fmu_dir, name["variants"] + " ")
     if sc.push.peak() == 0:
         raise InputError(f"{path}: the scenario has no push to scale")
     _check_pushes(models, sc, forces, f"{name['forces']}: a peak push of")
@@ -334,10 +377,20 @@ def _sweep_file(name_or_path, fmu_dir):
             pt = point_setup(sf, {"push.force": f, ("push.angle" if angled else "push.direction"): d}, sc)
             check_push_range(models.plant, pt.push, PUSH, f"{where}: push.force {f:g} N")
             check_push_range(models.plant, pt.push_y, PUSH_Y, f"{where}: push.force {f:g} N")
-    for v in sf.variants:
-        models.controller.configuration(v.config or sc.controller_config, f"{where}: variant {v.name}")
-        check_overrides(models, v.controller, v.plant, f"{where}: variant {v.name}")
+    _check_variants(models, sc, sf.variants, fmu_dir, f"{where}: variant ")
     return path, sf, sc, models
+
+
+def _check_variants(models, sc, variants: list[Variant], fmu_dir, where: str) -> None:
+    """Each variant's controller model, named configuration and overrides checked against the FMUs
+    it runs: a bad variant is an error here, not a traceback in every worker."""
+    import copy
+    from .master import check_overrides
+    for v in variants:
+        v.apply(copy.copy(sc), f"{where}{v.name}")
+    for v, m in zip(variants, variant_models(models, sc, variants, fmu_dir)):
+        m.controller.configuration(v.config or sc.controller_config, f"{where}{v.name}")
+        check_overrides(m, v.controller, v.plant, f"{where}{v.name}")
 
 
 def sweep(scenario, *, forces=None, variants=None, workers: int = 2, engine: str | None = None,
@@ -376,17 +429,14 @@ def sweep(scenario, *, forces=None, variants=None, workers: int = 2, engine: str
         path, sf, sc, models = _sweep_file(scenario, fmu_dir)
         from .sweepfile import sweepfile_point
         specs, fn, title = sf.specs(str(fmu_dir) if fmu_dir else None, engine), sweepfile_point, sf.name
-        key = sweep_key(path, models) + sweep_key(sf.scenario, models)
+        vm = variant_models(models, sc, sf.variants, fmu_dir)
+        key = sweep_key(path, *vm) + sweep_key(sf.scenario, *vm)
         stem, journal_name, what = "points", "points.jsonl", f"sweep file {path.name}"
     else:
         path, sc, forces, variants, models = _force_sweep(scenario, forces, variants, fmu_dir, name)
         sf = None
-        fd = str(fmu_dir) if fmu_dir else None
-        specs = [{"id": f"{v.name}@{float(f)!r}#{_variant_hash(v)}", "scenario": str(path), "fmu_dir": fd,
-                  "peak_force": float(f), "engine": engine,
-                  "variant": {"name": v.name, "controller": v.controller, "plant": v.plant, "config": v.config}}
-                 for v in variants for f in forces]
-        fn, title, key = sweep_point, sc.name, sweep_key(path, models)
+        specs = force_sweep_specs(path, forces, variants, str(fmu_dir) if fmu_dir else None, engine)
+        fn, title, key = sweep_point, sc.name, sweep_key(path, *variant_models(models, sc, variants, fmu_dir))
         stem, journal_name, what = "sweep", "sweep.points.jsonl", f"sweep of {path.name}"
     result = SweepResult(name=title, rows=[], total=len(specs), sweep_file=sf, scenario=sc,
                          plant_parameters=bounds_parameters_of(models, sc, sf.variants[0] if sf is not None else None))

@@ -20,6 +20,7 @@ options. Each point is one closed-loop run of the base scenario with that push a
     name = "ankle_only"
     controller = { hip_strategy_enabled = 0 }
     config = "paper"                      # optional: a named controller configuration
+    controller_model = "3d"               # optional: the controller FMU (default: the scenario's)
     [grid]                                # every combination ...
     "push.force" = "2:20:1"               # start:stop:step, a,b,c or a list of numbers
     "push.duration" = [0.1, 0.5, 1.0]
@@ -36,8 +37,6 @@ FMUs); faults.<key> (docs/scenarios.md, "Fault injection").
 """
 from __future__ import annotations
 
-import hashlib
-import json
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -85,13 +84,11 @@ class SweepFile:
     def specs(self, fmu_dir: str | None, engine: str) -> list[dict[str, Any]]:
         out = []
         for v in self.variants:
-            vh = hashlib.sha256(json.dumps([v.name, v.controller, v.plant, v.config], sort_keys=True)
-                                .encode()).hexdigest()[:8]
+            vh = v.digest()
             for vals in self.values():
                 pid = v.name + "|" + ",".join(f"{k}={x!r}" for k, x in vals.items()) + f"#{vh}"
                 out.append({"id": pid, "sweep": str(self.path), "fmu_dir": fmu_dir, "engine": engine,
-                            "variant": {"name": v.name, "controller": v.controller, "plant": v.plant,
-                                        "config": v.config}, "values": vals})
+                            "variant": v.as_dict(), "values": vals})
         return out
 
 
@@ -128,13 +125,15 @@ def load_sweep_file(path: str | Path) -> SweepFile:
         sf.variants = []
         for i, it in enumerate(v.list_(data["variant"], "variant")):
             it = v.table(it, f"variant[{i}]")
-            v.keys(it, {"name", "controller", "plant", "config"}, f"variant[{i}].", {"name"})
+            v.keys(it, {"name", "controller", "plant", "config", "controller_model"}, f"variant[{i}].", {"name"})
             name = v.str_(it["name"], f"variant[{i}].name")
             if name in {x.name for x in sf.variants}:
                 v.fail(f"variant[{i}].name", f"{name!r} is used twice")
             sf.variants.append(Variant(name, dict(v.table(it.get("controller", {}), f"variant[{i}].controller")),
                                        dict(v.table(it.get("plant", {}), f"variant[{i}].plant")),
-                                       v.str_(it["config"], f"variant[{i}].config") if "config" in it else None))
+                                       v.str_(it["config"], f"variant[{i}].config") if "config" in it else None,
+                                       v.str_(it["controller_model"], f"variant[{i}].controller_model")
+                                       if "controller_model" in it else None))
     if ("grid" in data) == ("random" in data):
         v.fail("grid", "give exactly one of [grid] (every combination) or [random] (seeded samples)")
     if "grid" in data:
@@ -278,8 +277,7 @@ def sweepfile_point(spec: dict) -> dict[str, Any]:
     sc = load_scenario(sf.scenario)
     vals = spec["values"]
     var = spec["variant"]
-    if var["config"]:
-        sc.controller_config = var["config"]
+    Variant.from_dict(var).apply(sc)
     pt = point_setup(sf, vals, sc)
     c, p, f = pt.controller, pt.plant, pt.faults
     sc.push_y = pt.push_y        # the swept push replaces the scenario's pushes, sideways ones too

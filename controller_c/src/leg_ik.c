@@ -144,8 +144,10 @@ int ahc_legs_from_planes(const ahc_leg_geometry *g, double th1, double th2, doub
     ho[1] = hp[1] + across[1] - side * 2.0 * g->ankle_y;
     ho[2] = hp[2] + across[2];
     out = ahc_leg_ik(g, hp, R, q[pivot]);
-    if (phi == 0.0 && psi == 0.0 && g->hip_y == g->ankle_y) {
-        /* both legs at the same pose relative to their ankles (ho = hp exactly): one leg's angles */
+    if (psi == 0.0 && g->hip_y == g->ankle_y) {
+        /* the parallelogram (pelvis level, hips as far apart as the ankles): both legs at the same
+         * pose relative to their ankles (ho = hp, up to the rounding of adding and taking away
+         * 2 b = 2 a): one leg's angles, and half the work */
         memcpy(q[other], q[pivot], sizeof q[pivot]);
         return 2 * out;
     }

@@ -20,6 +20,16 @@ using namespace fmuglue;
 
 namespace {
 
+// configurations.toml's frontal rows of a named configuration (ahc_frontal_params_named)
+std::string frontalRows(const char* config) {
+  ahc_frontal_params def, f;
+  ahc_frontal_params_default(&def);
+  ahc_frontal_params_named(&f, config);
+  size_t count = 0;
+  const ahc_param_info* table = ahc_frontal_param_table(&count);
+  return ahcfmu::differingRows(table, count, &f, &def);
+}
+
 namespace vr {
 enum : fmi2ValueReference {
   // the sagittal FMU's
@@ -155,8 +165,7 @@ ModelInfo makeInfo() {
   table = ahc_frontal_param_table(&count);
   ahcfmu::addParamVariables(m, table, count, vr::first_frontal_param, &fdef, isTunable);
   // the named configurations of both planes
-  m.resources.emplace_back("configurations.toml",
-                           ahcfmu::configurationsToml("AnkleHipController3D", ahcfmu::frontalConfigRows));
+  m.resources.emplace_back("configurations.toml", ahcfmu::configurationsToml("AnkleHipController3D", frontalRows));
   return m;
 }
 

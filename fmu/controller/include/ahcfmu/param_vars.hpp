@@ -11,7 +11,6 @@
 #include <string>
 
 #include "ahc/controller.h"
-#include "ahc/frontal.h"
 #include "fmuglue/glue.hpp"
 
 namespace ahcfmu {
@@ -90,23 +89,11 @@ inline std::string differingRows(const ahc_param_info* table, size_t count, cons
   return s;
 }
 
-// The frontal plane's rows of named configuration `name` (ahc_frontal_params_named), for
-// configurationsToml. A function of its own: only AnkleHipController3D uses it, so the sagittal
-// FMU's binary (and its source FMU, which has no frontal.c) references no frontal symbol.
-inline std::string frontalConfigRows(const char* name) {
-  ahc_frontal_params fdef, f;
-  ahc_frontal_params_default(&fdef);
-  ahc_frontal_params_named(&f, name);
-  size_t count = 0;
-  const ahc_param_info* table = ahc_frontal_param_table(&count);
-  return differingRows(table, count, &f, &fdef);
-}
-
-// resources/configurations.toml: every named configuration of the C library (ahc_params_named,
-// and the rows `more` adds, e.g. frontalConfigRows) with the parameter values that differ from
-// the defaults, for importers that select a configuration by name (anklehip: `controller_config =
-// "paper"`). Generated, never edited.
-inline std::string configurationsToml(const char* model, std::string (*more)(const char* name) = nullptr) {
+// resources/configurations.toml: every named configuration of the C library (ahc_params_named)
+// with the parameter values that differ from the defaults, for importers that select a
+// configuration by name (anklehip: `controller_config = "paper"`); `more_rows`, when given, adds an
+// FMU's own rows per configuration name (the 3D controller's frontal ones). Generated, never edited.
+inline std::string configurationsToml(const char* model, std::string (*more_rows)(const char* config) = nullptr) {
   ahc_params def;
   ahc_params_default(&def);
   size_t count = 0;
@@ -119,7 +106,7 @@ inline std::string configurationsToml(const char* model, std::string (*more)(con
     ahc_params_named(&p, ahc_config_name(c));
     s += std::string("\n[") + ahc_config_name(c) + "]\ndescription = \"" + ahc_config_description(c) + "\"\n";
     s += differingRows(table, count, &p, &def);
-    if (more) s += more(ahc_config_name(c));
+    if (more_rows) s += more_rows(ahc_config_name(c));
   }
   return s;
 }
