@@ -7,7 +7,7 @@
 The wheel holds the package and, as package data (anklehip/data/, found by anklehip.files.paths
 when there is no checkout), what the native build made and the repository's data:
 
-    fmus/       the three FMUs exactly as they ship (binaries/linux64 built against glibc 2.17, binaries/win64)
+    fmus/       the FMUs exactly as they ship (anklehip.files.paths.SHIPPED) (binaries/linux64 built against glibc 2.17, binaries/win64)
     lib/        libanklehip_closed_loop.so, the native closed-loop engine of the glibc-2.17 sub-build
     scenarios/  the scenarios with their references and sweep files
     steptests/  the recorded step-test cases
@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import os
 import shutil
+import sys
 import zipfile
 from pathlib import Path
 
@@ -34,7 +35,8 @@ except ImportError:            # setuptools < 70.1
     from wheel.bdist_wheel import bdist_wheel
 
 ROOT = Path(__file__).resolve().parent
-FMUS = ("AnkleHipController", "Hoap2Plant", "Hoap2Plant3D")
+sys.path.insert(0, str(ROOT))
+from anklehip.files.paths import SHIPPED as FMUS  # noqa: E402  (the package's one list; importing it is cheap)
 PLATFORMS = ("linux64", "win64")
 NATIVE = "libanklehip_closed_loop.so"
 PLATFORM_TAG = "manylinux_2_17_x86_64.manylinux2014_x86_64"

@@ -5,8 +5,10 @@
 #   1. the whole CTest suite built with AddressSanitizer + UndefinedBehaviorSanitizer;
 #   2. each shipped FMU's libFuzzer harness for ANKLEHIP_FUZZ_SECONDS (default 60) from the
 #      committed seed corpus (fmu/fuzz/corpus), leaks and slow inputs (> 10 s) included;
-#   3. one closed-loop scenario from Python through both sanitized FMUs (ASan runtime preloaded);
-#   4. a Valgrind memcheck of a closed-loop run through the shipped FMUs.
+#   3. closed-loop scenarios from Python through the sanitized FMUs (ASan runtime preloaded): the
+#      sagittal loop (hip_saves_push) and the 3D one (side_push_frontal: AnkleHipController3D on
+#      Hoap2Plant3D), so every shipped FMU runs sanitized;
+#   4. a Valgrind memcheck of the same two closed loops through the shipped FMUs.
 # Usage: bash scripts/reliability.sh            (after bash scripts/setup.sh --sanitize)
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -28,22 +30,25 @@ echo "== 2/4 FMI fuzzing, ${seconds} s per FMU"
 # the corpus under build/sanitize/fuzz grows across runs on this machine; the seeds are the committed ones
 bash scripts/fuzz.sh "$seconds" "$sbuild/fuzz"
 
-echo "== 3/4 closed loop through the sanitized FMUs from Python"
+echo "== 3/4 closed loops through the sanitized FMUs from Python"
 out="$(mktemp -d)"
 trap 'rm -rf "$out"' EXIT
 # The interpreter's own allocations at exit are not ours: leak checking is the fuzzers' and
 # Valgrind's job here; every other report aborts the run.
-if ! ANKLEHIP_FMU_DIR="$root/$sbuild/fmus" LD_PRELOAD="$asan_rt" ASAN_OPTIONS="abort_on_error=1:detect_leaks=0" \
-    .venv/bin/anklehip run hip_saves_push --out "$out/run" --no-progress >"$out/log" 2>&1; then
-  tail -n 60 "$out/log"
-  echo "reliability: the sanitized closed loop failed" >&2
-  exit 1
-fi
-if grep -Eq 'AddressSanitizer|runtime error|LeakSanitizer' "$out/log"; then
-  cat "$out/log"; echo "reliability: sanitizer report in the closed loop" >&2; exit 1
-fi
-echo "   hip_saves_push: $(grep -Eo 'scenario hip_saves_push: [^(]*' "$out/log" | head -n1)"
+for scenario in hip_saves_push side_push_frontal; do
+  if ! ANKLEHIP_FMU_DIR="$root/$sbuild/fmus" LD_PRELOAD="$asan_rt" ASAN_OPTIONS="abort_on_error=1:detect_leaks=0" \
+      .venv/bin/anklehip run "$scenario" --out "$out/$scenario" --no-progress >"$out/$scenario.log" 2>&1; then
+    tail -n 60 "$out/$scenario.log"
+    echo "reliability: the sanitized closed loop $scenario failed" >&2
+    exit 1
+  fi
+  if grep -Eq 'AddressSanitizer|runtime error|LeakSanitizer' "$out/$scenario.log"; then
+    cat "$out/$scenario.log"; echo "reliability: sanitizer report in the closed loop $scenario" >&2; exit 1
+  fi
+  echo "   $scenario: $(grep -Eo "scenario $scenario: [^(]*" "$out/$scenario.log" | head -n1)"
+done
 
-echo "== 4/4 Valgrind memcheck of a closed loop"
+echo "== 4/4 Valgrind memcheck of the closed loops"
 .venv/bin/python scripts/valgrind_closed_loop.py hip_saves_push --stop-time 1.5
+.venv/bin/python scripts/valgrind_closed_loop.py side_push_frontal --stop-time 1.5
 echo "reliability: all checks passed"

@@ -23,15 +23,10 @@ from collections import defaultdict
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+from anklehip.files.paths import SHIPPED  # noqa: E402  (every FMU the project ships)
 
-
-def fmu_binaries() -> tuple[str, ...]:
-    """Every FMU binary this build ships (so a new FMU joins the check by being built)."""
-    d = Path(os.environ.get("ANKLEHIP_FMU_DIR", ROOT / os.environ.get("ANKLEHIP_BUILD_DIR", "build") / "fmus"))
-    return tuple(sorted(f"{p.stem}.so" for p in d.glob("*.fmu")))
-
-
-FMU_BINARIES = fmu_binaries()
+FMU_BINARIES = tuple(f"{name}.so" for name in SHIPPED)
 
 
 def ours(error: ET.Element) -> str | None:

@@ -14,6 +14,8 @@ from pathlib import Path
 
 import pytest
 
+from anklehip.files.paths import SHIPPED  # noqa: F401  (the FMUs every FMI check covers; re-exported)
+
 REPO_ROOT = Path(__file__).resolve().parent.parent
 
 
@@ -288,6 +290,52 @@ def sensor_signals(times, peak=9.0):
     rows["theta_hip"] = 0.0
     rows["zmp_x"] = f * h / (m * g) + NOMINAL["FEET_COM_X"] * NOMINAL["FEET_MASS"] / m  # + the feet's offset
     rows["fz"] = m * g
+    return rows
+
+
+LEG_SIDES = ("left", "right")
+LEG_JOINTS = ("hip_yaw", "hip", "hip_roll", "knee", "ankle", "ankle_roll")   # Hoap2Plant3D's q_<side>_<joint>
+
+
+def sensor_signals_3d(times, peak=9.0, peak_y=8.0):
+    """Sensor signals for AnkleHipController3D: sensor_signals' sagittal push plus a push of
+    `peak_y` N toward +y through the same quasi-static model (ZMP_y shifted by F h / (m g), the
+    soles' loads shared by the moment balance about the ankles' mid-point, both legs leaning by
+    phi = F h / Ka_y: ankle rolls +phi, hip rolls -phi), the pitch joints at the sagittal angles.
+    Adds zmp_y, fz_left, fz_right and every q_<side>_<joint> to sensor_signals' columns."""
+    import numpy as np
+
+    m, g, h, ka_y = NOMINAL_MASS, NOMINAL["G"], 0.335, 250.0
+    base = sensor_signals(times, peak=peak)
+    fy = push_force(base["time"], peak=peak_y, t_on=0.5)
+    q = [f"q_{s}_{j}" for s in LEG_SIDES for j in LEG_JOINTS]
+    rows = np.zeros(base.size, dtype=base.dtype.descr + [(n, float) for n in ["zmp_y", "fz_left", "fz_right"] + q])
+    for n in base.dtype.names:
+        rows[n] = base[n]
+    rows["zmp_y"] = fy * h / (m * g)
+    rows["fz_left"] = 0.5 * base["fz"] * (1 + rows["zmp_y"] / NOMINAL["ANKLE_Y"])   # ankles at +-ANKLE_Y
+    rows["fz_right"] = base["fz"] - rows["fz_left"]
+    phi = fy * h / ka_y
+    for s in LEG_SIDES:
+        rows[f"q_{s}_ankle"], rows[f"q_{s}_hip"] = base["theta_ankle"], base["theta_hip"]
+        rows[f"q_{s}_ankle_roll"], rows[f"q_{s}_hip_roll"] = phi, -phi
+    return rows
+
+
+def fmu_inputs(name, times):
+    """The input every importer test gives FMU `name` (tests/test_fmi3.py, test_fmi_sim.py,
+    test_independent_importer.py): the controllers' push through the sensor model, a 4 N push on
+    the plants' back."""
+    import numpy as np
+
+    if name == "AnkleHipController":
+        return sensor_signals(times, peak=9.0)
+    if name == "AnkleHipController3D":
+        return sensor_signals_3d(times, peak=9.0)
+    t = np.asarray(times, dtype=float)
+    rows = np.zeros(t.size, dtype=[("time", float), ("push_force", float)])
+    rows["time"] = t
+    rows["push_force"] = push_force(t, peak=4.0)
     return rows
 
 

@@ -1,4 +1,4 @@
-"""The FMI 3.0 Co-Simulation twins of the three FMUs (issue 28): build/fmus/fmi3/<Name>.fmu, the
+"""The FMI 3.0 Co-Simulation twins of the shipped FMUs (issue 28): build/fmus/fmi3/<Name>.fmu, the
 same model behind the glue's FMI 3.0 API (fmu/common/src/fmi3_api.cpp over the operations it shares
 with the FMI 2.0 API) and a description generated from the same variable table.
 
@@ -26,9 +26,9 @@ import pytest
 from fmpy import read_model_description, simulate_fmu
 from fmpy.validation import validate_fmu
 
-from conftest import REPO_ROOT, push_force, sensor_signals
+from conftest import SHIPPED, fmu_inputs
 
-NAMES = ("AnkleHipController", "Hoap2Plant", "Hoap2Plant3D")
+NAMES = SHIPPED
 FMI3_TYPES = {"Float64": "Real", "Int32": "Integer"}
 
 
@@ -75,16 +75,15 @@ def test_twin_validates_and_declares_the_same_variables(twins, name):
 
 def _inputs(name):
     t = np.arange(2001) * 1e-3
-    if name == "AnkleHipController":
-        return sensor_signals(t, peak=9.0)
+    rows = fmu_inputs(name, t)
+    if name != "Hoap2Plant3D":
+        return rows
     # the 3D plant: a per-leg set point too (its value reference is one of those appended in issue 29)
-    legs = [("q_right_knee_ref", float)] if name == "Hoap2Plant3D" else []
-    rows = np.zeros(len(t), dtype=[("time", float), ("push_force", float)] + legs)
-    rows["time"] = t
-    rows["push_force"] = push_force(t, peak=4.0)
-    if legs:
-        rows["q_right_knee_ref"] = 0.1 * np.sin(np.pi * t)
-    return rows
+    legs = np.zeros(len(t), dtype=rows.dtype.descr + [("q_right_knee_ref", float)])
+    for n in rows.dtype.names:
+        legs[n] = rows[n]
+    legs["q_right_knee_ref"] = 0.1 * np.sin(np.pi * t)
+    return legs
 
 
 @pytest.mark.parametrize("name", NAMES)
@@ -102,17 +101,22 @@ def test_simulate_fmu_on_fmi3_equals_fmi2(twins, name):
         assert np.array_equal(r2[n], r3[n]), n
 
 
-@pytest.mark.parametrize("scenario,plant", [("hip_saves_push", "sagittal"), ("side_push_3d", "3d")])
-def test_closed_loop_on_fmi3_is_bit_identical(fmu_dir, scenario, plant):
+@pytest.mark.parametrize("scenario", ["hip_saves_push", "side_push_3d", "side_push_frontal"])
+def test_closed_loop_on_fmi3_is_bit_identical(fmu_dir, scenario):
     """Our master on the FMI 3.0 twins (FMPy's FMU3Slave, fmi3GetFloat64/Int32/Int64/Boolean,
-    fmi3DoStep) computes every column of the FMI 2.0 loop bit for bit, through a fall too."""
+    fmi3DoStep) computes every column of the FMI 2.0 loop bit for bit, through a fall too: the
+    sagittal loop, the sagittal controller falling on the 3D plant, and the 3D controller
+    (AnkleHipController3D) standing the side push on it."""
     from anklehip.running.master import Models, simulate
     from anklehip.files.paths import find_scenario
     from anklehip.files.scenario import load_scenario
     sc = load_scenario(find_scenario(scenario))
-    runs = {fmi: simulate(sc, Models.load(fmu_dir, plant_model=plant, fmi=fmi), progress=False,
-                          stop_time=min(sc.stop_time, 4.0)) for fmi in (2, 3)}
+    models = {fmi: Models.for_scenario(sc, fmu_dir, fmi=fmi) for fmi in (2, 3)}
+    runs = {fmi: simulate(sc, models[fmi], progress=False, stop_time=min(sc.stop_time, 4.0)) for fmi in (2, 3)}
     a, b = runs[2], runs[3]
+    # the run names every input of its controller (what a replay or a recorded step test feeds it)
+    inputs = tuple(v.name for v in models[2].controller.by_causality("input"))
+    assert a.controller_inputs == b.controller_inputs == inputs
     assert (a.outcome, a.fell_at, a.message) == (b.outcome, b.fell_at, b.message)
     assert a.data.dtype == b.data.dtype and len(a.data) == len(b.data) > 1000
     for n in a.data.dtype.names:
@@ -164,7 +168,7 @@ def _fmu2(p2, tmp_path, name="inst2"):
     return md, fmu
 
 
-@pytest.mark.parametrize("name", ["AnkleHipController", "Hoap2Plant"])
+@pytest.mark.parametrize("name", ["AnkleHipController", "AnkleHipController3D", "Hoap2Plant"])
 def test_states_move_between_fmi_versions(twins, tmp_path, name):
     """A state serialized by the FMI 2.0 FMU is de-serialized by its FMI 3.0 twin (and back) and
     continues bit for bit: one byte format, one model."""
@@ -173,7 +177,7 @@ def test_states_move_between_fmi_versions(twins, tmp_path, name):
     md3, f3 = _fmu3(p3, tmp_path)
     vr = {v.name: v.valueReference for v in md2.modelVariables}
     real_outs = [v.valueReference for v in md2.modelVariables if v.causality == "output" and v.type == "Real"]
-    inp = "theta_ankle" if name == "AnkleHipController" else "push_force"
+    inp = "push_force" if name.startswith("Hoap2Plant") else "zmp_y" if name.endswith("3D") else "theta_ankle"
     f2.instantiate()
     f2.setupExperiment(startTime=0.0)
     f2.enterInitializationMode()

@@ -1,7 +1,8 @@
 """Our FMUs in fmi-sim (issue 28), the Rust FMI importer of the `fmi` crates (crates registry,
-version 0.7.0): a third importer that shares no code with FMPy or libcosim. Each FMI 2.0 FMU runs
-on a CSV input in fmi-sim and in FMPy's simulate_fmu, and the outputs agree to 1e-9 of their scale
-(plus 1e-9 in SI units; the discrete ones equal), as in tests/test_independent_importer.py.
+version 0.7.0): a third importer that shares no code with FMPy or libcosim. Each FMI 2.0 FMU the
+project ships (anklehip.files.paths.SHIPPED) runs on a CSV input (conftest.fmu_inputs) in fmi-sim
+and in FMPy's simulate_fmu, and the outputs agree to 1e-9 of their scale (plus 1e-9 in SI units;
+the discrete ones equal), as in tests/test_independent_importer.py.
 
 The FMI 3.0 twins: fmi-sim 0.7 refuses their descriptions at the first Float64 with a `unit`
 attribute ("unknown field `unit` in element `FmiFloat64`"), although the FMI 3.0 schema allows it
@@ -21,11 +22,10 @@ import numpy as np
 import pytest
 from fmpy import read_model_description, simulate_fmu
 
-from conftest import push_force, sensor_signals, write_csv
+from conftest import SHIPPED, fmu_inputs, write_csv
 
-SHIPPED = ["AnkleHipController", "Hoap2Plant", "Hoap2Plant3D"]
 REQUIRED = os.environ.get("ANKLEHIP_REQUIRE_FMI_SIM") == "1"
-DISCRETE = {"phase", "fault", "fallen", "contact_mode", "input_fault"}
+DISCRETE = {"phase", "fault", "phase_y", "fault_y", "fallen", "contact_mode", "input_fault"}
 COUNTERS = {"cvode_steps", "rhs_evals", "root_evals", "ode_steps", "contacts", "mode_switches", "impacts"}
 
 
@@ -41,15 +41,6 @@ def fmi_sim(build_dir):
     if REQUIRED:
         pytest.fail(f"{why} (ANKLEHIP_REQUIRE_FMI_SIM=1)")
     pytest.skip(why)
-
-
-def _inputs(name, t):
-    if name == "AnkleHipController":
-        return sensor_signals(t, peak=9.0)
-    rows = np.zeros(len(t), dtype=[("time", float), ("push_force", float)])
-    rows["time"] = t
-    rows["push_force"] = push_force(t, peak=4.0)
-    return rows
 
 
 def _read(path) -> dict[str, np.ndarray]:
@@ -71,7 +62,7 @@ def _run(fmi_sim, fmu, csv_in, csv_out):
 def test_fmi_sim_runs_each_fmu_like_fmpy(fmi_sim, fmu_path, tmp_path, name):
     fmu = fmu_path(name)
     t = np.arange(2001) * 1e-3
-    inp = _inputs(name, t)
+    inp = fmu_inputs(name, t)
     csv_in = write_csv(tmp_path / "in.csv", inp)
     p = _run(fmi_sim, fmu, csv_in, tmp_path / "out.csv")
     assert p.returncode == 0, p.stderr[-3000:]
@@ -90,7 +81,7 @@ def test_fmi_sim_runs_each_fmu_like_fmpy(fmi_sim, fmu_path, tmp_path, name):
 
 def test_fmi_sim_refuses_the_fmi3_twins_at_a_unit(fmi_sim, fmu_dir, tmp_path):
     twin = fmu_dir / "fmi3" / "AnkleHipController.fmu"
-    csv_in = write_csv(tmp_path / "in.csv", _inputs("AnkleHipController", np.arange(11) * 1e-3))
+    csv_in = write_csv(tmp_path / "in.csv", fmu_inputs("AnkleHipController", np.arange(11) * 1e-3))
     p = _run(fmi_sim, twin, csv_in, tmp_path / "out.csv")
     assert p.returncode != 0 and 'unknown field "unit"' in p.stdout + p.stderr, (p.returncode, p.stderr[-2000:])
     assert read_model_description(str(twin)).fmiVersion == "3.0"

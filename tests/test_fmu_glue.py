@@ -1,6 +1,8 @@
-"""The FMI 2.0 co-simulation glue (fmu/common), exercised through AnkleHipController.fmu:
-state machine, get/set rules, logging, FMU state snapshots and their serialization, binary
-hygiene, modelDescription.xml. Low-level calls go through ctypes (tests/conftest.py RawModel)."""
+"""The FMI 2.0 co-simulation glue (fmu/common), exercised through each controller FMU
+(AnkleHipController.fmu and AnkleHipController3D.fmu: every test taking `raw_controller` or
+`controller_fmu` runs on both): state machine, get/set rules, logging, FMU state snapshots and
+their serialization, binary hygiene, modelDescription.xml. Low-level calls go through ctypes
+(tests/conftest.py RawModel)."""
 from __future__ import annotations
 
 import ctypes
@@ -13,7 +15,29 @@ import zipfile
 
 import pytest
 
-from conftest import (fmi2Discard, fmi2Error, fmi2OK, fmi2Warning, CONTROLLER_OUTPUTS, REPO_ROOT)
+from conftest import (fmi2Discard, fmi2Error, fmi2OK, fmi2Warning, CONTROLLER_OUTPUTS, REPO_ROOT, SHIPPED, RawModel,
+                      _unzip)
+
+CONTROLLERS = [n for n in SHIPPED if n.startswith("AnkleHipController")]
+# the 3D controller's frontal outputs, read with the sagittal ones where the FMU has them
+FRONTAL_OUTPUTS = ["phi_ref", "psi_ref", "dphi_ref", "dpsi_ref", "com_y", "com_z_frontal", "disturbance_moment_y",
+                   "k_w_y", "com_y_desired", "q_left_hip_roll_ref", "q_right_knee_ref", "q_left_ankle_roll_ref"]
+
+
+# These override conftest's fixtures of the same names in this module: each controller FMU in turn.
+@pytest.fixture(scope="module", params=CONTROLLERS)
+def controller_fmu(request, fmu_path):
+    return fmu_path(request.param)
+
+
+@pytest.fixture(scope="module")
+def controller_unzipped(controller_fmu, tmp_path_factory):
+    return _unzip(controller_fmu, tmp_path_factory)
+
+
+@pytest.fixture(scope="module")
+def raw_controller(controller_unzipped) -> RawModel:
+    return RawModel(controller_unzipped)
 
 fmi2LastSuccessfulTime, fmi2Terminated = 2, 3
 
@@ -108,20 +132,20 @@ def test_state_machine(raw_controller, state, call):
 # table: a fixed parameter is settable only before fmi2ExitInitializationMode, a tunable one also
 # in stepComplete, an input in all three set states, an output never.
 fmi2PendingStatus = 1
-_BLOB: list[bytes] = []
+_BLOB: dict[str, bytes] = {}   # GUID -> blob
 
 
 def _blob(inst):
-    """A serialized state of a running instance of the same FMU (made once)."""
-    if not _BLOB:
+    """A serialized state of a running instance of the same FMU (made once per FMU)."""
+    if inst.md.guid not in _BLOB:
         donor = RawInstanceOf(inst)
         assert donor.fmi2SetupExperiment(0, 0.0, 0.0, 0, 0.0) == fmi2OK
         assert donor.fmi2EnterInitializationMode() == fmi2OK
         assert donor.fmi2ExitInitializationMode() == fmi2OK
         assert donor.fmi2DoStep(0.0, 1e-3, 1) == fmi2OK
-        _BLOB.append(_snapshot_bytes(donor))
+        _BLOB[inst.md.guid] = _snapshot_bytes(donor)
         donor.free()
-    return _BLOB[0]
+    return _BLOB[inst.md.guid]
 
 
 def RawInstanceOf(inst):
@@ -419,16 +443,32 @@ def _step(inst, t, h=1e-3):
     assert inst.fmi2DoStep(t, h, 0) in (fmi2OK, fmi2Warning)
 
 
+def _push(inst, zmp):
+    """The sensors of a push that moves the ZMP to `zmp` [m]: forward, and for the 3D controller
+    sideways too (ZMP y, the soles' loads, the legs' roll), so that its frontal state moves."""
+    inst.set_real({"zmp_x": zmp, "theta_ankle": zmp * 0.3})
+    if "zmp_y" in inst.md.vars:
+        zy = 0.8 * zmp
+        inst.set_real({"zmp_y": zy, "fz_left": 35.0 + 400.0 * zy, "fz_right": 35.0 - 400.0 * zy,
+                       "q_left_ankle_roll": zy, "q_right_ankle_roll": zy, "q_left_hip_roll": -zy,
+                       "q_right_hip_roll": -zy})
+
+
+def _observe(inst):
+    """Every output of the controller (the 3D one's frontal ones too) after a step."""
+    frontal = [n for n in FRONTAL_OUTPUTS if n in inst.md.vars]
+    ints = ["phase", "fault"] + (["phase_y", "fault_y"] if frontal else [])
+    return inst.get_real(CONTROLLER_OUTPUTS[:4] + CONTROLLER_OUTPUTS[5:10] + frontal)[1] + inst.get_integer(ints)[1]
+
+
 def _drive(inst, t0, n, push=True):
     """n steps of 1 ms with a ramping ZMP; returns the outputs after each step."""
     out = []
     for k in range(n):
         t = t0 + k * 1e-3
-        zmp = 0.05 * min(1.0, t / 0.5) if push else 0.0
-        inst.set_real({"zmp_x": zmp, "theta_ankle": zmp * 0.3})
+        _push(inst, 0.05 * min(1.0, t / 0.5) if push else 0.0)
         _step(inst, t)
-        out.append(inst.get_real(CONTROLLER_OUTPUTS[:4] + CONTROLLER_OUTPUTS[5:10])[1] +
-                   inst.get_integer(["phase", "fault"])[1])
+        out.append(_observe(inst))
     return out
 
 
@@ -594,11 +634,9 @@ def test_two_instances_independent(raw_controller):
 
 def _drive_one(inst, k, push):
     t = k * 1e-3
-    zmp = 0.05 * min(1.0, t / 0.5) if push else 0.0
-    inst.set_real({"zmp_x": zmp, "theta_ankle": zmp * 0.3})
+    _push(inst, 0.05 * min(1.0, t / 0.5) if push else 0.0)
     _step(inst, t)
-    return [inst.get_real(CONTROLLER_OUTPUTS[:4] + CONTROLLER_OUTPUTS[5:10])[1] +
-            inst.get_integer(["phase", "fault"])[1]]
+    return [_observe(inst)]
 
 
 def test_reset_gives_fresh_behaviour(raw_controller):
@@ -626,7 +664,7 @@ def test_model_description_contents(controller_fmu):
     with zipfile.ZipFile(controller_fmu) as z:
         names = set(z.namelist())
         root = ET.fromstring(z.read("modelDescription.xml"))
-    assert {"modelDescription.xml", "binaries/linux64/AnkleHipController.so",
+    assert {"modelDescription.xml", f"binaries/linux64/{controller_fmu.stem}.so",
             "documentation/index.html"} <= names
     cs = root.find("CoSimulation").attrib
     for flag in ("canHandleVariableCommunicationStepSize", "canGetAndSetFMUstate", "canSerializeFMUstate"):
@@ -663,11 +701,12 @@ def test_outputs_have_no_direct_feedthrough(raw_controller):
     any output before the next fmi2DoStep."""
     inst = _running(raw_controller)
     _drive(inst, 0.0, 20)
-    before = inst.get_real(CONTROLLER_OUTPUTS[:4] + CONTROLLER_OUTPUTS[5:10])[1]
+    before = _observe(inst)
     assert inst.set_real({"theta_ankle": 0.2, "theta_hip": -0.3, "zmp_x": 0.04, "fz": 50.0}) == fmi2OK
-    assert inst.get_real(CONTROLLER_OUTPUTS[:4] + CONTROLLER_OUTPUTS[5:10])[1] == before
+    _push(inst, 0.04)     # and the 3D controller's frontal inputs
+    assert _observe(inst) == before
     _step(inst, 0.02)
-    assert inst.get_real(CONTROLLER_OUTPUTS[:4] + CONTROLLER_OUTPUTS[5:10])[1] != before
+    assert _observe(inst) != before
     inst.free()
 
 
@@ -678,7 +717,7 @@ def test_guid_is_deterministic(controller_fmu, native_tool, tmp_path):
     variable table alone)."""
     import xml.etree.ElementTree as ET
     from datetime import datetime
-    gen = native_tool("AnkleHipController_gen")
+    gen = native_tool(f"{controller_fmu.stem}_gen")
     with zipfile.ZipFile(controller_fmu) as z:
         shipped = z.read("modelDescription.xml")
     root = ET.fromstring(shipped)
@@ -695,7 +734,7 @@ def test_guid_is_deterministic(controller_fmu, native_tool, tmp_path):
     assert without.get("guid") == root.get("guid")
 
 
-@pytest.mark.parametrize("model", ["AnkleHipController", "Hoap2Plant", "Hoap2Plant3D"])
+@pytest.mark.parametrize("model", SHIPPED)
 def test_model_description_metadata(model, fmu_path):
     """Every unit has its SI base unit (J = kg.m2/s2; a unit the generator does not know fails
     the build); angles, angular rates and accelerations offer degrees and show them by default;
@@ -782,7 +821,7 @@ def test_packed_fmu_alone_in_empty_dir(controller_fmu, tmp_path):
     assert p.returncode == 0 and "ok" in p.stdout, p.stderr
 
 
-@pytest.mark.parametrize("model", ["AnkleHipController", "Hoap2Plant", "Hoap2Plant3D"])
+@pytest.mark.parametrize("model", SHIPPED)
 def test_documentation_links_resolve_inside_the_fmu(model, fmu_path):
     """Every relative Markdown link and image of the pages packed in documentation/ points at a
     file in the FMU (the 3D plant's page carries its figures in documentation/images/); repository

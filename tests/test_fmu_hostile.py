@@ -1,7 +1,7 @@
 """Hostile callers: the defects an independent audit found in the FMI boundary (issue 12), each
 reproduced through the raw C API (ctypes, every status visible) and kept as a regression test.
 
-What this establishes, per FMU the project ships:
+What this establishes, per FMU the project ships (the controller checks on both controllers):
 - a communication step longer than the FMU's largest step is refused at once with fmi2Error and
   changes nothing (the controller used to run 1e8 ticks for h = 1e5 s, and for h >= 1.85e16 s
   overflowed its tick counter and returned fmi2OK having run nothing);
@@ -14,7 +14,7 @@ What this establishes, per FMU the project ships:
 - parameters outside their physical range are refused at set time naming the variable
   (sample_period = 2.2e-310 was accepted);
 - an implausible normal force raises the controller's fault bit and is logged (fz = 1e300 raised
-  nothing);
+  nothing); the 3D controller logs its fault masks' changes too (it logged neither);
 - out-of-range fmi2StatusKind / fmi2Type values are reported errors (undefined behaviour before;
   the UBSan run of this file checks that no enum is loaded);
 - a plant logs a non-finite input once when it goes bad and once when it recovers, and reports
@@ -44,9 +44,23 @@ def raw_plant3d(fmu_path, tmp_path_factory) -> RawModel:
     return RawModel(_unzip(fmu_path("Hoap2Plant3D"), tmp_path_factory))
 
 
-@pytest.fixture(params=["controller", "plant", "plant3d"])
-def raw_any(request, raw_controller, raw_plant, raw_plant3d) -> RawModel:
-    return {"controller": raw_controller, "plant": raw_plant, "plant3d": raw_plant3d}[request.param]
+@pytest.fixture(scope="module")
+def raw_controller3d(fmu_path, tmp_path_factory) -> RawModel:
+    return RawModel(_unzip(fmu_path("AnkleHipController3D"), tmp_path_factory))
+
+
+@pytest.fixture(params=["controller", "controller3d"])
+def raw_ctrl(request, raw_controller, raw_controller3d) -> RawModel:
+    """Each controller FMU: the sagittal one and AnkleHipController3D (the same tick budget, time
+    rule, state handling, parameter checks and fz plausibility)."""
+    return {"controller": raw_controller, "controller3d": raw_controller3d}[request.param]
+
+
+@pytest.fixture(params=["controller", "controller3d", "plant", "plant3d"])
+def raw_any(request, raw_controller, raw_controller3d, raw_plant, raw_plant3d) -> RawModel:
+    """Every FMU the project ships (conftest.SHIPPED)."""
+    return {"controller": raw_controller, "controller3d": raw_controller3d, "plant": raw_plant,
+            "plant3d": raw_plant3d}[request.param]
 
 
 def _real_outputs(raw: RawModel) -> list[str]:
@@ -63,8 +77,8 @@ def _time(inst) -> float:
 # Step size
 
 @pytest.mark.parametrize("h", [1e5, 1.85e16, 1e303])
-def test_controller_refuses_steps_beyond_its_tick_budget(raw_controller, h):
-    inst = _running(raw_controller)
+def test_controller_refuses_steps_beyond_its_tick_budget(raw_ctrl, h):
+    inst = _running(raw_ctrl)
     assert inst.fmi2DoStep(0.0, 1e-3, 0) == fmi2OK
     assert inst.fmi2DoStep(1e-3, h, 0) == fmi2Error
     assert any("longer than this FMU's largest step 1000" in m for m in inst.errors()), inst.log
@@ -73,9 +87,9 @@ def test_controller_refuses_steps_beyond_its_tick_budget(raw_controller, h):
     inst.free()
 
 
-def test_controller_takes_its_largest_step(raw_controller):
+def test_controller_takes_its_largest_step(raw_ctrl):
     """1000 s in one step (1e6 ticks at 1 ms) is still accepted and runs every tick."""
-    inst = _running(raw_controller)
+    inst = _running(raw_ctrl)
     assert inst.fmi2DoStep(0.0, 1000.0, 0) == fmi2OK
     assert _time(inst) == 1000.0
     inst.free()
@@ -91,8 +105,8 @@ def test_plants_refuse_steps_beyond_their_budget(raw_name, hmax, raw_plant, raw_
     inst.free()
 
 
-def test_step_below_time_resolution_refused(raw_controller):
-    inst = raw_controller.instance()
+def test_step_below_time_resolution_refused(raw_ctrl):
+    inst = raw_ctrl.instance()
     assert inst.fmi2SetupExperiment(0, 0.0, 1e17, 0, 0.0) == fmi2OK
     assert inst.fmi2EnterInitializationMode() == fmi2OK
     assert inst.fmi2ExitInitializationMode() == fmi2OK
@@ -155,8 +169,8 @@ def test_forged_states_are_refused_or_harmless(raw_any, count):
     assert accepted < count  # the forgeries exercised the validation
 
 
-def test_state_of_another_instance_or_freed_is_an_error(raw_controller):
-    a, b = _running(raw_controller, name="a"), _running(raw_controller, name="b")
+def test_state_of_another_instance_or_freed_is_an_error(raw_ctrl):
+    a, b = _running(raw_ctrl, name="a"), _running(raw_ctrl, name="b")
     s = ctypes.c_void_p()
     assert a.fmi2GetFMUstate(ctypes.byref(s)) == fmi2OK
     assert b.fmi2SetFMUstate(s) == fmi2Error
@@ -176,8 +190,8 @@ def test_state_of_another_instance_or_freed_is_an_error(raw_controller):
 # ---------------------------------------------------------------------------------------------
 # Parameters, inputs and enums
 
-def test_meaningless_sample_period_refused_at_set_time(raw_controller):
-    inst = raw_controller.instance()
+def test_meaningless_sample_period_refused_at_set_time(raw_ctrl):
+    inst = raw_ctrl.instance()
     assert inst.set_real({"sample_period": 2.2e-310}) == fmi2Error
     assert any('"sample_period" = 2.19' in m and "is outside [1e-05, 0.1]" in m for m in inst.errors()), inst.log
     inst.free()
@@ -195,8 +209,8 @@ def test_every_positive_parameter_has_a_positive_minimum(raw_any):
         inst.free()
 
 
-def test_implausible_fz_raises_and_logs_the_fault(raw_controller):
-    inst = _running(raw_controller)
+def test_implausible_fz_raises_and_logs_the_fault(raw_ctrl):
+    inst = _running(raw_ctrl)
     assert inst.fmi2DoStep(0.0, 1e-3, 0) == fmi2OK
     assert inst.set_real({"fz": 1e300}) == fmi2OK
     assert inst.fmi2DoStep(1e-3, 1e-3, 0) == fmi2OK
@@ -205,6 +219,23 @@ def test_implausible_fz_raises_and_logs_the_fault(raw_controller):
     assert inst.set_real({"fz": 70.0}) == fmi2OK
     assert inst.fmi2DoStep(2e-3, 1e-3, 0) == fmi2OK
     assert inst.get_integer(["fault"])[1] == [0]
+    inst.free()
+
+
+def test_implausible_zmp_y_raises_and_logs_the_frontal_fault(raw_controller3d):
+    """The 3D controller logs a change of its frontal fault mask with the bits' names, as it does
+    the sagittal one (it logged neither before): a lateral ZMP beyond the soles raises
+    zmp_y_outside (0x4), and its return is logged as healthy."""
+    inst = _running(raw_controller3d)
+    assert inst.fmi2DoStep(0.0, 1e-3, 0) == fmi2OK
+    assert inst.set_real({"zmp_y": 0.5}) == fmi2OK
+    assert inst.fmi2DoStep(1e-3, 1e-3, 0) == fmi2OK
+    assert inst.get_integer(["fault_y"])[1] == [0x4]
+    assert any("frontal fault mask 0x4 (zmp_y_outside)" in m for _, _, m in inst.log), inst.log
+    assert inst.set_real({"zmp_y": 0.0}) == fmi2OK
+    assert inst.fmi2DoStep(2e-3, 1e-3, 0) == fmi2OK
+    assert inst.get_integer(["fault_y"])[1] == [0]
+    assert any("frontal fault mask 0x0 (healthy)" in m for _, _, m in inst.log), inst.log
     inst.free()
 
 
@@ -219,8 +250,8 @@ def test_out_of_range_status_kind(raw_any, fn, kind):
     inst.free()
 
 
-def test_out_of_range_fmu_type(raw_controller):
-    inst = raw_controller.instance(fmu_type=7)
+def test_out_of_range_fmu_type(raw_ctrl):
+    inst = raw_ctrl.instance(fmu_type=7)
     assert not inst.c
     assert any("fmuType 7" in m for _, _, m in inst.log), inst.log
 

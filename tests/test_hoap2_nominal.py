@@ -116,6 +116,14 @@ SHARED = {"g": "G", "m1": "M1", "l1": "L1", "lg1": "LG1", "I1": "I1", "m2": "M2"
     ("AnkleHipController", {"ankle_min": "ANKLE_MIN", "ankle_max": "ANKLE_MAX", "hip_min": "HIP_MIN",
                             "hip_max": "HIP_MAX", "sample_period": "SAMPLE_PERIOD"}),
     ("Hoap2Plant", {"feet_inertia": "FEET_INERTIA"}),
+    # the 3D controller: the sagittal FMU's numbers and the frontal plane's (issue 29)
+    ("AnkleHipController3D", {"ankle_min": "ANKLE_MIN", "ankle_max": "ANKLE_MAX", "hip_min": "HIP_MIN",
+                              "hip_max": "HIP_MAX", "sample_period": "SAMPLE_PERIOD", "hip_y": "HIP_Y",
+                              "ankle_y": "ANKLE_Y", "thigh": "THIGH", "shank": "SHANK", "I1_roll": "I1_ROLL",
+                              "I2_roll": "I2_ROLL", "link1_com_y": "LINK1_COM_Y", "link2_com_y": "LINK2_COM_Y",
+                              "sole_width": "SOLE_WIDTH", "ankle_roll_max": "ANKLE_ROLL_MAX",
+                              "hip_abduction_max": "HIP_ABDUCTION_MAX", "hip_adduction_max": "HIP_ADDUCTION_MAX",
+                              "knee_max": "KNEE_MAX"}),
 ])
 def test_fmu_defaults_are_the_nominal_numbers(fmu_path, fmu, extra):
     params = FMUInfo.load(fmu_path(fmu)).parameters()

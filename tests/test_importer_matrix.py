@@ -8,9 +8,8 @@ from __future__ import annotations
 import re
 import zipfile
 
-from conftest import REPO_ROOT
+from conftest import REPO_ROOT, SHIPPED
 
-SHIPPED = ["AnkleHipController", "Hoap2Plant", "Hoap2Plant3D"]
 COLUMNS = ["FMU", "FMI", "platform", "FMPy", "libcosim", "fmi-sim 0.7", "native runner (x86-64 Linux)",
            "Wine (runner for Windows)", "qemu-aarch64 (runner for aarch64)", "t = k·h master (ctypes)"]
 

@@ -18,10 +18,10 @@ import ctypes
 import math
 
 import pytest
-from conftest import RawModel, _unzip, fmi2Error, fmi2OK, fmi2Warning
+from conftest import SHIPPED, RawModel, _unzip, fmi2Error, fmi2OK, fmi2Warning
 
 PLANTS = ("Hoap2Plant", "Hoap2Plant3D")
-ALL = ("AnkleHipController",) + PLANTS
+ALL = SHIPPED
 
 
 @pytest.fixture(scope="module")

@@ -15,7 +15,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from conftest import REPO_ROOT, push_force, sensor_signals
+from conftest import REPO_ROOT, SHIPPED, fmu_inputs
 
 import libcosimpy  # noqa: F401  (a test dependency: pip install -e .[test]; missing = failure, not a skip)
 
@@ -25,13 +25,7 @@ H_NS = 1_000_000
 
 
 def _inputs(name):
-    t = np.arange(int(round(STOP / H)) + 1) * H
-    if name == "AnkleHipController":
-        return sensor_signals(t, peak=9.0)
-    rows = np.zeros(len(t), dtype=[("time", float), ("push_force", float)])
-    rows["time"] = t
-    rows["push_force"] = push_force(t, peak=4.0)
-    return rows
+    return fmu_inputs(name, np.arange(int(round(STOP / H)) + 1) * H)
 
 
 def _run_libcosim(fmu, md, inputs, outputs):
@@ -65,7 +59,7 @@ def _run_libcosim(fmu, md, inputs, outputs):
     return rows
 
 
-@pytest.mark.parametrize("name", ["AnkleHipController", "Hoap2Plant", "Hoap2Plant3D"])
+@pytest.mark.parametrize("name", SHIPPED)
 def test_libcosim_simulates_each_fmu_like_fmpy(fmu_path, name):
     import fmpy
 

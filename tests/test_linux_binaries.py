@@ -22,12 +22,13 @@ import zipfile
 
 import pytest
 
+from conftest import SHIPPED
+
 GLIBC_BASELINE = (2, 17)
 # glibc's own libraries (libpthread and libdl are separate libraries before glibc 2.34 and stubs
 # after it: a glibc 2.17 binary names them).
 GLIBC_LIBRARIES = {"libc.so.6", "libm.so.6", "libpthread.so.0", "libdl.so.2", "librt.so.1",
                    "ld-linux-x86-64.so.2"}
-SHIPPED = ["AnkleHipController", "Hoap2Plant", "Hoap2Plant3D"]
 
 
 def version_tuple(v: str) -> tuple[int, ...]:

@@ -18,9 +18,7 @@ import zipfile
 
 import pytest
 
-from conftest import RawModel, _unzip
-
-SHIPPED = ["AnkleHipController", "Hoap2Plant", "Hoap2Plant3D"]
+from conftest import SHIPPED, RawModel, _unzip
 
 
 def _structure(fmu):

@@ -129,7 +129,7 @@ def test_importer_tolerance_rule(plant_unzipped):
 
 def test_importer_tolerance_out_of_range_is_an_error(plant_unzipped, fmu_path):
     """A tolerance the integrators cannot use (> 1e-2) fails the initialization with a message
-    that names fmi2SetupExperiment; the controller and the 3D plant (no error-controlled
+    that names fmi2SetupExperiment; the controllers and the 3D plant (no error-controlled
     integrator) advertise no tolerance."""
     from fmpy import read_model_description
     from fmpy.fmi2 import fmi2Error, fmi2OK
@@ -140,7 +140,7 @@ def test_importer_tolerance_out_of_range_is_an_error(plant_unzipped, fmu_path):
     assert inst.fmi2ExitInitializationMode() == fmi2Error
     assert any("0.5" in m and "fmi2SetupExperiment" in m for m in inst.errors()), inst.errors()
     inst.free()
-    for model in ("AnkleHipController", "Hoap2Plant3D"):
+    for model in ("AnkleHipController", "AnkleHipController3D", "Hoap2Plant3D"):
         assert read_model_description(str(fmu_path(model))).defaultExperiment.tolerance is None, model
 
 

@@ -71,13 +71,13 @@ def test_hoap2_round_trip(kind):
 
 
 def test_hoap2_robot_file_holds_the_fmu_defaults(fmu_path):
-    """robots/hoap2.toml = nominal.h = both FMUs' start values, bit for bit."""
+    """robots/hoap2.toml = nominal.h = the controllers' and the sagittal plant's start values, bit for bit."""
     from anklehip.running.fmu import FMUInfo
     robot = load_robot(REPO_ROOT / "robots" / "hoap2.toml")
     header = {key: macro for macro, key, _ in lump_py.MACROS}
     for k, q in robot.model.items():
         assert q.value == NOMINAL[header[k]], k
-    for fmu in ("AnkleHipController", "Hoap2Plant"):
+    for fmu in ("AnkleHipController", "AnkleHipController3D", "Hoap2Plant"):
         start = FMUInfo.load(fmu_path(fmu)).start_values()
         for k, x in robot.values().items():
             if k in start:

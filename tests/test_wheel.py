@@ -4,8 +4,9 @@ tree on any path, it runs the main job and passes its checks.
 
 Establishes:
   - `python -m build --wheel --no-isolation` makes one platform wheel (py3-none-manylinux_2_17_x86_64)
-    holding the package, the three FMUs exactly as the build packed them (linux64 and win64
-    binaries), the native engine built against glibc 2.17 (nothing else needed, only ahn_* exported),
+    holding the package, every shipped FMU (anklehip.files.paths.SHIPPED) exactly as the build packed
+    it (linux64 and win64 binaries), the native engine built against glibc 2.17 (nothing else needed,
+    only ahn_* exported),
     the scenarios with their references and sweep files, and the step-test cases;
   - its size is the one README.md states;
   - `pip install --only-binary=:all: <wheel>` into a venv made from the base interpreter, then, with
@@ -27,11 +28,11 @@ from pathlib import Path
 
 import pytest
 
-from conftest import REPO_ROOT
+from conftest import REPO_ROOT, SHIPPED
 from test_linux_binaries import GLIBC_BASELINE, GLIBC_LIBRARIES, version_references, version_tuple
 
 COMPILERS = ("cc", "gcc", "g++", "c++", "clang", "clang++", "cmake", "make", "ld", "zig", "x86_64-linux-gnu-gcc")
-FMUS = ("AnkleHipController", "Hoap2Plant", "Hoap2Plant3D")
+FMUS = SHIPPED
 
 
 def _run(cmd, timeout=600, **kw):
@@ -134,7 +135,7 @@ def test_installed_wheel_runs_the_main_job(bare, venv):
     where = run("anklehip", "where").stdout
     data = next(venv.glob("lib/python3*/site-packages/anklehip/data"))
     assert re.search(r"^checkout +\(none\)$", where, re.M), where
-    for name in ("AnkleHipController.fmu", "Hoap2Plant.fmu", "native engine", "scenarios", "step-test cases"):
+    for name in [f"{m}.fmu" for m in FMUS] + ["native engine", "scenarios", "step-test cases"]:
         line = next(x for x in where.splitlines() if x.startswith(name))
         assert str(data) in line, line
 

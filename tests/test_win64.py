@@ -35,11 +35,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from conftest import REPO_ROOT, read_csv_exact
+from conftest import REPO_ROOT, SHIPPED, read_csv_exact
 
 SOLVER_COUNTERS = ("cvode_steps", "rhs_evals", "root_evals")   # integrator statistics, not physics
 
-SHIPPED = ["AnkleHipController", "Hoap2Plant", "Hoap2Plant3D"]
 # Windows' own DLLs (present on every Windows 10/11): all a shipped binary may import.
 WINDOWS_SYSTEM_DLLS = {"kernel32.dll", "msvcrt.dll", "user32.dll", "advapi32.dll", "ws2_32.dll",
                        "bcrypt.dll", "ntdll.dll"}
@@ -147,21 +146,34 @@ def _replay(cmd_prefix, env, runner, unzipdir, csv_in, csv_out, step, stop, para
     return read_csv_exact(csv_out)
 
 
-DISCRETE = {"phase", "fault", "fallen", "contact", "contact_mode", "terminated"}
+DISCRETE = {"phase", "fault", "phase_y", "fault_y", "fallen", "contact", "contact_mode", "terminated"}
+# AnkleHipController3D's per-leg set points q_<side>_<joint>_ref come from the legs' inverse
+# kinematics, which is singular at a straight knee: the knee angle is acos of a cosine near 1,
+# q ~ sqrt(2 (1 - c)), so a last-bit difference of the libm-computed hip-ankle distance becomes
+# ~1e-8 rad (5.2e-8 rad seen on aarch64, side_push_frontal) while the frontal references it is
+# computed from agree to 1e-15. Bound for those outputs: 1e-7 rad, far below any servo's resolution.
+LEG_IK_TOL = 1e-7
+
+
+def controller_tolerance(name: str) -> float:
+    """|difference| allowed between two platforms' controller outputs `name` [rad]."""
+    return LEG_IK_TOL if name.startswith("q_") and name.endswith("_ref") else 1e-12
 
 
 @pytest.mark.parametrize("fmi", [2, 3])
-@pytest.mark.parametrize("scenario,plant_model,stop", [("hip_saves_push", "sagittal", 4.0),
-                                                       ("diagonal_push_3d", "3d", 2.0)])
+# the sagittal loop, the sagittal controller on the 3D plant, and the 3D controller on it
+# (side_push_frontal: the frontal layer's lean and per-leg set points at work)
+@pytest.mark.parametrize("scenario,stop", [("hip_saves_push", 4.0), ("diagonal_push_3d", 2.0),
+                                           ("side_push_frontal", 2.5)])
 def test_windows_binaries_replay_a_closed_loop_like_the_linux_ones(win64_fmus, wine, win_runner, native_tool,
-                                                                    fmu_dir, tmp_path, scenario, plant_model, stop,
-                                                                    fmi):
+                                                                    fmu_dir, tmp_path, scenario, stop, fmi):
     """FMI 2.0 (win64) and the FMI 3.0 twins (x86_64-windows): the runner reads either."""
     from anklehip.running.master import Models, simulate
     from anklehip.files.scenario import load_scenario
 
-    models = Models.load(fmu_dir, plant_model=plant_model, fmi=fmi)
-    res = simulate(load_scenario(REPO_ROOT / "scenarios" / f"{scenario}.toml"), models, stop_time=stop)
+    sc = load_scenario(REPO_ROOT / "scenarios" / f"{scenario}.toml")
+    models = Models.for_scenario(sc, fmu_dir, fmi=fmi)
+    res = simulate(sc, models, stop_time=stop)
     assert res.outcome == "completed", res.message
     d, n, h = res.data, len(res.data) - 1, res.step
     t_end = float(d["time"][n])
@@ -170,7 +182,6 @@ def test_windows_binaries_replay_a_closed_loop_like_the_linux_ones(win64_fmus, w
     plant_inputs = [v.name for v in models.plant.by_causality("input")]
     # each FMU with the parameters the closed loop gave it (the 3D plant's link CoM offsets reach
     # the controller this way, docs/fmu.md)
-    sc = load_scenario(REPO_ROOT / "scenarios" / f"{scenario}.toml")
     cases = {
         "controller": (models.controller, [(c, c) for c in res.controller_inputs], res.controller_overrides),
         "plant": (models.plant, [(v, by_var.get(v, v)) for v in plant_inputs if by_var.get(v, v) in d.dtype.names],
@@ -209,7 +220,7 @@ def test_windows_binaries_replay_a_closed_loop_like_the_linux_ones(win64_fmus, w
             if name in SOLVER_COUNTERS:   # libm's last bits may move one step-size decision
                 assert np.max(np.abs(a - b)) <= 1e-3 * np.max(np.abs(a)) + 2, f"{role} {name}"
                 continue
-            tol = 1e-12 if role == "controller" else 1e-8 * float(np.max(np.abs(a))) + 1e-12
+            tol = controller_tolerance(name) if role == "controller" else 1e-8 * float(np.max(np.abs(a))) + 1e-12
             err = float(np.max(np.abs(a - b)))
             worst[name] = err
             assert err <= tol, f"{info.name} {name}: |linux - win64| = {err:.3g} > {tol:.3g}"

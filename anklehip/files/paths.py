@@ -28,6 +28,9 @@ PLANT_FMUS = {"sagittal": PLANT_FMU, "3d": "Hoap2Plant3D.fmu"}
 # 3D controller needs the 3D plant's signals.
 CONTROLLER_FMUS = {"sagittal": CONTROLLER_FMU, "3d": "AnkleHipController3D.fmu"}
 FMUS = (*CONTROLLER_FMUS.values(), *PLANT_FMUS.values())
+# The model names (modelIdentifier, file stem) of every FMU the project ships: the one list the wheel
+# (setup.py) and every FMI check in tests/ and scripts/ iterate over, so a new FMU joins them all.
+SHIPPED = tuple(f.removesuffix(".fmu") for f in FMUS)
 RT_RUNNER = "anklehip_rt_step"
 NATIVE_LIBRARY = "libanklehip_closed_loop.so"
 

@@ -55,7 +55,7 @@ class RunResult:
     controller_overrides: dict[str, Any] = field(default_factory=dict)   # config + scenario + caller
     plant_parameters: dict[str, Any] = field(default_factory=dict)
     controller_columns: dict[str, str] = field(default_factory=dict)   # column -> FMU variable
-    controller_inputs: tuple[str, ...] = CONTROLLER_INPUTS
+    controller_inputs: tuple[str, ...] = CONTROLLER_INPUTS   # the controller FMU's inputs, in its order
     column_units: dict[str, str] = field(default_factory=dict)
     faults: dict[str, Any] = field(default_factory=dict)     # the injected faults (non-default keys)
     transition_pushes: list[float] = field(default_factory=list)   # start times of the transition pushes
@@ -501,6 +501,7 @@ class ClosedLoop:
                         controller_config=scenario.controller_config, controller_overrides=c_over,
                         plant_parameters={**models.plant.start_values(), **p_over},
                         controller_columns=L.controller_columns, column_units=L.units,
+                        controller_inputs=tuple(v.name for v in L.c_in),   # the 3D controller's too
                         faults=faults.non_default(),
                         transition_pushes=[t0 + j * h for j in extra_push.starts] if extra_push is not None else [],
                         erect=self.erect)

@@ -8,6 +8,7 @@
 #include <string.h>
 
 #include "ahc/controller.h"
+#include "ahc/frontal.h"
 
 void ahc_params_default(ahc_params *p)
 {
@@ -372,9 +373,27 @@ const char *ahc_error_string(int code)
     }
 }
 
+typedef struct { unsigned bit; const char *name; } fault_name;
+
+/* The names of the bits of `fault` that `names` lists, comma-separated, into msg. */
+static const char *fault_names(const fault_name *names, size_t count, unsigned fault, char *msg, size_t msg_size)
+{
+    size_t i, used = 0;
+    if (!msg || msg_size == 0) return msg;
+    msg[0] = '\0';
+    for (i = 0; i < count; ++i) {
+        if (fault & names[i].bit) {
+            int n = snprintf(msg + used, msg_size - used, "%s%s", used ? "," : "", names[i].name);
+            if (n < 0 || (size_t)n >= msg_size - used) break;
+            used += (size_t)n;
+        }
+    }
+    return msg;
+}
+
 const char *ahc_fault_string(unsigned fault, char *msg, size_t msg_size)
 {
-    static const struct { unsigned bit; const char *name; } names[] = {
+    static const fault_name names[] = {
         { AHC_FAULT_THETA_ANKLE_NONFINITE, "theta_ankle_nonfinite" },
         { AHC_FAULT_THETA_HIP_NONFINITE, "theta_hip_nonfinite" },
         { AHC_FAULT_ZMP_NONFINITE, "zmp_nonfinite" },
@@ -386,15 +405,18 @@ const char *ahc_fault_string(unsigned fault, char *msg, size_t msg_size)
         { AHC_FAULT_NOT_INITIALIZED, "not_initialized" },
         { AHC_FAULT_FZ_IMPLAUSIBLE, "fz_implausible" },
     };
-    size_t i, used = 0;
-    if (!msg || msg_size == 0) return msg;
-    msg[0] = '\0';
-    for (i = 0; i < sizeof names / sizeof names[0]; ++i) {
-        if (fault & names[i].bit) {
-            int n = snprintf(msg + used, msg_size - used, "%s%s", used ? "," : "", names[i].name);
-            if (n < 0 || (size_t)n >= msg_size - used) break;
-            used += (size_t)n;
-        }
-    }
-    return msg;
+    return fault_names(names, sizeof names / sizeof names[0], fault, msg, msg_size);
+}
+
+const char *ahc_frontal_fault_string(unsigned fault, char *msg, size_t msg_size)
+{
+    static const fault_name names[] = {
+        { AHC_FFAULT_ZMP_Y_NONFINITE, "zmp_y_nonfinite" },
+        { AHC_FFAULT_ANGLE_NONFINITE, "angle_nonfinite" },
+        { AHC_FFAULT_ZMP_Y_OUTSIDE, "zmp_y_outside" },
+        { AHC_FFAULT_LIFTED, "lifted" },
+        { AHC_FFAULT_REF_SATURATED, "ref_saturated" },
+        { AHC_FFAULT_NOT_INITIALIZED, "not_initialized" },
+    };
+    return fault_names(names, sizeof names / sizeof names[0], fault, msg, msg_size);
 }

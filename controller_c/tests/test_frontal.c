@@ -231,6 +231,22 @@ static void test_frontal_law(void)
     }
 }
 
+/* Every frontal fault bit has a name (the FMU logs a change of fault_y with them). */
+static void test_frontal_fault_string(void)
+{
+    char buf[160];
+    unsigned bit;
+    ahc_frontal_fault_string(AHC_FFAULT_LIFTED | AHC_FFAULT_ZMP_Y_NONFINITE, buf, sizeof buf);
+    CHECK(strcmp(buf, "zmp_y_nonfinite,lifted") == 0, "frontal fault string: %s", buf);
+    for (bit = 1; bit <= AHC_FFAULT_ALL_MASK; bit <<= 1) {
+        if (!(bit & AHC_FFAULT_ALL_MASK)) continue;
+        ahc_frontal_fault_string(bit, buf, sizeof buf);
+        CHECK(buf[0] != '\0' && strchr(buf, ',') == NULL, "bit 0x%x has one name: '%s'", bit, buf);
+    }
+    ahc_frontal_fault_string(0, buf, sizeof buf);
+    CHECK(buf[0] == '\0', "no fault: empty string");
+}
+
 static void test_controller3d_zero_offsets(void)
 {
     ahc_params sp;
@@ -333,5 +349,6 @@ int main(void)
     test_frontal_law();
     test_lateral_lean();
     test_controller3d_zero_offsets();
+    test_frontal_fault_string();
     TEST_MAIN_END();
 }

@@ -176,6 +176,7 @@ class Controller3DModel final : public Model {
     ticks_ = 0;
     t0_ = 0.0;
     lastPhase_ = lastPhaseY_ = 0;
+    lastFault_ = lastFaultY_ = 0;
     nonfinite_ = 0;
   }
 
@@ -196,6 +197,7 @@ class Controller3DModel final : public Model {
     t0_ = ctx.start_time();
     ticks_ = 0;
     lastPhase_ = lastPhaseY_ = AHC_PHASE_ANKLE;
+    lastFault_ = lastFaultY_ = 0;
     nonfinite_ = 0;
     writeInitialOutputs(ctx, p);
     return fmi2OK;
@@ -292,6 +294,21 @@ class Controller3DModel final : public Model {
                 ahc_phase_name(lastPhaseY_), out_.frontal.phase, ahc_phase_name(out_.frontal.phase));
         lastPhaseY_ = out_.frontal.phase;
       }
+      // a change of either fault mask is logged with its bits' names, as the sagittal FMU does
+      if (out_.sag.fault != lastFault_) {
+        char buf[256];
+        ahc_fault_string(out_.sag.fault, buf, sizeof buf);
+        ctx.log(kLogEvents, fmi2OK, "t=%.9g: fault mask 0x%x (%s)", tk, out_.sag.fault,
+                out_.sag.fault ? buf : "healthy");
+        lastFault_ = out_.sag.fault;
+      }
+      if (out_.frontal.fault != lastFaultY_) {
+        char buf[256];
+        ahc_frontal_fault_string(out_.frontal.fault, buf, sizeof buf);
+        ctx.log(kLogEvents, fmi2OK, "t=%.9g: frontal fault mask 0x%x (%s)", tk, out_.frontal.fault,
+                out_.frontal.fault ? buf : "healthy");
+        lastFaultY_ = out_.frontal.fault;
+      }
     }
     if (ticked) writeOutputs(ctx, out_);
     return r;
@@ -305,6 +322,8 @@ class Controller3DModel final : public Model {
     w.f64(t0_);
     w.i32(lastPhase_);
     w.i32(lastPhaseY_);
+    w.u32(lastFault_);
+    w.u32(lastFaultY_);
     w.i32(nonfinite_);
   }
 
@@ -319,8 +338,9 @@ class Controller3DModel final : public Model {
     std::uint64_t ticks = 0;
     double t0 = 0;
     std::int32_t phase = 0, phase_y = 0, nonfinite = 0;
+    std::uint32_t fault = 0, fault_y = 0;
     if (!r.pod(c) || !r.pod(o) || !r.u64(ticks) || !r.f64(t0) || !r.i32(phase) || !r.i32(phase_y) ||
-        !r.i32(nonfinite)) {
+        !r.u32(fault) || !r.u32(fault_y) || !r.i32(nonfinite)) {
       err = "controller state truncated";
       return false;
     }
@@ -331,8 +351,9 @@ class Controller3DModel final : public Model {
     }
     // the start time is the instance's once initialized (before, t0 is 0 whatever the set-up says)
     if (t0 != (ctx.initialized() ? ctx.start_time() : 0.0) || ticks != c.sag.tick || ticks != c.frontal.tick ||
-        phase < 0 || phase > 3 || phase_y < 0 || phase_y > 3 || nonfinite < 0 || nonfinite > 1) {
-      err = "controller state corrupt (start time, tick counters, phases or input flag)";
+        phase < 0 || phase > 3 || phase_y < 0 || phase_y > 3 || (fault & ~unsigned(AHC_FAULT_ALL_MASK)) ||
+        (fault_y & ~unsigned(AHC_FFAULT_ALL_MASK)) || nonfinite < 0 || nonfinite > 1) {
+      err = "controller state corrupt (start time, tick counters, phases, fault masks or input flag)";
       return false;
     }
     // As the sagittal FMU (issue 33, findings 1-2): an initialized state must fit the instance it
@@ -378,6 +399,8 @@ class Controller3DModel final : public Model {
     t0_ = t0;
     lastPhase_ = phase;
     lastPhaseY_ = phase_y;
+    lastFault_ = fault;
+    lastFaultY_ = fault_y;
     nonfinite_ = nonfinite;
     return true;
   }
@@ -443,6 +466,7 @@ class Controller3DModel final : public Model {
   unsigned long long ticks_ = 0;
   double t0_ = 0.0;
   int lastPhase_ = 0, lastPhaseY_ = 0;
+  unsigned lastFault_ = 0, lastFaultY_ = 0;  // the fault masks last logged
   int nonfinite_ = 0;
 };
 

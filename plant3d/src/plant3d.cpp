@@ -476,6 +476,11 @@ Plant3D::Plant3D(const Params& p) : P_(p), w_(std::make_unique<World>()) {
         j = dJointCreateUniversal(w.world, nullptr);
         dJointAttach(j, parent, child);
         dJointSetUniversalAnchor(j, a[0], a[1], a[2]);
+        // ODE recomputes the joint's reference rotations from both axes at every axis change, and
+        // with parallel axes leaves its rotation matrix unset and reads it (dRFrom2Axes; Valgrind).
+        // The defaults are axis 1 = +x, axis 2 = +y: axis 2 goes to +z first, so that no step is
+        // parallel; the last call computes the rotations from the final axes, as before.
+        dJointSetUniversalAxis2(j, 0, 0, 1);
         dJointSetUniversalAxis1(j, 0, 1, 0);  // pitch, on the shank
         dJointSetUniversalAxis2(j, 1, 0, 0);  // roll, on the foot
       }

@@ -113,6 +113,10 @@ int ahc_frontal_params_validate(const ahc_frontal_params *f, const ahc_params *s
 const ahc_param_info *ahc_frontal_param_table(size_t *count);
 const ahc_param_info *ahc_frontal_param_find(const char *name);
 
+/* Writes a comma-separated list of the set AHC_FFAULT_* bits' names ("" for 0); returns msg (the
+ * frontal twin of ahc_fault_string). */
+const char *ahc_frontal_fault_string(unsigned fault, char *msg, size_t msg_size);
+
 /* Frontal sensors: the lateral ZMP and the measured frontal angles (ahc3d computes phi and psi from
  * the legs' joint angles, ahc_leg_frontal_angles). */
 typedef struct {
