@@ -542,6 +542,10 @@ static int feasible(const ahc_frontal *c, double phi, double psi)
     const double lmin = sqrt(f->thigh * f->thigh + f->shank * f->shank + 2.0 * f->thigh * f->shank * cos(f->knee_max));
     const int pivot = psi >= 0.0 ? 0 : 1, other = 1 - pivot;   /* lumps: 0 right leg, 1 left leg */
     const double sgn = psi >= 0.0 ? 1.0 : -1.0;
+    if (psi == 0.0 && f->hip_y == f->ankle_y) {
+        /* the parallelogram: both legs lean by phi, both hips roll by -phi, the knees straight */
+        return fabs(phi) <= f->ankle_roll_max && -phi <= f->hip_adduction_max && -phi <= f->hip_abduction_max;
+    }
     ahc_frontal_pose_at(f, &c->sp, phi, psi, &o);
     if (fabs(lean[0]) > f->ankle_roll_max || fabs(lean[1]) > f->ankle_roll_max) return 0;
     if (sgn * (psi - lean[pivot]) > f->hip_adduction_max) return 0;
