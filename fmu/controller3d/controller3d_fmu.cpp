@@ -120,11 +120,7 @@ ModelInfo makeInfo() {
   out("theta_hip_ref", vr::theta_hip_ref, Type::Real, "rad", "Hip pitch set point, both legs", {"theta_hip"});
   out("dtheta_ankle_ref", vr::dtheta_ankle_ref, Type::Real, "rad/s", "Ankle reference rate");
   out("dtheta_hip_ref", vr::dtheta_hip_ref, Type::Real, "rad/s", "Hip reference rate");
-  m.enumerations.push_back({"Phase", "Phase of the balance controller (docs/controller.md)",
-                            {{"ankle", AHC_PHASE_ANKLE, "ankle strategy"},
-                             {"ankle_to_hip", AHC_PHASE_ANKLE_TO_HIP, "transition ankle -> hip"},
-                             {"hip", AHC_PHASE_HIP, "hip strategy"},
-                             {"hip_to_ankle", AHC_PHASE_HIP_TO_ANKLE, "transition hip -> ankle"}}});
+  ahcfmu::addPhaseEnumeration(m);
   out("phase", vr::phase, Type::Integer, "", "Sagittal phase: 0 ankle, 1 ankle-to-hip, 2 hip, 3 hip-to-ankle");
   m.variables.back().enumeration = "Phase";
   out("com_x", vr::com_x, Type::Real, "m", "CoM ground projection r_x of the sagittal model from the measured angles", posture);

@@ -114,6 +114,15 @@ inline std::string firstDifferingParam(const ahc_param_info* table, size_t count
   return "";
 }
 
+// The enumeration "Phase" of both controllers' phase outputs (AHC_PHASE_*).
+inline void addPhaseEnumeration(fmuglue::ModelInfo& m) {
+  m.enumerations.push_back({"Phase", "Phase of the balance controller (docs/controller.md)",
+                            {{"ankle", AHC_PHASE_ANKLE, "ankle strategy"},
+                             {"ankle_to_hip", AHC_PHASE_ANKLE_TO_HIP, "transition ankle -> hip"},
+                             {"hip", AHC_PHASE_HIP, "hip strategy"},
+                             {"hip_to_ankle", AHC_PHASE_HIP_TO_ANKLE, "transition hip -> ankle"}}});
+}
+
 // resources/configurations.toml: every named configuration of the C library (ahc_params_named)
 // with the parameter values that differ from the defaults, for importers that select a
 // configuration by name (anklehip: `controller_config = "paper"`); `more_rows`, when given, adds an
