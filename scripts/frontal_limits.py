@@ -6,7 +6,7 @@ point): a short pulse (0.2 s, 50 ms ramps), a 1 s pulse (0.3 s ramps: the scenar
 slow push (5 s, 1 s ramps). Each is scaled in 1 N steps upward from --from until the first fall;
 the last force that stood is printed per configuration: the sagittal controller (its roll servos
 hold the legs still), the 3D controller with its defaults, and the defaults with one setting
-changed at a time. Runs on the native engine (about 12 minutes for the whole table).
+changed at a time. Runs on the native engine (about 25 minutes for the whole table).
 
     .venv/bin/python scripts/frontal_limits.py [--from 6] [--shape 0.2s|1s|slow ...] [--set NAME=VALUE ...]
 
@@ -33,18 +33,29 @@ CONFIGURATIONS = [
     ("3D controller, defaults", "3d", {}),
     ("the paper's reading (configuration paper)", "3d", {"Ka_y": 19.0, "Ca_y": 4.75, "hip_strategy_enabled_y": 1,
                                                          "lean_enabled_y": 0}),
+    ("the first defaults (low-pass lean, tau 0.2 s, fz hold 3 N, no roll hold)", "3d",
+     {"lean_law_y": 0, "lean_tau_y": 0.2, "fz_rocking_y": 3.0, "roll_rocking_y": 3.2, "rocking_dwell_y": 0.0}),
     ("lateral hip strategy on", "3d", {"hip_strategy_enabled_y": 1}),
     ("lateral lean off", "3d", {"lean_enabled_y": 0}),
+    ("lean_law_y 0 (the low-pass lean)", "3d", {"lean_law_y": 0}),
     ("Ka_y 19 (Ca_y 4.75, the sagittal gains')", "3d", {"Ka_y": 19.0, "Ca_y": 4.75}),
     ("Ka_y 160 (Ca_y 13.7)", "3d", {"Ka_y": 160.0, "Ca_y": 13.7}),
     ("Ka_y 400 (Ca_y 21.6)", "3d", {"Ka_y": 400.0, "Ca_y": 21.6}),
+    ("lean_tau_y 0.02 s", "3d", {"lean_tau_y": 0.02}),
+    ("lean_tau_y 0.05 s", "3d", {"lean_tau_y": 0.05}),
     ("lean_tau_y 0.1 s", "3d", {"lean_tau_y": 0.1}),
-    ("lean_tau_y 0.15 s", "3d", {"lean_tau_y": 0.15}),
-    ("lean_tau_y 0.3 s (the sagittal lean's)", "3d", {"lean_tau_y": 0.3}),
-    ("lean_margin_y 0 (the lean up to the edges)", "3d", {"lean_margin_y": 0.0}),
+    ("lean_capture_gain_y 4", "3d", {"lean_capture_gain_y": 4.0}),
+    ("lean_capture_gain_y 32", "3d", {"lean_capture_gain_y": 32.0}),
+    ("lean_zmp_margin_y 5 mm", "3d", {"lean_zmp_margin_y": 0.005}),
+    ("lean_zmp_margin_y 25 mm", "3d", {"lean_zmp_margin_y": 0.025}),
     ("lean_margin_y 5 mm", "3d", {"lean_margin_y": 0.005}),
     ("lean_margin_y 15 mm (the sagittal lean's)", "3d", {"lean_margin_y": 0.015}),
-    ("fz_rocking_y 0 (the lean never holds)", "3d", {"fz_rocking_y": 0.0}),
+    ("roll_rocking_y 3.2 rad (no roll hold: imu_roll unused)", "3d", {"roll_rocking_y": 3.2}),
+    ("roll_rocking_y 0.005 rad", "3d", {"roll_rocking_y": 0.005}),
+    ("roll_rocking_y 0.02 rad", "3d", {"roll_rocking_y": 0.02}),
+    ("rocking_dwell_y 0", "3d", {"rocking_dwell_y": 0.0}),
+    ("rocking_dwell_y 0.15 s", "3d", {"rocking_dwell_y": 0.15}),
+    ("fz_rocking_y 3 N (an unloaded sole holds the lean too)", "3d", {"fz_rocking_y": 3.0}),
 ]
 
 # push shapes: (duration [s], rise [s], stop time [s]); the push starts at 1 s
@@ -89,11 +100,11 @@ def main(argv: list[str] | None = None) -> int:
     shapes = a.shape or list(SHAPES)
     configs = [("3D controller, " + ", ".join(a.set), "3d", over)] if a.set else CONFIGURATIONS
     print(f"largest peak side force that stands [N], 1 N steps from {a.start:g} N, toward +y / toward -y")
-    print(f"  {'configuration':<44}" + "".join(f"{s:>9}" for s in shapes))
+    print(f"  {'configuration':<72}" + "".join(f"{s:>9}" for s in shapes))
     for label, model, o in configs:
         row = [f"{largest_standing(sc, model, o, shape, a.start, sign=+1):.0f}/"
                f"{largest_standing(sc, model, o, shape, a.start, sign=-1):.0f}" for shape in shapes]
-        print(f"  {label:<44}" + "".join(f"{x:>9}" for x in row), flush=True)
+        print(f"  {label:<72}" + "".join(f"{x:>9}" for x in row), flush=True)
     return 0
 
 

@@ -53,6 +53,8 @@ void ahc3d_step(ahc3d *c, const ahc3d_sensors *s, ahc3d_outputs *out)
             for (j = 0; j < AHC_LEG_JOINTS; ++j) finite = finite && isfinite(s->q[side][j]);
         if (finite) ahc_legs_frontal_angles(&c->legs, s->q, c->frontal.psi >= 0.0, &fs.phi, &fs.psi);
     }
+    /* the feet's roll toward +y: the trunk's lean toward +y (-imu_roll) less link 2's lean on flat feet */
+    fs.foot_roll = -s->imu_roll - fs.psi;
     /* 3. the frontal controller */
     ahc_frontal_step(&c->frontal, &fs, &out->frontal);
     /* 4. the legs: both planes' references minus the sagittal ones alone, which are the pitch

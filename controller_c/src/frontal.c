@@ -68,9 +68,14 @@ void ahc_frontal_params_default(ahc_frontal_params *f)
     f->zmp_filter_tau_y = 0.0;
     f->zmp_fault_margin_y = 0.02;
     f->lean_enabled_y = 1;
-    f->lean_tau_y = 0.2;
+    f->lean_tau_y = 0.03;
     f->lean_margin_y = 0.01;
-    f->fz_rocking_y = 3.0;
+    f->fz_rocking_y = 0.0;
+    f->lean_law_y = AHC_LEAN_PENDULUM;
+    f->lean_zmp_margin_y = 0.015;
+    f->lean_capture_gain_y = 16.0;
+    f->roll_rocking_y = 0.01;
+    f->rocking_dwell_y = 0.05;
 }
 
 void ahc_frontal_params_paper(ahc_frontal_params *f)
@@ -139,7 +144,12 @@ static const ahc_param_info k_ftable[] = {
     FI(lean_enabled_y, 0.0, 1.0, "Frontal sustained-push lean: 1 the CoM reference leans against the low-passed lateral disturbance, in every phase"),
     FD(lean_tau_y, "s", 0.01, 100.0, "Time constant of the lateral disturbance low-pass the lean follows"),
     FD(lean_margin_y, "m", 0.0, 1.0, "The leaned CoM reference stays this far inside the soles' outer edges"),
-    FD(fz_rocking_y, "N", 0.0, 1e4, "A sole with less normal load than this counts as lifted: the lateral lean holds"),
+    FD(fz_rocking_y, "N", 0.0, 1e4, "A sole with less normal load than this counts as lifted: the lateral lean holds (0: never)"),
+    FI(lean_law_y, 0.0, 1.0, "Frontal lean law: 0 the low-passed disturbance (the sagittal lean's); 1 the inverted pendulum's CoM, its ZMP planned by capture-point feedback"),
+    FD(lean_zmp_margin_y, "m", 0.0, 1.0, "Lean law 1: the planned ZMP stays this far inside the soles' outer edges"),
+    FD(lean_capture_gain_y, "1", 0.01, 100.0, "Lean law 1: the capture point converges at this multiple of the pendulum's rate"),
+    FD(roll_rocking_y, "rad", 0.0, 3.2, "The feet rolled more than this (imu_roll against the legs' kinematics): the robot rocks on a sole's edge, the lateral lean holds"),
+    FD(rocking_dwell_y, "s", 0.0, 10.0, "The lateral lean holds until the feet have lain flat again for this long"),
 };
 #define FTABLE_LEN (sizeof k_ftable / sizeof k_ftable[0])
 
@@ -220,6 +230,9 @@ int ahc_frontal_params_validate(const ahc_frontal_params *f, const ahc_params *s
         return fail(msg, msg_size, AHC_ERR_INCONSISTENT,
                     "lean_margin_y = %.6g must be < the soles' outer edge %.6g (the lean range must hold 0)",
                     f->lean_margin_y, edge);
+    if (!(f->lean_zmp_margin_y < edge))
+        return fail(msg, msg_size, AHC_ERR_INCONSISTENT,
+                    "lean_zmp_margin_y = %.6g must be < the soles' outer edge %.6g", f->lean_zmp_margin_y, edge);
     if (!(f->rz_band_low_y < f->rz_band_high_y))
         return fail(msg, msg_size, AHC_ERR_INCONSISTENT, "rz_band_low_y = %.6g must be < rz_band_high_y = %.6g",
                     f->rz_band_low_y, f->rz_band_high_y);
@@ -237,6 +250,18 @@ int ahc_frontal_params_validate(const ahc_frontal_params *f, const ahc_params *s
             return fail(msg, msg_size, AHC_ERR_INCONSISTENT,
                         "sample_period = %.6g too large for the lateral hip law (Kh_y = %.6g, Ch_y = %.6g): "
                         "semi-implicit Euler unstable", h, f->Kh_y, f->Ch_y);
+    }
+    if (f->lean_enabled_y && f->lean_law_y == AHC_LEAN_PENDULUM) {
+        /* F26-F28 unclamped: c'' = -k w^2 (c - target) - (1 + k) w c' */
+        double rz;
+        ahc_frontal_com(f, sp, 0.0, 0.0, NULL, &rz);
+        {
+            const double w = sqrt(sp->g / (rz + sp->ankle_height)), k = f->lean_capture_gain_y;
+            if (!symplectic_stable(h, k * w * w, (1.0 + k) * w))
+                return fail(msg, msg_size, AHC_ERR_INCONSISTENT,
+                            "sample_period = %.6g too large for the pendulum lean (lean_capture_gain_y = %.6g): "
+                            "semi-implicit Euler unstable", h, k);
+        }
     }
     if (!(h * f->Kp_psi < 1.0))
         return fail(msg, msg_size, AHC_ERR_INCONSISTENT,
@@ -259,6 +284,7 @@ static void compute_derived(ahc_frontal *c)
     ahc_frontal_com(&c->f, &c->sp, 0.0, 0.0, NULL, &c->rz_erect);
     c->zmp_alpha = c->f.zmp_filter_tau_y > 0.0 ? 1.0 - exp(-c->sp.sample_period / c->f.zmp_filter_tau_y) : 1.0;
     c->lean_alpha = 1.0 - exp(-2.0 * c->sp.sample_period / c->f.lean_tau_y);
+    c->omega_y = sqrt(c->sp.g / (c->rz_erect + c->sp.ankle_height));
 }
 
 int ahc_frontal_init(ahc_frontal *c, const ahc_frontal_params *f, const ahc_params *sp)
@@ -412,6 +438,21 @@ static void law_ankle_strategy(ahc_frontal *c, const fctx *k)
     c->phi += k->h * c->dphi;
 }
 
+/* F11 about the pendulum's plan (lean_law_y = AHC_LEAN_PENDULUM): the legs follow the planned CoM,
+ * phi_plan = lean / J[0], and F11's spring-damper acts on the deviation from it, driven by the part
+ * of d_y the plan does not expect, d_y - m g (p_plan - lean). */
+static void law_ankle_strategy_planned(ahc_frontal *c, const fctx *k)
+{
+    const double j0 = fabs(k->J[0]) > 1e-9 ? k->J[0] : 1e-9;
+    const double plan = c->lean / j0, dplan = k->dlean / j0;
+    const double dd = k->d - c->m * c->sp.g * (c->lean_p - c->lean);
+    double dev = c->phi - c->phi_plan, ddev = c->dphi - c->dphi_plan;
+    ddev += k->h * (dd - c->f.Ca_y * ddev - c->f.Ka_y * dev) / c->Jphi;
+    dev += k->h * ddev;
+    c->phi = plan + dev;
+    c->dphi = dplan + ddev;
+}
+
 /* F16: psi'' = (k_m d_y - Ch_y psi' - Kh_y psi) / J_psi. */
 static void law_hip_strategy(ahc_frontal *c, const fctx *k)
 {
@@ -469,21 +510,30 @@ static double external_moment(ahc_frontal *c, const ahc_frontal_sensors *s, cons
     return s->zmp_y * s->fz - c->sp.g * grav - dH;
 }
 
-/* The lateral lean (docs/controller.md §11.2): the sagittal update_lean's law (controller.c) over
- * the soles' width, -D_y/(m g) low-passed and bounded lean_margin_y inside the outer edges, held
- * while the ZMP is at the edge the push drives it to and released at the other; unlike the
- * sagittal lean it acts in every phase (F11 leans the legs by it: the evidence of §11.5), and it
- * holds while a sole is unloaded (the robot rocks on the other's edge: the moment balance assumes
- * both soles flat). Returns the lean's rate this tick. */
-static double update_lean(ahc_frontal *c, double ext, double s_fz_min)
+/* The lateral lean (docs/controller.md §11.2). Its estimate is the sagittal update_lean's
+ * (controller.c) over the soles' width: the external moment D_y low-passed, held while the ZMP is at
+ * the edge the push drives it to and released at the other, and held while a sole is unloaded (the
+ * robot may rock on the other's edge: the moment balance assumes both soles flat). Its target is
+ * -D_y/(m g), bounded lean_margin_y inside the outer edges. lean_law_y says how the CoM reference
+ * moves there: AHC_LEAN_LOWPASS, as the target itself (§4.6's law); AHC_LEAN_PENDULUM, as the
+ * linear inverted pendulum's CoM under D_y, F26-F28, its ZMP planned by capture-point feedback
+ * toward the target and kept lean_zmp_margin_y inside the soles: the CoM starts away from the
+ * push at the pendulum's rate as soon as the estimate moves. Unlike the sagittal lean it acts in
+ * every phase (F11 leans the legs by it: the evidence of §11.5). Returns the lean's rate this tick. */
+static double update_lean(ahc_frontal *c, double ext, const ahc_frontal_sensors *s)
 {
     const ahc_frontal_params *f = &c->f;
     const double edge = f->ankle_y + 0.5 * f->sole_width, h = c->sp.sample_period;
     double next;
+    int rocking;
     {
         const int at_pos = c->zmp_f >= edge - LEAN_EDGE, at_neg = c->zmp_f <= -edge + LEAN_EDGE;
-        /* one sole unloaded: the robot rocks on the other's edge, the balance means nothing (hold) */
-        const int rocking = !(s_fz_min >= f->fz_rocking_y);
+        /* one sole unloaded (fz_rocking_y), or the feet rolled or flat for less than rocking_dwell_y:
+         * the robot may rock on a sole's edge, the balance means nothing (hold) */
+        const double fz_min = s->fz_left < s->fz_right ? s->fz_left : s->fz_right;
+        c->flat_time = fabs(s->foot_roll) > f->roll_rocking_y ? 0.0 : c->flat_time + h;
+        rocking = (f->fz_rocking_y > 0.0 && !(fz_min >= f->fz_rocking_y)) || c->flat_time < f->rocking_dwell_y ||
+                  fabs(s->foot_roll) > f->roll_rocking_y;
         if (!rocking && !((at_pos && c->lean_f > 0.0) || (at_neg && c->lean_f < 0.0))) {
             const double in = (at_pos || at_neg) ? 0.0 : ext;
             c->lean_f1 += c->lean_alpha * (in - c->lean_f1);
@@ -491,6 +541,29 @@ static double update_lean(ahc_frontal *c, double ext, double s_fz_min)
         }
     }
     next = clampd(-c->lean_f / (c->m * c->sp.g), -edge + f->lean_margin_y, edge - f->lean_margin_y);
+    if (f->lean_law_y == AHC_LEAN_PENDULUM && rocking) {
+        /* rocking on an edge: the plan holds at rest (moving the legs on a rolled foot only rolls it
+         * more), its ZMP the static one */
+        c->lean_rate = 0.0;
+        c->lean_p = c->lean + c->lean_f / (c->m * c->sp.g);
+        next = c->lean;
+    } else if (f->lean_law_y == AHC_LEAN_PENDULUM) {
+        /* F26 the pendulum's CoM c under the estimated moment, c'' = w^2 (c - p + D_y/(m g)); F27 its
+         * capture point xi = c + c'/w; F28 the planned ZMP p = xi + k (xi - target) + D_y/(m g),
+         * inside the soles, which makes xi' = -k w (xi - target) while p is not clamped */
+        const double w = c->omega_y, off = c->lean_f / (c->m * c->sp.g);
+        /* the margin yields where holding the target needs the ZMP closer to the edge */
+        const double pm = fabs(next + off) > edge - f->lean_zmp_margin_y ? edge : edge - f->lean_zmp_margin_y;
+        const double xi = c->lean + c->lean_rate / w;
+        const double p = clampd(xi + f->lean_capture_gain_y * (xi - next) + off, -pm, pm);
+        c->lean_p = p;
+        c->lean_rate += h * w * w * (c->lean - p + off);
+        next = c->lean + h * c->lean_rate;
+        if (fabs(next) > edge - f->lean_margin_y) {
+            next = clampd(next, -edge + f->lean_margin_y, edge - f->lean_margin_y);
+            c->lean_rate = 0.0;
+        }
+    }
     {
         const double rate = (next - c->lean) / h;
         c->lean = next;
@@ -508,7 +581,7 @@ static unsigned classify(const ahc_frontal *c, const ahc_frontal_sensors *s)
         fl |= AHC_FFAULT_ZMP_Y_NONFINITE;
     else if (fabs(s->zmp_y) > edge)
         fl |= AHC_FFAULT_ZMP_Y_OUTSIDE;
-    if (!isfinite(s->phi) || !isfinite(s->psi)) fl |= AHC_FFAULT_ANGLE_NONFINITE;
+    if (!isfinite(s->phi) || !isfinite(s->psi) || !isfinite(s->foot_roll)) fl |= AHC_FFAULT_ANGLE_NONFINITE;
     if (!isfinite(s->fz) || s->fz < c->sp.fz_lifted) fl |= AHC_FFAULT_LIFTED;
     return fl;
 }
@@ -654,7 +727,7 @@ void ahc_frontal_step(ahc_frontal *c, const ahc_frontal_sensors *s, ahc_frontal_
     k.d = c->m * c->sp.g * (c->zmp_f - k.ry_meas);   /* d_y = m g (p_y - r_y) */
     if (c->f.lean_enabled_y) {
         const double ext = external_moment(c, s, &pm);
-        k.dlean = update_lean(c, ext, s->fz_left < s->fz_right ? s->fz_left : s->fz_right);
+        k.dlean = update_lean(c, ext, s);
     } else {
         c->lean = 0.0;
     }
@@ -663,7 +736,10 @@ void ahc_frontal_step(ahc_frontal *c, const ahc_frontal_sensors *s, ahc_frontal_
     switch (c->phase) {
     case AHC_PHASE_ANKLE:
         law_hip_regulator(c, &k);
-        law_ankle_strategy(c, &k);
+        if (c->f.lean_enabled_y && c->f.lean_law_y == AHC_LEAN_PENDULUM)
+            law_ankle_strategy_planned(c, &k);
+        else
+            law_ankle_strategy(c, &k);
         break;
     case AHC_PHASE_ANKLE_TO_HIP: {
         double dkw;
@@ -690,6 +766,11 @@ void ahc_frontal_step(ahc_frontal *c, const ahc_frontal_sensors *s, ahc_frontal_
         law_ankle_reactionless(c, &k);
         break;
     }
+    if (c->f.lean_enabled_y && c->f.lean_law_y == AHC_LEAN_PENDULUM) {
+        const double j0 = fabs(k.J[0]) > 1e-9 ? k.J[0] : 1e-9;
+        c->phi_plan = c->lean / j0;
+        c->dphi_plan = k.dlean / j0;
+    }
     c->phase_time += k.h;
     c->fault = clamp_references(c);
     write_outputs(c, &k, out);
@@ -712,7 +793,8 @@ int ahc_frontal_state_validate(const ahc_frontal *c, char *msg, size_t msg_size)
     fresh.sp = c->sp;
     compute_derived(&fresh);
     if (fresh.m != c->m || fresh.km != c->km || fresh.Jphi != c->Jphi || fresh.Jpsi != c->Jpsi ||
-        fresh.rz_erect != c->rz_erect || fresh.zmp_alpha != c->zmp_alpha || fresh.lean_alpha != c->lean_alpha)
+        fresh.rz_erect != c->rz_erect || fresh.zmp_alpha != c->zmp_alpha || fresh.lean_alpha != c->lean_alpha ||
+        fresh.omega_y != c->omega_y)
         return fail(msg, msg_size, AHC_ERR_INCONSISTENT, "derived constants do not match the parameters");
     if (c->phase < AHC_PHASE_ANKLE || c->phase > AHC_PHASE_HIP_TO_ANKLE)
         return fail(msg, msg_size, AHC_ERR_RANGE, "phase = %d", c->phase);
@@ -723,12 +805,13 @@ int ahc_frontal_state_validate(const ahc_frontal *c, char *msg, size_t msg_size)
     {
         const double v[] = {c->phi, c->dphi, c->psi, c->dpsi, c->psi_bump, c->phase_time, c->fallback_timer,
                             c->k_w, c->ryd, c->dryd, c->zmp_f, c->last_phi, c->last_psi, c->lean_f1, c->lean_f,
-                            c->lean};
+                            c->lean, c->lean_rate, c->lean_p, c->phi_plan, c->dphi_plan, c->flat_time};
         size_t i;
         for (i = 0; i < sizeof v / sizeof v[0]; ++i)
             if (!isfinite(v[i])) return fail(msg, msg_size, AHC_ERR_NONFINITE, "state value %u is not finite", (unsigned)i);
     }
     if (c->k_w < 0.0 || c->k_w > 1.0) return fail(msg, msg_size, AHC_ERR_RANGE, "k_w = %g outside [0, 1]", c->k_w);
+    if (c->flat_time < 0.0) return fail(msg, msg_size, AHC_ERR_RANGE, "flat_time = %g must be >= 0", c->flat_time);
     if (fabs(c->phi) > c->f.ankle_roll_max || fabs(c->psi) > 1.5)
         return fail(msg, msg_size, AHC_ERR_RANGE, "frontal reference outside the legs' range");
     if ((c->fault & ~(unsigned)AHC_FFAULT_ALL_MASK) != 0)

@@ -298,11 +298,15 @@ static void test_controller3d_zero_offsets(void)
     CHECK(ahc3d_state_validate(&c, NULL, 0) == AHC_OK, "a running instance validates");
 }
 
-/* The lateral lean (defaults): under a constant external moment D about the ground line the CoM
- * reference settles at -D/(m g) (within the 10 % F11's spring yields), opposite the push, with phi
- * leaning the legs there (quasi-static robot: the ZMP from the moment balance); with one sole
- * unloaded the lean holds. */
-static void test_lateral_lean(void)
+/* The lateral lean (defaults, with either lean law): under a constant external moment D about the
+ * ground line the CoM reference settles at -D/(m g) (within the 10 % F11's spring yields), opposite
+ * the push, with phi leaning the legs there (quasi-static robot: the ZMP from the moment balance);
+ * with one sole unloaded the lean holds (within 0.1 um: the estimate holds, the plan is at its
+ * target). The pendulum law (F26-F28): its planned ZMP never leaves the soles less
+ * lean_zmp_margin_y, and the CoM reference starts away from the push within 100 ms (the first
+ * rocking_dwell_y of a run count as not yet flat). What the law
+ * gains on the 3D plant is measured by scripts/frontal_limits.py (docs/controller.md §11.5). */
+static void test_lateral_lean(int law)
 {
     ahc_params sp;
     ahc_frontal_params f;
@@ -311,10 +315,12 @@ static void test_lateral_lean(void)
     ahc_frontal_outputs o;
     int i;
     const double D = 1.5, m = HOAP2_M1 + HOAP2_M2, mt = m + HOAP2_FEET_MASS;
-    double ry, lean_held;
+    double ry, lean_held, pmax = 0.0, lean_100ms = 0.0;
     ahc_params_default(&sp);
     ahc_frontal_params_default(&f);
     CHECK(f.lean_enabled_y == 1, "the lean is on by default");
+    CHECK(f.lean_law_y == AHC_LEAN_PENDULUM, "the pendulum lean is the default");
+    f.lean_law_y = law;
     CHECK(ahc_frontal_init(&c, &f, &sp) == AHC_OK, "init");
     memset(&s, 0, sizeof s);
     s.fz = mt * sp.g;
@@ -323,22 +329,83 @@ static void test_lateral_lean(void)
         s.phi = c.phi;
         s.psi = c.psi;
         ahc_frontal_com(&f, &sp, s.phi, s.psi, &ry, NULL);
+        ahc_frontal_com(&f, &sp, s.phi, s.psi, &ry, NULL);
         s.zmp_y = (m * sp.g * ry + D) / s.fz;   /* at rest: p f_z = g m r_y + D (feet at y = 0) */
         ahc_frontal_step(&c, &s, &o);
+        if (fabs(c.lean_p) > pmax) pmax = fabs(c.lean_p);
+        if (i == 99) lean_100ms = c.lean;
+    }
+    if (law == AHC_LEAN_PENDULUM) {
+        CHECK(pmax <= f.ankle_y + 0.5 * f.sole_width - f.lean_zmp_margin_y + 1e-15,
+              "the planned ZMP stays lean_zmp_margin_y inside the soles: %g", pmax);
+        CHECK(lean_100ms < 0.0, "the CoM reference moves away from the push within 100 ms: %g", lean_100ms);
     }
     ahc_frontal_com(&f, &sp, c.phi, c.psi, &ry, NULL);
     /* -D/(m g), less what F11's spring yields to the remaining d_y = m g (p_y - r_y): 10 % */
     CHECK(ry < -0.9 * D / (m * sp.g) && ry > -1.1 * D / (m * sp.g), "the CoM leaned to -D/(m g): %g vs %g", ry,
           -D / (m * sp.g));
     CHECK(o.phase == 0 && o.psi_ref == 0.0, "phase 0, no hip motion (hip strategy off by default)");
-    /* a sole unloaded: the lean holds whatever the ZMP says */
+    /* the feet rolled (the robot rocking on a sole's edge): the lean holds whatever the ZMP says */
+    lean_held = c.lean;
+    s.foot_roll = 2.0 * f.roll_rocking_y;
+    for (i = 0; i < 500; ++i) {
+        s.zmp_y = 0.06;
+        ahc_frontal_step(&c, &s, &o);
+    }
+    CHECK(fabs(c.lean - lean_held) < 1e-7, "the lean held while the feet rolled: %.12g vs %.12g", c.lean, lean_held);
+    /* flat again but a sole unloaded: by default the lean goes on (fz_rocking_y = 0: never) ... */
+    s.foot_roll = 0.0;
+    s.fz_left = 0.0;
+    for (i = 0; i < 500; ++i) ahc_frontal_step(&c, &s, &o);
+    CHECK(fabs(c.lean - lean_held) > 1e-4, "a flat unloaded sole does not hold the lean: %g vs %g", c.lean, lean_held);
+    /* ... and with fz_rocking_y set it holds */
+    f.fz_rocking_y = 3.0;
+    CHECK(ahc_frontal_init(&c, &f, &sp) == AHC_OK, "init");
+    s.fz_left = s.fz_right = 0.5 * s.fz;
+    for (i = 0; i < 3000; ++i) {
+        s.phi = c.phi;
+        s.psi = c.psi;
+        ahc_frontal_com(&f, &sp, s.phi, s.psi, &ry, NULL);
+        s.zmp_y = (m * sp.g * ry + D) / s.fz;
+        ahc_frontal_step(&c, &s, &o);
+    }
     lean_held = c.lean;
     s.fz_left = 0.0;
     for (i = 0; i < 500; ++i) {
         s.zmp_y = 0.06;
         ahc_frontal_step(&c, &s, &o);
     }
-    CHECK(c.lean == lean_held, "the lean held while a sole is lifted: %g vs %g", c.lean, lean_held);
+    CHECK(fabs(c.lean - lean_held) < 1e-7, "fz_rocking_y: the lean held while a sole is lifted: %.12g vs %.12g", c.lean,
+          lean_held);
+}
+
+/* The feet's roll ahc3d gives the frontal layer: the trunk's measured lean toward +y (-imu_roll)
+ * less link 2's lean on flat feet (psi from the legs' joint angles). Legs standing straight and level
+ * (psi = 0): imu_roll = -0.05 (the trunk, and so the feet, turned 0.05 rad toward +y) is a roll of
+ * +0.05, the lean's estimate holds; imu_roll = 0 lets it follow the lateral ZMP. */
+static void test_controller3d_foot_roll(void)
+{
+    ahc_params sp;
+    ahc_frontal_params f;
+    ahc3d c;
+    ahc3d_sensors s;
+    ahc3d_outputs o;
+    double lean_flat = 0.0, lean_rolled = 1.0;
+    int i, k;
+    ahc_params_default(&sp);
+    ahc_frontal_params_default(&f);
+    for (k = 0; k < 2; ++k) {
+        CHECK(ahc3d_init(&c, &sp, &f) == AHC_OK, "init 3d");
+        memset(&s, 0, sizeof s);
+        s.sag.fz = 70.0;
+        s.fz_left = s.fz_right = 35.0;
+        s.zmp_y = 0.03;               /* a push toward +y, the legs held straight */
+        s.imu_roll = k == 0 ? 0.0 : -0.05;
+        for (i = 0; i < 300; ++i) ahc3d_step(&c, &s, &o);
+        if (k == 0) lean_flat = c.frontal.lean; else lean_rolled = c.frontal.lean;
+    }
+    CHECK(lean_flat < -1e-3, "feet flat: the lean moves away from the push: %g", lean_flat);
+    CHECK(lean_rolled == 0.0, "feet rolled 0.05 rad: the lean holds (at 0): %g", lean_rolled);
 }
 
 int main(void)
@@ -347,7 +414,9 @@ int main(void)
     test_planes();
     test_frontal_model();
     test_frontal_law();
-    test_lateral_lean();
+    test_lateral_lean(AHC_LEAN_LOWPASS);
+    test_lateral_lean(AHC_LEAN_PENDULUM);
+    test_controller3d_foot_roll();
     test_controller3d_zero_offsets();
     test_frontal_fault_string();
     TEST_MAIN_END();

@@ -38,7 +38,7 @@ enum : fmi2ValueReference {
   com_x = 15, com_z = 16, disturbance_moment = 17, k_w = 18, com_x_desired = 19, fault = 20,
   theta_ankle_erect = 30, theta_hip_erect = 31,
   // the frontal plane
-  zmp_y = 4, fz_left = 5, fz_right = 6,
+  zmp_y = 4, fz_left = 5, fz_right = 6, imu_roll = 7,
   first_joint = 40,  // q_<side>_<joint>: 40 + 6 side + joint (AHC_LEFT, AHC_RIGHT; leg_ik.h order)
   phi_ref = 60, psi_ref = 61, dphi_ref = 62, dpsi_ref = 63, phase_y = 64, com_y = 65, com_z_frontal = 66,
   disturbance_moment_y = 67, k_w_y = 68, com_y_desired = 69, fault_y = 70,
@@ -109,6 +109,8 @@ ModelInfo makeInfo() {
   in("zmp_y", vr::zmp_y, "m", "Measured ZMP y from the mid-point between the ankles (+ left)", 0.0);
   in("fz_left", vr::fz_left, "N", "Left sole's normal load (start: half the model's weight)", 0.5 * weight);
   in("fz_right", vr::fz_right, "N", "Right sole's normal load (start: half the model's weight)", 0.5 * weight);
+  in("imu_roll", vr::imu_roll, "rad", "Trunk roll in the world, an IMU's (+ turns the top toward -y; Hoap2Plant3D's imu_roll)",
+     0.0);
   for (int s = 0; s < 2; ++s)
     for (int j = 0; j < AHC_LEG_JOINTS; ++j)
       in(std::string("q_") + kSide[s] + "_" + kJoint[j], jointVr(vr::first_joint, s, j), "rad",
@@ -247,9 +249,10 @@ class Controller3DModel final : public Model {
     s.zmp_y = ctx.real(vr::zmp_y);
     s.fz_left = ctx.real(vr::fz_left);
     s.fz_right = ctx.real(vr::fz_right);
+    s.imu_roll = ctx.real(vr::imu_roll);
     bool bad = !std::isfinite(s.sag.theta_ankle) || !std::isfinite(s.sag.theta_hip) || !std::isfinite(s.sag.zmp_x) ||
                !std::isfinite(s.sag.fz) || !std::isfinite(s.zmp_y) || !std::isfinite(s.fz_left) ||
-               !std::isfinite(s.fz_right);
+               !std::isfinite(s.fz_right) || !std::isfinite(s.imu_roll);
     for (int side = 0; side < 2; ++side)
       for (int j = 0; j < AHC_LEG_JOINTS; ++j) {
         s.q[side][j] = ctx.real(jointVr(vr::first_joint, side, j));

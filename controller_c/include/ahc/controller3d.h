@@ -22,6 +22,8 @@ typedef struct {
     double zmp_y;                      /* lateral ZMP from the mid-point between the ankles [m]   */
     double fz_left, fz_right;          /* each sole's normal load [N]                              */
     double q[2][AHC_LEG_JOINTS];       /* measured joint angles, [AHC_LEFT], [AHC_RIGHT] [rad]    */
+    double imu_roll;                   /* the trunk's roll in the world (an IMU's; Hoap2Plant3D's
+                                          imu_roll: + turns the top toward -y) [rad]             */
 } ahc3d_sensors;
 
 typedef struct {

@@ -31,7 +31,8 @@ extern "C" {
 /* Frontal fault bits (ahc_frontal_outputs.fault); "hold" as in controller.h. */
 enum {
     AHC_FFAULT_ZMP_Y_NONFINITE  = 1u << 0, /* hold: zmp_y is NaN or Inf                            */
-    AHC_FFAULT_ANGLE_NONFINITE  = 1u << 1, /* hold: a measured frontal angle is NaN or Inf          */
+    AHC_FFAULT_ANGLE_NONFINITE  = 1u << 1, /* hold: a measured frontal angle (or the feet's roll) is
+                                              NaN or Inf                                         */
     AHC_FFAULT_ZMP_Y_OUTSIDE    = 1u << 2, /* hold: zmp_y beyond the soles' outer edges by more than
                                               zmp_fault_margin_y                                   */
     AHC_FFAULT_LIFTED           = 1u << 3, /* hold: fz below the sagittal fz_lifted, or not finite  */
@@ -91,7 +92,22 @@ typedef struct {
     double lean_tau_y;          /* time constant of that low-pass (two stages of lean_tau_y/2) [s] */
     double lean_margin_y;       /* the leaned CoM reference stays this far inside the outer edges [m] */
     double fz_rocking_y;        /* a sole loaded less than this is lifted: the lean holds [N]   */
+    /* how the lean moves (docs/controller.md §11.2) */
+    int lean_law_y;             /* AHC_LEAN_LOWPASS: the lean is -D_y/(m g) low-passed (§4.6's law);
+                                   AHC_LEAN_PENDULUM: the CoM reference is the linear inverted
+                                   pendulum's under the low-passed D_y, its ZMP planned by
+                                   capture-point feedback toward -D_y/(m g), inside the soles   */
+    double lean_zmp_margin_y;   /* AHC_LEAN_PENDULUM: the planned ZMP stays this far inside the
+                                   outer edges [m]                                               */
+    double lean_capture_gain_y; /* AHC_LEAN_PENDULUM: the capture point converges at this
+                                   multiple of the pendulum's rate [-]                          */
+    double roll_rocking_y;      /* the feet rolled more than this (foot_roll): the robot rocks on a
+                                   sole's edge, the lean holds [rad]                             */
+    double rocking_dwell_y;     /* ... and holds until the feet have lain flat this long [s]     */
 } ahc_frontal_params;
+
+/* lean_law_y */
+enum { AHC_LEAN_LOWPASS = 0, AHC_LEAN_PENDULUM = 1 };
 
 /* HOAP-2 defaults (hoap2/nominal.h) and the frontal gains (docs/controller.md §11). */
 void ahc_frontal_params_default(ahc_frontal_params *f);
@@ -126,6 +142,8 @@ typedef struct {
     double fz;      /* total normal force [N]                                                    */
     double fz_left, fz_right; /* each sole's normal load [N]: the frontal moment balance holds only
                                  with both soles on the ground                                  */
+    double foot_roll; /* the feet's roll toward +y [rad]: the trunk's measured lean minus psi; 0 while
+                         the soles lie flat, the robot rocking on a sole's edge otherwise         */
 } ahc_frontal_sensors;
 
 typedef struct {
@@ -166,6 +184,10 @@ typedef struct {
     double hist_y[2][3], hist_z[2][3], hist_lean[2][3];
     int hist_n;
     double lean_alpha, lean_f1, lean_f, lean;
+    /* AHC_LEAN_PENDULUM: the planned CoM's rate, the pendulum's rate, the planned ZMP, the legs'
+     * lean that carries the planned CoM and its rate */
+    double lean_rate, omega_y, lean_p, phi_plan, dphi_plan;
+    double flat_time;           /* how long the feet have lain flat (|foot_roll| <= roll_rocking_y) [s] */
     unsigned fault;
     int holding;
     ahc_frontal_outputs last_out;
