@@ -45,7 +45,7 @@ CONFIGURATIONS = [
     ("lean_tau_y 0.05 s", "3d", {"lean_tau_y": 0.05}),
     ("lean_tau_y 0.1 s", "3d", {"lean_tau_y": 0.1}),
     ("lean_capture_gain_y 4", "3d", {"lean_capture_gain_y": 4.0}),
-    ("lean_capture_gain_y 32", "3d", {"lean_capture_gain_y": 32.0}),
+    ("lean_capture_gain_y 16", "3d", {"lean_capture_gain_y": 16.0}),
     ("lean_zmp_margin_y 5 mm", "3d", {"lean_zmp_margin_y": 0.005}),
     ("lean_zmp_margin_y 25 mm", "3d", {"lean_zmp_margin_y": 0.025}),
     ("lean_margin_y 5 mm", "3d", {"lean_margin_y": 0.005}),
@@ -56,6 +56,7 @@ CONFIGURATIONS = [
     ("rocking_dwell_y 0", "3d", {"rocking_dwell_y": 0.0}),
     ("rocking_dwell_y 0.15 s", "3d", {"rocking_dwell_y": 0.15}),
     ("fz_rocking_y 3 N (an unloaded sole holds the lean too)", "3d", {"fz_rocking_y": 3.0}),
+    ("two changes: lateral hip strategy on, zmp_limit_y 65 mm", "3d", {"hip_strategy_enabled_y": 1, "zmp_limit_y": 0.065}),
 ]
 
 # push shapes: (duration [s], rise [s], stop time [s]); the push starts at 1 s

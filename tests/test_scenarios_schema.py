@@ -56,6 +56,8 @@ def test_minimal(tmp_path):
     ("stop_time = 5\n[controller]\nKa = 'x'\n", "x.toml: controller.Ka: parameter value must be a number or boolean"),
     ("stop_time = 5\n[expect]\nmust_fall = 1\n", "x.toml: expect.must_fall: must be true or false, got integer 1"),
     ("stop_time = 5\n[expect]\nphases_reached = [0, 4]\n", "x.toml: expect.phases_reached[1]: phases are 0..3, got 4"),
+    ("stop_time = 5\n[expect]\nphases_y_reached = [5]\n", "x.toml: expect.phases_y_reached[0]: phases are 0..3, got 5"),
+    ("stop_time = 5\n[expect]\nmin_cycles_y = -1\n", "x.toml: expect.min_cycles_y"),
     ("stop_time = 5\n[expect]\nerect_by = 9\n", "x.toml: expect.erect_by: must be <= 5, got 9"),
     ("stop_time = 5\n[expect]\nfall_before = 3\n", "expect.fall_before: only meaningful with must_fall = true"),
     ("stop_time = 5\n[expect]\nwhatever = 3\n", "x.toml: expect.whatever: unknown key"),
@@ -127,3 +129,31 @@ def test_generic_expectations_check_named_columns():
     assert not checks["max_abs zmp_y"].ok and "0.02" in checks["max_abs zmp_y"].detail
     assert not checks["max_abs nope"].ok and "expect.max_abs.nope" in checks["max_abs nope"].detail
     assert checks["min_range feet_x"].ok and "0.3" in checks["min_range feet_x"].detail
+
+
+def test_frontal_phase_expectations():
+    """phases_y_reached and min_cycles_y check the 3D controller's frontal phase (phase_y) as
+    phases_reached and min_cycles check the sagittal one; a result without phase_y (the sagittal
+    controller) fails them, saying so."""
+    import numpy as np
+    from anklehip.analysis.summary import check_expect
+    from anklehip.files.scenario import Expect
+
+    def res(cols):
+        class Res:
+            outcome, fell, message = "completed", False, ""
+        n = len(next(iter(cols.values())))
+        Res.data = np.zeros(n, dtype=[("time", float)] + [(k, float) for k in cols])
+        Res.data["time"] = np.arange(n) * 0.1
+        for k, v in cols.items():
+            Res.data[k] = v
+        return Res()
+
+    e = Expect(phases_y_reached=[0, 1, 2, 3], min_cycles_y=1)
+    ok = {c.name: c for c in check_expect(res({"phase_y": [0, 1, 2, 3, 0]}), e)}
+    assert all(ok[f"frontal phase {p} reached"].ok for p in range(4)) and ok["frontal cycles"].ok
+    part = {c.name: c for c in check_expect(res({"phase_y": [0, 1, 2, 2]}), e)}
+    assert not part["frontal phase 3 reached"].ok and "[0, 1, 2]" in part["frontal phase 3 reached"].detail
+    assert not part["frontal cycles"].ok and "0 complete" in part["frontal cycles"].detail
+    none = {c.name: c for c in check_expect(res({"zmp_y": [0.0, 0.0]}), e)}
+    assert not none["frontal phase 0 reached"].ok and "no phase_y" in none["frontal phase 0 reached"].detail

@@ -150,6 +150,17 @@ def check_expect(res: RunResult, e: Expect) -> list[Check]:
         if e.min_cycles is not None:
             n = count_cycles(phase)
             out.append(Check("cycles", n >= e.min_cycles, f"{n} complete 0-1-2-3-0 cycles (need {e.min_cycles})"))
+    if e.phases_y_reached or e.min_cycles_y is not None:
+        # the 3D controller's frontal phases (a result without phase_y fails these checks)
+        phase_y = d["phase_y"] if "phase_y" in names else None
+        seen_y = set(int(x) for x in np.unique(phase_y)) if phase_y is not None else set()
+        det = f"frontal phases seen: {sorted(seen_y)}" if phase_y is not None else "no phase_y column (not the 3D controller)"
+        for p in e.phases_y_reached:
+            out.append(Check(f"frontal phase {p} reached", p in seen_y, det))
+        if e.min_cycles_y is not None:
+            n = count_cycles(phase_y) if phase_y is not None else 0
+            out.append(Check("frontal cycles", n >= e.min_cycles_y,
+                             f"{n} complete frontal 0-1-2-3-0 cycles (need {e.min_cycles_y})"))
     if e.erect_by is not None:
         m = t >= e.erect_by
         if res.end_time < e.erect_by or not m.any():

@@ -210,6 +210,8 @@ class Expect:
     phases_reached: list[int] = field(default_factory=list)
     phases_not_reached: list[int] = field(default_factory=list)
     min_cycles: int | None = None            # complete 0->1->2->3->0 cycles
+    phases_y_reached: list[int] = field(default_factory=list)   # the 3D controller's frontal phases (phase_y)
+    min_cycles_y: int | None = None          # complete frontal 0->1->2->3->0 cycles
     erect_by: float | None = None            # back in phase 0 and near erect from this time on
     erect_tol: float = 0.02                  # [rad] on |theta_ankle| and |theta_hip|
     max_abs_zmp: float | None = None         # [m]
@@ -341,7 +343,7 @@ PUSH_KEYS = {
     "pulse": ({"kind", "t", "duration", "force", "rise"}, {"duration", "force"}),
 }
 EXPECT_KEYS = {"must_fall", "fall_after", "fall_before", "phases_reached", "phases_not_reached",
-               "min_cycles", "erect_by", "erect_tol", "max_abs_zmp", "no_fault", "max_abs", "min_range"}
+               "min_cycles", "phases_y_reached", "min_cycles_y", "erect_by", "erect_tol", "max_abs_zmp", "no_fault", "max_abs", "min_range"}
 REF_KEYS = {"file", "columns", "num", "dx", "dy", "abs_tol", "rel_tol", "interval", "band_floor", "signals"}
 REF_SIGNAL_KEYS = {"dy", "abs_tol", "rel_tol", "band_floor"}
 
@@ -419,7 +421,7 @@ def _parse_expect(v: _V, d: Any, stop_time: float) -> Expect:
             if not e.must_fall:
                 v.fail(f"expect.{k}", "only meaningful with must_fall = true")
             setattr(e, k, v.num(d[k], f"expect.{k}", ge=0.0, le=stop_time))
-    for k in ("phases_reached", "phases_not_reached"):
+    for k in ("phases_reached", "phases_not_reached", "phases_y_reached"):
         if k in d:
             lst = v.list_(d[k], f"expect.{k}")
             vals = []
@@ -434,6 +436,8 @@ def _parse_expect(v: _V, d: Any, stop_time: float) -> Expect:
         v.fail("expect.phases_not_reached", f"phase(s) {sorted(both)} also listed in phases_reached")
     if "min_cycles" in d:
         e.min_cycles = v.int_(d["min_cycles"], "expect.min_cycles", ge=0)
+    if "min_cycles_y" in d:
+        e.min_cycles_y = v.int_(d["min_cycles_y"], "expect.min_cycles_y", ge=0)
     if "erect_by" in d:
         e.erect_by = v.num(d["erect_by"], "expect.erect_by", ge=0.0, le=stop_time)
         if e.must_fall:

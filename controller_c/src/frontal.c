@@ -73,7 +73,7 @@ void ahc_frontal_params_default(ahc_frontal_params *f)
     f->fz_rocking_y = 0.0;
     f->lean_law_y = AHC_LEAN_PENDULUM;
     f->lean_zmp_margin_y = 0.015;
-    f->lean_capture_gain_y = 16.0;
+    f->lean_capture_gain_y = 32.0;
     f->roll_rocking_y = 0.01;
     f->rocking_dwell_y = 0.05;
 }
