@@ -62,7 +62,7 @@ constexpr double kWeldSpeed = 1e-4;
 // Plant3D (World) initialises ODE, the last one destroyed closes it, counted under a mutex because
 // instances live in any thread (dInitODE2 / dCloseODE are not thread-safe and ODE is static inside
 // each binary, so this count is every ODE user of the binary). ODE is built without thread-local
-// data (ODE_WITH_OU=OFF, cmake/OdeFromDebianSource.cmake; plant3d/tests/test_ode_lifetime.cpp
+// data (ODE_WITH_OU=OFF, cmake/OdeFromDebianSource.cmake; the CTest plant3d.ode_lifetime
 // checks it): no thread holds anything of ODE, so an instance may be created, stepped and freed
 // from different threads and the last one may close ODE on any of them.
 [[noreturn]] void ode_throw(int num, const char* msg, va_list ap) {
