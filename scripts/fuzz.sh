@@ -10,8 +10,8 @@
 #   bash scripts/fuzz.sh SECONDS WORK [FMU...]     SECONDS per FMU (default FMUs: every shipped FMU
 #                                                 whose <Model>_fuzz is built in <build>/sanitize;
 #                                                 each covers the FMU and its FMI 3.0 twin)
-#   bash scripts/fuzz.sh --long WORK [FMU...]      until 10 million inputs per FMU (hours: the 3D
-#                                                 plant runs about 100 inputs/s sanitized); RUNS=N
+#   bash scripts/fuzz.sh --long WORK [FMU...]      until 10 million inputs per FMU (days: the 3D
+#                                                 plant runs about 15 inputs/s sanitized); RUNS=N
 #                                                 sets another count; the figures also go to
 #                                                 WORK/figures.md, to be quoted in docs/reliability.md
 #   bash scripts/fuzz.sh 60 build/sanitize/fuzz   (the CI step; needs bash scripts/setup.sh --sanitize)

@@ -8,7 +8,8 @@
 #   3. closed-loop scenarios from Python through the sanitized FMUs (ASan runtime preloaded): the
 #      sagittal loop (hip_saves_push) and the 3D one (side_push_frontal: AnkleHipController3D on
 #      Hoap2Plant3D), so every shipped FMU runs sanitized;
-#   4. a Valgrind memcheck of the same two closed loops through the shipped FMUs.
+#   4. a Valgrind memcheck of the same two closed loops through the shipped FMUs (the known errors of
+#      the interpreter, NumPy, lxml and the loader suppressed by scripts/valgrind-python.supp).
 # Usage: bash scripts/reliability.sh            (after bash scripts/setup.sh --sanitize)
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"

@@ -7,9 +7,12 @@ Runs `anklehip run SCENARIO` under memcheck (Python with PYTHONMALLOC=malloc, so
 own allocator hides nothing), reads Valgrind's XML report and counts, for each FMU binary, the
 errors (invalid reads/writes, uninitialised values, bad frees) and the definitely lost bytes whose
 stack passes through it (or through any other object built in this repository). Exit status 0
-only if both are zero for every FMU and the run succeeded; errors whose stacks pass through none
-of ours are listed by the library of their innermost frame (the interpreter, numpy, the loader)
-and do not count. Issue 12, issue 33 / docs/reliability.md.
+only if both are zero for every FMU and the run succeeded. The known errors of the interpreter,
+NumPy, lxml and the loader are suppressed by scripts/valgrind-python.supp (--suppressions; each
+suppression is checked to name only frames of those libraries, so none can hide an error of ours)
+and counted by name; errors whose stacks pass through none of ours and that no suppression matched
+are listed by the library of their innermost frame and do not count. Issue 12, issue 33 /
+docs/reliability.md, "Valgrind suppressions".
 """
 from __future__ import annotations
 
@@ -27,6 +30,42 @@ sys.path.insert(0, str(ROOT))
 from anklehip.files.paths import SHIPPED  # noqa: E402  (every FMU the project ships)
 
 FMU_BINARIES = tuple(f"{name}.so" for name in SHIPPED)
+SUPPRESSIONS = ROOT / "scripts" / "valgrind-python.supp"
+# The only objects a suppression may name: the interpreter, NumPy, lxml, the loader and libc. None
+# of them is built here, and a suppression names its frames by these or by functions inside them.
+ALLOWED_OBJ = ("*/libpython3.11.so*", "*/numpy/_core/_multiarray_umath.cpython-311-*.so",
+               "*/lxml/etree.cpython-311-*.so", "*/ld-linux-x86-64.so.2", "*/libc.so.6")
+
+
+def check_suppressions(text: str) -> list[str]:
+    """The suppressions' names, or ValueError naming the first that could match a frame of ours:
+    a "..." wildcard, an obj: outside ALLOWED_OBJ, no obj: line pinning it to such a library, or a
+    line that is not a frame."""
+    names: list[str] = []
+    lines = [ln.strip() for ln in text.splitlines() if ln.strip() and not ln.strip().startswith("#")]
+    i = 0
+    while i < len(lines):
+        if lines[i] != "{":
+            raise ValueError(f"expected '{{' at {lines[i]!r}")
+        end = lines.index("}", i)
+        body = lines[i + 1:end]
+        if len(body) < 3:
+            raise ValueError(f"suppression at {body!r}: a name, a kind and frames expected")
+        name, frames = body[0], body[2:]
+        if frames and frames[0].startswith("match-leak-kinds:"):
+            frames = frames[1:]
+        for f in frames:
+            if f in ("...", "fun:*", "obj:*") or f.startswith("src:"):
+                raise ValueError(f"suppression {name}: {f!r} could match a frame of ours")
+            if not (f.startswith("fun:") or f.startswith("obj:")):
+                raise ValueError(f"suppression {name}: {f!r} is not a frame")
+            if f.startswith("obj:") and f[4:] not in ALLOWED_OBJ:
+                raise ValueError(f"suppression {name}: {f!r} is not one of {', '.join(ALLOWED_OBJ)}")
+        if not any(f.startswith("obj:") for f in frames):
+            raise ValueError(f"suppression {name}: no obj: line pins it to a library that is not ours")
+        names.append(name)
+        i = end + 1
+    return names
 
 
 def ours(error: ET.Element) -> str | None:
@@ -57,6 +96,10 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("scenario", nargs="?", default="hip_saves_push")
     ap.add_argument("--stop-time", default="1.5", help="simulated seconds (default 1.5: the push and the hip strategy)")
     ap.add_argument("--plant", default=None, choices=("sagittal", "3d"), help="plant model (default: the scenario's)")
+    ap.add_argument("--suppressions", default=str(SUPPRESSIONS),
+                    help="Valgrind suppressions of errors outside our binaries (default: %(default)s); "
+                         "'' for none")
+    ap.add_argument("--keep-xml", default=None, help="also copy Valgrind's XML report here")
     args = ap.parse_args(argv)
     if not FMU_BINARIES:
         print("valgrind_closed_loop: no packed FMUs in the build (bash scripts/setup.sh)", file=sys.stderr)
@@ -71,8 +114,17 @@ def main(argv: list[str] | None = None) -> int:
 
     with tempfile.TemporaryDirectory(prefix="anklehip-valgrind-") as tmp:
         xml = Path(tmp) / "memcheck.xml"
+        supp = []
+        if args.suppressions:
+            try:
+                check_suppressions(Path(args.suppressions).read_text())
+            except (OSError, ValueError) as e:
+                print(f"valgrind_closed_loop: {args.suppressions}: {e}", file=sys.stderr)
+                return 2
+            supp = [f"--suppressions={args.suppressions}"]
         cmd = ["valgrind", "--tool=memcheck", "--leak-check=full", "--show-leak-kinds=definite",
                "--errors-for-leak-kinds=definite", "--track-origins=yes", "--xml=yes", f"--xml-file={xml}",
+               "--gen-suppressions=all", *supp,
                sys.executable, "-m", "anklehip.cli", "run", args.scenario, "--stop-time", args.stop_time,
                "--out", str(Path(tmp) / "out"), "--no-progress"]
         if args.plant:
@@ -84,6 +136,8 @@ def main(argv: list[str] | None = None) -> int:
             print(run.stdout[-3000:], run.stderr[-3000:], sep="\n", file=sys.stderr)
             print(f"valgrind_closed_loop: the run failed (exit {run.returncode})", file=sys.stderr)
             return 1
+        if args.keep_xml:
+            Path(args.keep_xml).write_bytes(xml.read_bytes())
         root = ET.parse(xml).getroot()
 
     errors: dict[str, list[str]] = defaultdict(list)
@@ -108,11 +162,18 @@ def main(argv: list[str] | None = None) -> int:
         for line in errors[name][:10]:
             print("   ", line)
     print("(not loaded by this scenario: " + (", ".join(sorted(set(FMU_BINARIES) - used)) or "none") + ")")
-    # No stack of these passes through a binary of ours: attributed to the library of the innermost
-    # frame besides Valgrind's own (the interpreter, numpy, lxml, the dynamic loader), listed, not counted.
-    print("outside our binaries, not counted:" + ("" if elsewhere else " nothing"))
+    # No stack of these passes through a binary of ours, and no suppression matched them: attributed
+    # to the library of the innermost frame besides Valgrind's own, listed (something new to look
+    # at), not counted.
+    print("outside our binaries, not suppressed, not counted:" + ("" if elsewhere else " nothing"))
     for lib, kinds in sorted(elsewhere.items()):
         print(f"    {lib}: " + ", ".join(f"{n} {k}" for k, n in sorted(kinds.items())))
+    counts = root.find("suppcounts")
+    used_supp = [(p.findtext("name"), int(p.findtext("count") or 0)) for p in (counts.iter("pair") if counts is not None else [])]
+    print("suppressed (" + (Path(args.suppressions).name if args.suppressions else "no suppressions file") + "):"
+          + ("" if used_supp else " nothing"))
+    for name, count in sorted(used_supp):
+        print(f"    {name}: {count}")
     bad = any(errors.values()) or any(lost.values())
     print("valgrind_closed_loop:", "FAILED" if bad else "clean")
     return 1 if bad else 0

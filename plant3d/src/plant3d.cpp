@@ -55,7 +55,16 @@ constexpr double kNearLift = 1e-3;
 // A free foot on four corners is held once no corner moves faster than this [m/s].
 constexpr double kWeldSpeed = 1e-4;
 
-// --- ODE's process-wide state: initialised once (thread-safe), its error hooks throw ------------
+// --- ODE's process-wide state: held while any Plant3D exists -----------------------------------
+// dInitODE2 allocates ODE's default threading implementation and dCloseODE frees it together with
+// the geometry position cache (the last destroyed geom's dxPosR): 176 bytes that a binary which
+// initialised ODE once and never closed it lost at every unload (docs/reliability.md). The first
+// Plant3D (World) initialises ODE, the last one destroyed closes it, counted under a mutex because
+// instances live in any thread (dInitODE2 / dCloseODE are not thread-safe and ODE is static inside
+// each binary, so this count is every ODE user of the binary). ODE is built without thread-local
+// data (ODE_WITH_OU=OFF, cmake/OdeFromDebianSource.cmake; the CTest plant3d.ode_lifetime
+// checks it): no thread holds anything of ODE, so an instance may be created, stepped and freed
+// from different threads and the last one may close ODE on any of them.
 [[noreturn]] void ode_throw(int num, const char* msg, va_list ap) {
   char buf[512];
   std::vsnprintf(buf, sizeof buf, msg, ap);
@@ -67,19 +76,35 @@ void ode_message(int num, const char* msg, va_list ap) {
   std::vsnprintf(buf, sizeof buf, msg, ap);
   if (tl_logger && *tl_logger) (*tl_logger)(std::string("ODE message ") + std::to_string(num) + ": " + buf);
 }
-void ode_init_once() {
-  static std::once_flag once;
-  std::call_once(once, [] {
-    dInitODE2(0);
+std::mutex ode_mutex;
+int ode_users = 0;  // guarded by ode_mutex
+
+}  // namespace
+
+OdeUse::OdeUse() {
+  std::lock_guard<std::mutex> lock(ode_mutex);
+  if (ode_users == 0) {
+    if (!dInitODE2(0)) throw std::runtime_error("ODE: dInitODE2 failed");
     // ODE's default error and debug handlers print and abort the process: ours throw, and the
-    // FMU turns that into fmi2Error. Never dCloseODE: other instances may still be running.
+    // FMU turns that into fmi2Error.
     dSetErrorHandler(ode_throw);
     dSetDebugHandler(ode_throw);
     dSetMessageHandler(ode_message);
-  });
-  // per-thread data (a no-op unless ODE was built with thread-local caches); cheap when present
-  if (!dAllocateODEDataForThread(dAllocateMaskAll)) throw std::runtime_error("ODE: no per-thread data");
+  }
+  ++ode_users;
 }
+
+OdeUse::~OdeUse() {
+  std::lock_guard<std::mutex> lock(ode_mutex);
+  if (--ode_users == 0) dCloseODE();
+}
+
+int OdeUse::users() {
+  std::lock_guard<std::mutex> lock(ode_mutex);
+  return ode_users;
+}
+
+namespace {
 
 // Proto motor name -> (side, leg joint); false for joints that are not leg joints.
 bool leg_joint(const char* motor, int& side, int& kind) {
@@ -232,6 +257,7 @@ struct GroundReaction {
 };
 
 struct Plant3D::World {
+  OdeUse ode;  // first member, so released last: after ~World has destroyed the ODE objects
   dWorldID world = nullptr;
   dThreadingImplementationID threading = nullptr;  // this world's own (ODE's default one is shared)
   dGeomID ground = nullptr;
@@ -389,7 +415,6 @@ void group_anchor(const Plant3D::World& w, int s, int g, double a[3]) {
 }  // namespace
 
 Plant3D::Plant3D(const Params& p) : P_(p), w_(std::make_unique<World>()) {
-  ode_init_once();
   World& w = *w_;
   w.world = dWorldCreate();
   // Without its own threading implementation a world uses ODE's process-wide default one, whose

@@ -209,6 +209,17 @@ struct JointInfo {
   double lo, hi;           // limits, this model's sense [rad]
 };
 
+// ODE's process-wide state (dInitODE2 ... dCloseODE), held by every Plant3D: the first holder
+// initialises ODE, the last one released closes it (plant3d.cpp). Thread-safe; any thread.
+class OdeUse {
+ public:
+  OdeUse();   // throws std::runtime_error if ODE cannot be initialised
+  ~OdeUse();
+  OdeUse(const OdeUse&) = delete;
+  OdeUse& operator=(const OdeUse&) = delete;
+  static int users();  // holders now (0: ODE is closed)
+};
+
 class Plant3D {
  public:
   explicit Plant3D(const Params& p);  // builds the robot in the zero posture, at rest on the ground
