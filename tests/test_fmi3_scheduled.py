@@ -77,6 +77,13 @@ def test_description(se_fmu, fmu_dir):
             assert w.variability == v.variability and not w.clocks, v.name
     # clocked outputs are no initial unknowns; the calculated parameters still are
     assert {u.variable.causality for u in se.initialUnknowns} == {"calculatedParameter"}
+    # the Co-Simulation twin's binary, x86_64-linux only (its importers are tested here on Linux)
+    so = f"binaries/x86_64-linux/{NAME}.so"
+    with zipfile.ZipFile(se_fmu) as z, zipfile.ZipFile(fmu_dir / "fmi3" / f"{NAME}.fmu") as t:
+        assert {n.split("/")[1] for n in z.namelist() if n.startswith("binaries/") and n.count("/") >= 2} == \
+            {"x86_64-linux"}
+        assert z.read(so) == t.read(so)
+        assert not any(n.startswith("sources/") for n in z.namelist())
 
 
 def _interval(fmu) -> float:
