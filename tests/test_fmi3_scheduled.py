@@ -192,6 +192,10 @@ def test_scheduled_execution_rules(se_fmu, fmu_dir):
         with pytest.raises(Exception):
             f.activateModelPartition(clock.valueReference + 1, 0.5)   # no such clock
         assert any("is not an input clock" in m for m in log), log
+        # the constant interval, as an importer may ask for it
+        vrs, iv, q = (ctypes.c_uint32 * 1)(clock.valueReference), (ctypes.c_double * 1)(), (ctypes.c_int * 1)(-1)
+        f.getIntervalDecimal(vrs, iv, q)
+        assert (iv[0], q[0]) == (1e-3, 1)   # fmi3IntervalUnchanged
         f.activateModelPartition(clock.valueReference, 0.5)
         f.activateModelPartition(clock.valueReference, 0.5 + 1e-3)
         for t in (0.5 + 1e-3, 0.5 + 3e-3):   # a repeated and a skipped tick

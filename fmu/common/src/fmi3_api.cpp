@@ -223,7 +223,7 @@ fmi3Status fmi3ExitInitializationMode(fmi3Instance c) {
     CALLLOG(inst, "fmi3ExitInitializationMode");
     const char* fn = "fmi3ExitInitializationMode";
     const ScheduledClock& clock = inst->info.clock;
-    if (inst->scheduled && !clock.period_parameter.empty() && inst->allowed(kInit, fn)) {
+    if (inst->scheduled && !clock.period_parameter.empty() && inst->state == State::InitializationMode) {
       // one activation is one step of the model's own period: the two must be the same
       for (size_t i = 0; i < inst->info.variables.size(); ++i) {
         const Variable& v = inst->info.variables[i];
@@ -472,9 +472,22 @@ fmi3Status fmi3EnterConfigurationMode(fmi3Instance c) {
 fmi3Status fmi3ExitConfigurationMode(fmi3Instance c) {
   return unsupported(c, "fmi3ExitConfigurationMode", "no structural parameters");
 }
-fmi3Status fmi3GetIntervalDecimal(fmi3Instance c, const fmi3ValueReference[], size_t, fmi3Float64[],
-                                  fmi3IntervalQualifier[]) {
-  return unsupported(c, "fmi3GetIntervalDecimal", "no clocks");
+// The Scheduled Execution clock's interval (constant: the description's intervalDecimal).
+fmi3Status fmi3GetIntervalDecimal(fmi3Instance c, const fmi3ValueReference vr[], size_t nvr, fmi3Float64 intervals[],
+                                  fmi3IntervalQualifier qualifiers[]) {
+  return call(c, "fmi3GetIntervalDecimal", [&](Instance* inst) {
+    const char* fn = "fmi3GetIntervalDecimal";
+    if (!inst->allowed(kMaskGet, fn)) return fmi2Error;
+    if (nvr > 0 && (!vr || !intervals || !qualifiers)) return inst->error("%s: an array is NULL with nvr = %zu", fn, nvr);
+    const ScheduledClock& clock = inst->info.clock;
+    for (size_t k = 0; k < nvr; ++k) {
+      if (!(clock.interval > 0.0) || vr[k] != clock.vr)
+        return inst->error("%s: value reference %u is no clock of this FMU", fn, vr[k]);
+      intervals[k] = clock.interval;
+      qualifiers[k] = fmi3IntervalUnchanged;
+    }
+    return fmi2OK;
+  });
 }
 fmi3Status fmi3GetIntervalFraction(fmi3Instance c, const fmi3ValueReference[], size_t, fmi3UInt64[], fmi3UInt64[],
                                    fmi3IntervalQualifier[]) {

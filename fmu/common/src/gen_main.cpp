@@ -152,7 +152,23 @@ int main(int argc, char** argv) {
         << xmlName(v.causality) << "</td><td>" << xmlName(v.variability) << "</td><td>" << html(v.unit)
         << "</td><td>" << html(startText(v)) << "</td><td>" << g(v.min) << "</td><td>" << g(v.max) << "</td><td>"
         << html(v.description) << "</td></tr>\n";
-    f << "</table>\n</body></html>\n";
+    f << "</table>\n";
+    if (fmi3 && !info.arrays.empty()) {  // FMI 3.0: the arrays, views of the variables above
+      f << "<h2>Float64 arrays (FMI 3.0)</h2>\n<p>Each is the listed variables' values, row-major; reading or "
+           "setting it reads or sets them.</p>\n<table border=\"1\" cellspacing=\"0\" cellpadding=\"3\">\n"
+           "<tr><th>name</th><th>vr</th><th>dimensions</th><th>elements</th><th>description</th></tr>\n";
+      for (const auto& a : info.arrays) {
+        std::string dims, elements;
+        for (int d : a.dimensions) dims += (dims.empty() ? "" : " x ") + std::to_string(d);
+        for (fmi2ValueReference r : a.elements)
+          for (const auto& v : info.variables)
+            if (v.vr == r) elements += (elements.empty() ? "" : ", ") + v.name;
+        f << "<tr><td>" << html(a.name) << "</td><td>" << a.vr << "</td><td>" << dims << "</td><td>" << html(elements)
+          << "</td><td>" << html(a.description) << "</td></tr>\n";
+      }
+      f << "</table>\n";
+    }
+    f << "</body></html>\n";
     if (!f) { std::cerr << "cannot write " << dir << "/documentation/index.html\n"; return 1; }
   }
   if (!info.resources.empty()) std::filesystem::create_directories(dir + "/resources");
