@@ -206,3 +206,32 @@ def test_arrays_follow_the_fmi2_closed_loop_bit_for_bit(fmu_dir, twin, md):
         assert pushed > 10.0 and np.max(np.abs(data["q_left_hip_roll"])) > 1e-3  # a push the legs answered
     finally:
         s.free()
+
+
+def test_the_3d_controller_arrays_match_the_plants(fmu_dir, md):
+    """AnkleHipController3D's twin declares its joint-angle inputs and per-leg set-point outputs as
+    arrays of the same names, dimensions and element order as Hoap2Plant3D's: an importer that
+    connects arrays connects q (plant -> controller) and q_leg_ref (controller -> plant) by name."""
+    p = fmu_dir / "fmi3" / "AnkleHipController3D.fmu"
+    assert validate_fmu(str(p)) == []
+    c = _vars(read_model_description(str(p)))
+    v = _vars(md)
+    for name, causality in (("q", "input"), ("q_leg_ref", "output")):
+        a = c[name]
+        assert a.causality == causality and [d.start for d in a.dimensions] == [d.start for d in v[name].dimensions]
+        assert a.unit == v[name].unit == "rad"
+    x = FMU3Slave(guid=read_model_description(str(p)).instantiationToken,
+                  unzipDirectory=extract(str(p)), modelIdentifier="AnkleHipController3D", instanceName="c")
+    x.instantiate()
+    try:
+        angles = [0.001 * k for k in range(12)]
+        x.setFloat64([c["q"].valueReference], angles)
+        x.enterInitializationMode(startTime=0.0)
+        assert x.getFloat64([c[e].valueReference for e in ARRAYS["q"][1]]) == angles
+        x.exitInitializationMode()
+        x.doStep(0.0, 1e-3)
+        assert x.getFloat64([c["q_leg_ref"].valueReference], 12) == \
+            x.getFloat64([c[e].valueReference for e in ARRAYS["q_leg_ref"][1]])
+        x.terminate()
+    finally:
+        x.freeInstance()

@@ -1,5 +1,6 @@
-"""The FMI 3.0 Scheduled Execution variant of the controller (issue 28):
-build/fmus/fmi3/AnkleHipController_se.fmu, the FMI 3.0 library of the Co-Simulation twin with a
+"""The FMI 3.0 Scheduled Execution variants of the controllers (issue 28):
+build/fmus/fmi3/<Name>_se.fmu for AnkleHipController and AnkleHipController3D
+(anklehip.files.paths.SCHEDULED_EXECUTION), the FMI 3.0 library of the Co-Simulation twin with a
 description generated from the same variable table (fmuglue::ModelInfo::clock): one model
 partition on the input clock `tick` (intervalVariability = constant, intervalDecimal = the
 controller's sample period), every input and output clocked by it (docs/fmu.md, "Scheduled
@@ -13,7 +14,8 @@ What is established here:
 * FMPy's FMU3ScheduledExecution (instantiate, enter/exit initialization, fmi3ActivateModelPartition
   N times with the sensor inputs of a recorded closed-loop run) gives every output bit for bit as
   the Co-Simulation twin stepped tick by tick (fmi3DoStep(t_k, 1 ms)) and as the recorded FMI 2.0
-  loop, through the ankle-to-hip and hip-to-ankle transitions;
+  loop: the sagittal controller through hip_saves_push (all four phases), the 3D one through
+  side_push_frontal (its per-leg set points read as the array q_leg_ref too);
 * the rules: an activation must be the clock's next tick (a skipped or repeated tick is an error
   naming the expected time), the clock reference must be the FMU's clock, fmi3DoStep is refused on a
   Scheduled Execution instance and fmi3ActivateModelPartition on a Co-Simulation one, a
@@ -31,29 +33,43 @@ from fmpy import extract, read_model_description
 from fmpy.fmi3 import FMU3Slave, FMU3ScheduledExecution
 from fmpy.validation import validate_fmu
 
-NAME = "AnkleHipController"
+from anklehip.files.paths import SCHEDULED_EXECUTION
+
+# the closed loop each controller's activations replay (and its simulated seconds)
+SCENARIOS = {"AnkleHipController": ("hip_saves_push", 12.0), "AnkleHipController3D": ("side_push_frontal", 4.0)}
+
+
+def test_the_list():
+    assert set(SCHEDULED_EXECUTION) == set(SCENARIOS)
+
+
+@pytest.fixture(scope="module", params=SCHEDULED_EXECUTION)
+def model(request):
+    return request.param
 
 
 @pytest.fixture(scope="module")
-def se_fmu(fmu_dir):
-    p = fmu_dir / "fmi3" / f"{NAME}_se.fmu"
+def se_fmu(fmu_dir, model):
+    p = fmu_dir / "fmi3" / f"{model}_se.fmu"
     assert p.is_file(), f"{p} is missing: add_fmu(... SCHEDULED_EXECUTION) packs it (cmake/AddFmu.cmake)"
     return p
 
 
 @pytest.fixture(scope="module")
-def recorded(fmu_dir):
-    """The FMI 2.0 closed loop hip_saves_push: its controller inputs, outputs and parameters."""
+def recorded(fmu_dir, model):
+    """The FMI 2.0 closed loop of the model's scenario: its controller inputs, outputs and parameters."""
     from anklehip.files.paths import find_scenario
     from anklehip.files.scenario import load_scenario
     from anklehip.running.master import Models, simulate
-    sc = load_scenario(find_scenario("hip_saves_push"))
-    run = simulate(sc, Models.for_scenario(sc, fmu_dir, fmi=2), progress=False)
+    scenario, seconds = SCENARIOS[model]
+    sc = load_scenario(find_scenario(scenario))
+    run = simulate(sc, Models.for_scenario(sc, fmu_dir, fmi=2), progress=False, stop_time=seconds)
     assert run.complete
     return run
 
 
-def test_description(se_fmu, fmu_dir):
+def test_description(se_fmu, fmu_dir, model):
+    NAME = model
     assert validate_fmu(str(se_fmu)) == []
     se = read_model_description(str(se_fmu))
     cs = read_model_description(str(fmu_dir / "fmi3" / f"{NAME}.fmu"))
@@ -122,7 +138,8 @@ def _se(se_fmu, md, name="se"):
     return f, messages
 
 
-def test_activations_equal_the_cosimulation_twin_tick_by_tick(se_fmu, fmu_dir, recorded):
+def test_activations_equal_the_cosimulation_twin_tick_by_tick(se_fmu, fmu_dir, recorded, model):
+    NAME = model
     md = read_model_description(str(se_fmu))
     cs_path = fmu_dir / "fmi3" / f"{NAME}.fmu"
     md_cs = read_model_description(str(cs_path))
@@ -130,12 +147,14 @@ def test_activations_equal_the_cosimulation_twin_tick_by_tick(se_fmu, fmu_dir, r
     T = _interval(se_fmu)
     data, params = recorded.data, recorded.controller_parameters
     assert recorded.step == T   # the loop steps the controller once per tick
-    ins = [v for v in md.modelVariables if v.causality == "input" and v.type != "Clock"]
-    outs = [v for v in md.modelVariables if v.causality == "output"]
+    ins = [v for v in md.modelVariables if v.causality == "input" and v.type != "Clock" and not v.dimensions]
+    outs = [v for v in md.modelVariables if v.causality == "output" and not v.dimensions]
+    arrays = {v.name: v for v in md.modelVariables if v.dimensions and v.causality == "output"}
     reals = [v.valueReference for v in outs if v.type == "Float64"]
     enums = [v.valueReference for v in outs if v.type == "Enumeration"]
     ints = [v.valueReference for v in outs if v.type == "Int32"]
     in_vrs = [v.valueReference for v in ins]
+    var = {v.name: v for v in md.modelVariables}
     column = {var: col for col, var in recorded.controller_columns.items()}
     real_outs = [v for v in outs if v.type == "Float64"]
     assert {v.name for v in real_outs} <= set(column)
@@ -163,7 +182,13 @@ def test_activations_equal_the_cosimulation_twin_tick_by_tick(se_fmu, fmu_dir, r
             phases.add(a[1][0])
             for v, x in zip(real_outs, a[0]):   # and the FMI 2.0 loop's controller columns at row k
                 assert x == data[column[v.name]][k], (k, v.name)
-        assert phases == {0, 1, 2, 3}, phases   # the run goes through all four phases
+            if arrays:   # the 3D controller's per-leg set points, clocked like their scalars
+                legs = [var[f"q_{s}_{j}_ref"].valueReference for s in SIDES for j in JOINTS]
+                assert se.getFloat64([arrays["q_leg_ref"].valueReference], 12) == se.getFloat64(legs)
+        if model == "AnkleHipController":
+            assert phases == {0, 1, 2, 3}, phases   # the run goes through all four phases
+        else:   # the side push moves the frontal plane's references
+            assert max(abs(x) for x in data[column["phi_ref"]]) > 1e-3
         assert not [m for m in se_log if "rror" in m], se_log
     finally:
         for f in (se, cs):
@@ -171,7 +196,12 @@ def test_activations_equal_the_cosimulation_twin_tick_by_tick(se_fmu, fmu_dir, r
             f.freeInstance()
 
 
-def test_scheduled_execution_rules(se_fmu, fmu_dir):
+SIDES = ("left", "right")
+JOINTS = ("hip_yaw", "hip", "hip_roll", "knee", "ankle", "ankle_roll")
+
+
+def test_scheduled_execution_rules(se_fmu, fmu_dir, model):
+    NAME = model
     md = read_model_description(str(se_fmu))
     clock = next(v for v in md.modelVariables if v.type == "Clock")
     sample = next(v for v in md.modelVariables if v.name == "sample_period")

@@ -33,7 +33,7 @@ FMUS = (*CONTROLLER_FMUS.values(), *PLANT_FMUS.values())
 SHIPPED = tuple(f.removesuffix(".fmu") for f in FMUS)
 # The FMI 3.0 Scheduled Execution variants, <fmu dir>/fmi3/<name>_se.fmu (x86_64-linux; docs/fmu.md):
 # the models of SHIPPED that declare a clock. The FMI 3.0 checks that apply iterate over them too.
-SCHEDULED_EXECUTION = ("AnkleHipController",)
+SCHEDULED_EXECUTION = ("AnkleHipController", "AnkleHipController3D")
 RT_RUNNER = "anklehip_rt_step"
 NATIVE_LIBRARY = "libanklehip_closed_loop.so"
 
