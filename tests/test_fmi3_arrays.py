@@ -235,3 +235,16 @@ def test_the_3d_controller_arrays_match_the_plants(fmu_dir, md):
         x.terminate()
     finally:
         x.freeInstance()
+
+
+def test_simulate_fmu_records_the_arrays(twin):
+    """FMPy's simulate_fmu, recording every output by default, reads each array with nValues = its
+    size and gets it in its shape, equal to the scalars."""
+    from fmpy import simulate_fmu
+    r = simulate_fmu(str(twin), stop_time=0.05, step_size=1e-3, output_interval=1e-3)
+    for name in OUTPUT_ARRAYS:
+        dims, elements = ARRAYS[name]
+        assert r[name].shape == (len(r),) + dims, name
+        flat = r[name].reshape(len(r), -1)
+        for k, e in enumerate(elements):
+            assert np.array_equal(flat[:, k], r[e]), (name, e)
