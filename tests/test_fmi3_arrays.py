@@ -14,7 +14,9 @@ What is established here:
   instance fed the loop's plant inputs *through the array input* reproduces the loop bit for bit,
   and every output array equals the FMI 2.0 loop's scalars bit for bit at every step;
 * a wrong nValues is an error that names the array and its size; an array through another type's
-  function, or through FMI 2.0, is refused naming it.
+  function, or through FMI 2.0, is refused naming it;
+* FMPy's simulate_fmu with its default outputs records each array in its shape, equal to the scalars;
+* AnkleHipController3D's twin has the arrays q (in) and q_leg_ref (out) under the plant's names.
 """
 from __future__ import annotations
 
