@@ -1,4 +1,4 @@
-# add_fmu(NAME <ModelName> SOURCES <src>... [LINK <lib>...] [INCLUDE_DIRS <dir>...]
+# add_fmu(NAME <ModelName> SOURCES <src>... [LINK <lib>...] [INCLUDE_DIRS <dir>...] [SCHEDULED_EXECUTION]
 #         [DOCUMENTATION <file>...] [DOCUMENTATION_IMAGES <file>...] [OUTPUT_DIR <dir>]
 #         [SOURCE_FMU_FILES <file>... SOURCE_FMU_HEADER_DIRS <dir>...
 #          [SOURCE_FMU_DEPENDENCIES SUNDIALS|Eigen3|ODE...]])
@@ -85,7 +85,19 @@ endfunction()
 # add_fmu arguments of the caller (documentation, sources). Target <name>_fmu / <name>_fmi3_fmu.
 function(_add_fmu_package name api so so_dep)
   set(gen_src_names "")
-  if(api STREQUAL "fmi3")
+  set(fmu_name ${name})
+  set(bin_api ${api})  # fmi3se: the FMI 3.0 library, packed with the Scheduled Execution description
+  if(api STREQUAL "fmi3se")
+    set(stage "${CMAKE_CURRENT_BINARY_DIR}/${name}_se.fmu.d")
+    set(fmu_dir "${ANKLEHIP_FMU_DIR}/fmi3")
+    set(fmu_name ${name}_se)
+    set(target ${name}_se_fmu)
+    set(gen_args --fmi3-se "${stage}")
+    set(linux_dir x86_64-linux)
+    set(win_dir x86_64-windows)
+    set(api_name "FMI 3.0")
+    set(bin_api fmi3)
+  elseif(api STREQUAL "fmi3")
     set(stage "${CMAKE_CURRENT_BINARY_DIR}/${name}_fmi3.fmu.d")
     set(fmu_dir "${ANKLEHIP_FMU_DIR}/fmi3")
     set(target ${name}_fmi3_fmu)
@@ -102,7 +114,7 @@ function(_add_fmu_package name api so so_dep)
     set(win_dir win64)
     set(api_name "FMI 2.0")
   endif()
-  set(fmu "${fmu_dir}/${name}.fmu")
+  set(fmu "${fmu_dir}/${fmu_name}.fmu")
   # The project's license in documentation/licenses/ (FMI 2.0.4: the FMU's license files).
   set(license "${_ADD_FMU_GLUE_SRC}/../../../LICENSE")
   get_filename_component(license "${license}" ABSOLUTE)
@@ -121,7 +133,7 @@ function(_add_fmu_package name api so so_dep)
   set(src_cmds "")
   set(src_deps "")
   set(src_entry "")
-  if(FMU_SOURCE_FMU_FILES)
+  if(FMU_SOURCE_FMU_FILES AND NOT api STREQUAL "fmi3se")  # the Scheduled Execution variant: binaries only
     set(glue_generated "${CMAKE_BINARY_DIR}/generated")   # fmuglue/version.h
     set(glue_include "${_ADD_FMU_GLUE_SRC}/../include")
     get_filename_component(glue_include "${glue_include}" ABSOLUTE)
@@ -189,9 +201,11 @@ set(FMU_DEPENDENCIES ${dep_list})
   # With ANKLEHIP_WIN64 the Windows sub-build's <name>.dll goes next to the .so (Win64Fmus.cmake).
   set(win_cmds "")
   set(win_deps "")
-  if(ANKLEHIP_WIN64)
+  # The Scheduled Execution variant packs x86_64-linux only: its importers (HIL schedulers, FMPy's
+  # FMU3ScheduledExecution) are tested here on Linux (docs/fmu.md, "Scheduled Execution").
+  if(ANKLEHIP_WIN64 AND NOT api STREQUAL "fmi3se")
     set(dll "${ANKLEHIP_WIN64_BINARY_DIR}/${name}.dll")
-    if(api STREQUAL "fmi3")
+    if(bin_api STREQUAL "fmi3")
       set(dll "${ANKLEHIP_WIN64_BINARY_DIR}/fmi3/${name}.dll")
     endif()
     set(win_cmds COMMAND "${CMAKE_COMMAND}" -E make_directory "${stage}/binaries/${win_dir}"
@@ -202,9 +216,9 @@ set(FMU_DEPENDENCIES ${dep_list})
   # versions (Aarch64LinuxFmus.cmake says why FMI 2.0 uses the FMI 3.0 tuple).
   set(arm_cmds "")
   set(arm_deps "")
-  if(ANKLEHIP_AARCH64)
+  if(ANKLEHIP_AARCH64 AND NOT api STREQUAL "fmi3se")
     set(arm_so "${ANKLEHIP_AARCH64_BINARY_DIR}/${name}.so")
-    if(api STREQUAL "fmi3")
+    if(bin_api STREQUAL "fmi3")
       set(arm_so "${ANKLEHIP_AARCH64_BINARY_DIR}/fmi3/${name}.so")
     endif()
     set(arm_cmds COMMAND "${CMAKE_COMMAND}" -E make_directory "${stage}/binaries/aarch64-linux"
@@ -224,7 +238,7 @@ set(FMU_DEPENDENCIES ${dep_list})
     COMMAND "${CMAKE_COMMAND}" -E chdir "${stage}" "${CMAKE_COMMAND}" -E tar cf "${fmu}" --format=zip
             modelDescription.xml binaries documentation resources ${src_entry}
     DEPENDS ${so_dep} ${name}_gen ${doc_deps} ${src_deps} ${win_deps} ${arm_deps}
-    COMMENT "Packing ${name}.fmu (${api_name})"
+    COMMENT "Packing ${fmu_name}.fmu (${api_name})"
     VERBATIM)
   add_custom_target(${target} ALL DEPENDS "${fmu}")
   if(ANKLEHIP_WIN64)
@@ -241,7 +255,7 @@ set(FMU_DEPENDENCIES ${dep_list})
 endfunction()
 
 function(add_fmu)
-  cmake_parse_arguments(FMU "" "NAME;OUTPUT_DIR"
+  cmake_parse_arguments(FMU "SCHEDULED_EXECUTION" "NAME;OUTPUT_DIR"
                         "SOURCES;LINK;INCLUDE_DIRS;DOCUMENTATION;DOCUMENTATION_IMAGES;SOURCE_FMU_FILES;SOURCE_FMU_HEADER_DIRS;SOURCE_FMU_DEPENDENCIES" ${ARGN})
   if(NOT FMU_NAME OR NOT FMU_SOURCES)
     message(FATAL_ERROR "add_fmu: NAME and SOURCES are required")
@@ -308,4 +322,9 @@ function(add_fmu)
 
   _add_fmu_package(${name} fmi2 "${so}" "${so_dep}")
   _add_fmu_package(${name} fmi3 "${so3}" "${so3_dep}")
+  # SCHEDULED_EXECUTION: also <ANKLEHIP_FMU_DIR>/fmi3/<name>_se.fmu, the FMI 3.0 Scheduled Execution
+  # variant (the model's ModelInfo::clock): the FMI 3.0 library with its own description.
+  if(FMU_SCHEDULED_EXECUTION)
+    _add_fmu_package(${name} fmi3se "${so3}" "${so3_dep}")
+  endif()
 endfunction()

@@ -8,8 +8,9 @@
 #   3. closed-loop scenarios from Python through the sanitized FMUs (ASan runtime preloaded): the
 #      sagittal loop (hip_saves_push) and the 3D one (side_push_frontal: AnkleHipController3D on
 #      Hoap2Plant3D), so every shipped FMU runs sanitized;
-#   4. a Valgrind memcheck of the same two closed loops through the shipped FMUs (the known errors of
-#      the interpreter, NumPy, lxml and the loader suppressed by scripts/valgrind-python.supp).
+#   4. a Valgrind memcheck of the same two closed loops through the shipped FMUs, and of the
+#      controller's FMI 3.0 Scheduled Execution variant and the 3D plant's FMI 3.0 arrays (the known
+#      errors of the interpreter, NumPy, lxml and the loader suppressed by scripts/valgrind-python.supp).
 # Usage: bash scripts/reliability.sh            (after bash scripts/setup.sh --sanitize)
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -52,4 +53,6 @@ done
 echo "== 4/4 Valgrind memcheck of the closed loops"
 .venv/bin/python scripts/valgrind_closed_loop.py hip_saves_push --stop-time 1.5
 .venv/bin/python scripts/valgrind_closed_loop.py side_push_frontal --stop-time 1.5
+# the FMI 3.0 paths the loops do not take: Scheduled Execution and the 3D plant's arrays
+.venv/bin/python scripts/valgrind_closed_loop.py --fmi3-extras
 echo "reliability: all checks passed"

@@ -2,6 +2,12 @@
 """Valgrind memcheck of a closed-loop run (controller + plant FMUs through the FMPy master).
 
     .venv/bin/python scripts/valgrind_closed_loop.py [SCENARIO] [--stop-time S] [--plant NAME]
+    .venv/bin/python scripts/valgrind_closed_loop.py --fmi3-extras
+
+--fmi3-extras runs, instead of a closed loop, what the loop does not call (issue 28): the
+controller's FMI 3.0 Scheduled Execution variant activated tick by tick through a push's sensor
+signals (FMPy's FMU3ScheduledExecution) and the 3D plant's FMI 3.0 twin stepped with its per-leg
+set points set through the array q_leg_ref and every output array read (and one wrong nValues).
 
 Runs `anklehip run SCENARIO` under memcheck (Python with PYTHONMALLOC=malloc, so the interpreter's
 own allocator hides nothing), reads Valgrind's XML report and counts, for each FMU binary, the
@@ -91,7 +97,58 @@ def library(error: ET.Element) -> str:
     return "?"
 
 
+def drive_fmi3_extras(fmu_dir: Path, ticks: int, steps: int) -> None:
+    """The --fmi3-extras program (run under memcheck): Scheduled Execution and arrays."""
+    import math
+    from fmpy import extract, read_model_description
+    from fmpy.fmi3 import FMU3ScheduledExecution, FMU3Slave
+    se = fmu_dir / "fmi3" / "AnkleHipController_se.fmu"
+    md = read_model_description(str(se))
+    var = {v.name: v for v in md.modelVariables}
+    f = FMU3ScheduledExecution(guid=md.instantiationToken, unzipDirectory=extract(str(se)),
+                               modelIdentifier=md.scheduledExecution.modelIdentifier, instanceName="se")
+    f.instantiate()
+    f.enterInitializationMode(startTime=0.0)
+    f.exitInitializationMode()
+    ins = [var[n].valueReference for n in ("theta_ankle", "theta_hip", "zmp_x", "fz")]
+    outs = [v.valueReference for v in md.modelVariables if v.causality == "output" and v.type == "Float64"]
+    for k in range(ticks):   # a forward lean whose ZMP passes the toe-side limit: the hip strategy
+        t = k * 1e-3
+        lean = 0.03 * math.sin(math.pi * min(t, 1.0))
+        f.setFloat64(ins, [lean, -0.5 * lean, 0.9 * lean, 70.2])
+        f.activateModelPartition(var["tick"].valueReference, t)
+        f.getFloat64(outs)
+        f.getInt64([var["phase"].valueReference])
+    f.terminate()
+    f.freeInstance()
+    p3 = fmu_dir / "fmi3" / "Hoap2Plant3D.fmu"
+    md = read_model_description(str(p3))
+    var = {v.name: v for v in md.modelVariables}
+    arrays = [v for v in md.modelVariables if v.dimensions and v.causality == "output"]
+    sizes = [math.prod(int(d.start) for d in v.dimensions) for v in arrays]
+    f = FMU3Slave(guid=md.instantiationToken, unzipDirectory=extract(str(p3)),
+                  modelIdentifier=md.coSimulation.modelIdentifier, instanceName="plant")
+    f.instantiate()
+    f.enterInitializationMode(startTime=0.0)
+    f.exitInitializationMode()
+    for k in range(steps):
+        f.setFloat64([var["q_leg_ref"].valueReference], [0.02 * math.sin(1e-2 * k + j) for j in range(12)])
+        f.doStep(k * 1e-3, 1e-3)
+        f.getFloat64([v.valueReference for v in arrays], sum(sizes))
+    try:
+        f.getFloat64([arrays[0].valueReference], sizes[0] - 1)   # refused: nValues is the array's size
+        raise SystemExit("a wrong nValues was accepted")
+    except Exception as e:
+        if isinstance(e, SystemExit):
+            raise
+    f.terminate()
+    f.freeInstance()
+
+
 def main(argv: list[str] | None = None) -> int:
+    if argv is None and sys.argv[1:2] == ["--drive-fmi3-extras"]:   # the program memcheck runs
+        drive_fmi3_extras(Path(sys.argv[2]), int(sys.argv[3]), int(sys.argv[4]))
+        return 0
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("scenario", nargs="?", default="hip_saves_push")
     ap.add_argument("--stop-time", default="1.5", help="simulated seconds (default 1.5: the push and the hip strategy)")
@@ -100,17 +157,23 @@ def main(argv: list[str] | None = None) -> int:
                     help="Valgrind suppressions of errors outside our binaries (default: %(default)s); "
                          "'' for none")
     ap.add_argument("--keep-xml", default=None, help="also copy Valgrind's XML report here")
+    ap.add_argument("--fmi3-extras", action="store_true",
+                    help="instead of a closed loop: the controller's Scheduled Execution variant and the 3D plant's "
+                         "FMI 3.0 arrays (see above)")
     args = ap.parse_args(argv)
     if not FMU_BINARIES:
         print("valgrind_closed_loop: no packed FMUs in the build (bash scripts/setup.sh)", file=sys.stderr)
         return 1
     # the FMU binaries this run loads: the scenario's controller and plant
     sys.path.insert(0, str(ROOT))
-    from anklehip.files.paths import CONTROLLER_FMUS, PLANT_FMUS, find_scenario
+    from anklehip.files.paths import CONTROLLER_FMUS, PLANT_FMUS, find_fmu, find_scenario
     from anklehip.files.scenario import load_scenario
-    sc = load_scenario(find_scenario(args.scenario))
-    plant = PLANT_FMUS[args.plant or sc.plant_model]
-    used = {Path(CONTROLLER_FMUS[sc.controller_model]).stem + ".so", Path(plant).stem + ".so"}
+    if args.fmi3_extras:
+        used = {"AnkleHipController.so", "Hoap2Plant3D.so"}
+    else:
+        sc = load_scenario(find_scenario(args.scenario))
+        plant = PLANT_FMUS[args.plant or sc.plant_model]
+        used = {Path(CONTROLLER_FMUS[sc.controller_model]).stem + ".so", Path(plant).stem + ".so"}
 
     with tempfile.TemporaryDirectory(prefix="anklehip-valgrind-") as tmp:
         xml = Path(tmp) / "memcheck.xml"
@@ -124,9 +187,12 @@ def main(argv: list[str] | None = None) -> int:
             supp = [f"--suppressions={args.suppressions}"]
         cmd = ["valgrind", "--tool=memcheck", "--leak-check=full", "--show-leak-kinds=definite",
                "--errors-for-leak-kinds=definite", "--track-origins=yes", "--xml=yes", f"--xml-file={xml}",
-               "--gen-suppressions=all", *supp,
-               sys.executable, "-m", "anklehip.cli", "run", args.scenario, "--stop-time", args.stop_time,
-               "--out", str(Path(tmp) / "out"), "--no-progress"]
+               "--gen-suppressions=all", *supp, sys.executable]
+        if args.fmi3_extras:   # 1500 ticks (1.5 s) and 300 plant steps
+            cmd += [__file__, "--drive-fmi3-extras", str(find_fmu("AnkleHipController.fmu").parent), "1500", "300"]
+        else:
+            cmd += ["-m", "anklehip.cli", "run", args.scenario, "--stop-time", args.stop_time,
+                    "--out", str(Path(tmp) / "out"), "--no-progress"]
         if args.plant:
             cmd += ["--plant", args.plant]
         env = dict(os.environ, PYTHONMALLOC="malloc")

@@ -8,6 +8,7 @@ from __future__ import annotations
 import re
 import zipfile
 
+from anklehip.files.paths import SCHEDULED_EXECUTION
 from conftest import REPO_ROOT, SHIPPED
 
 COLUMNS = ["FMU", "FMI", "platform", "FMPy", "libcosim", "fmi-sim 0.7", "native runner (x86-64 Linux)",
@@ -38,6 +39,8 @@ def test_matrix_rows_are_the_shipped_binaries(fmu_dir):
     for name in SHIPPED:
         for version, fmu in (("2.0", fmu_dir / f"{name}.fmu"), ("3.0", fmu_dir / "fmi3" / f"{name}.fmu")):
             shipped |= {(name, version, p) for p in _platforms(fmu)}
+    for name in SCHEDULED_EXECUTION:   # the Scheduled Execution variants (FMI 3.0 only)
+        shipped |= {(f"{name}_se", "3.0", p) for p in _platforms(fmu_dir / "fmi3" / f"{name}_se.fmu")}
     assert shipped <= documented, f"shipped but not in the matrix: {sorted(shipped - documented)}"
     # a build without the optional platforms ships fewer; the matrix may list those (CI builds all)
     optional = {"win64", "x86_64-windows", "aarch64-linux"}

@@ -31,6 +31,9 @@ FMUS = (*CONTROLLER_FMUS.values(), *PLANT_FMUS.values())
 # The model names (modelIdentifier, file stem) of every FMU the project ships: the one list the wheel
 # (setup.py) and every FMI check in tests/ and scripts/ iterate over, so a new FMU joins them all.
 SHIPPED = tuple(f.removesuffix(".fmu") for f in FMUS)
+# The FMI 3.0 Scheduled Execution variants, <fmu dir>/fmi3/<name>_se.fmu (x86_64-linux; docs/fmu.md):
+# the models of SHIPPED that declare a clock. The FMI 3.0 checks that apply iterate over them too.
+SCHEDULED_EXECUTION = ("AnkleHipController", "AnkleHipController3D")
 RT_RUNNER = "anklehip_rt_step"
 NATIVE_LIBRARY = "libanklehip_closed_loop.so"
 

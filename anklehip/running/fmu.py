@@ -65,6 +65,8 @@ class FMUInfo:
         for v in self.md.modelVariables:
             if v.causality == "independent":      # FMI 3.0's `time`: not a signal of the loop
                 continue
+            if getattr(v, "dimensions", None):     # an FMI 3.0 array: a view of scalars the loop has (docs/fmu.md)
+                continue
             start = v.start
             vtype = FMI3_TYPES.get(v.type, v.type)
             if start is not None:

@@ -59,6 +59,10 @@ ModelInfo makeInfo() {
   m.default_experiment = {0.0, 5.0, 0.0, def.sample_period};  // no integrator: no tolerance
   m.fixed_internal_step = def.sample_period;  // FMI 3.0: the control tick grid (sample_period's default)
   m.outputs_depend_on_inputs = false;
+  // The FMI 3.0 Scheduled Execution variant (AnkleHipController_se.fmu): one model partition, one
+  // control tick per activation of a constant clock of sample_period's default (docs/fmu.md).
+  m.clock = {"tick", 1000, "The control tick: one activation runs one ahc_step on the inputs set before it", def.sample_period,
+             "sample_period"};
 
   auto in = [&](const char* n, fmi2ValueReference r, const char* unit, const char* d, double start) {
     Variable v;

@@ -44,7 +44,9 @@ enum : fmi2ValueReference {
   disturbance_moment_y = 67, k_w_y = 68, com_y_desired = 69, fault_y = 70,
   first_joint_ref = 80,  // q_<side>_<joint>_ref: 80 + 6 side + joint
   first_param = 100,     // row i of ahc_param_table()
-  first_frontal_param = 400  // row i of ahc_frontal_param_table()
+  first_frontal_param = 400,  // row i of ahc_frontal_param_table()
+  q = 300, q_leg_ref = 301,   // FMI 3.0 arrays of the q_<side>_<joint> inputs and _ref outputs
+  tick = 1000                 // the Scheduled Execution variant's clock
 };
 }
 
@@ -164,6 +166,21 @@ ModelInfo makeInfo() {
   ahcfmu::addParamVariables(m, table, count, vr::first_frontal_param, &fdef, isTunable);
   // the named configurations of both planes
   m.resources.emplace_back("configurations.toml", ahcfmu::configurationsToml("AnkleHipController3D", frontalRows));
+  // FMI 3.0: the legs' joint angles in and per-leg set points out also as [side, joint] arrays, named as
+  // Hoap2Plant3D's (q out of the plant, q_leg_ref into it: the arrays connect by name too); docs/fmu.md §8
+  std::vector<fmi2ValueReference> q_in, q_out;
+  for (int s = 0; s < 2; ++s)
+    for (int j = 0; j < AHC_LEG_JOINTS; ++j) {
+      q_in.push_back(jointVr(vr::first_joint, s, j));
+      q_out.push_back(jointVr(vr::first_joint_ref, s, j));
+    }
+  m.arrays = {{"q", vr::q, "Measured joint angles [side, joint] (sides left, right; joints hip_yaw, hip, hip_roll, knee, "
+                           "ankle, ankle_roll): q_<side>_<joint>", {2, AHC_LEG_JOINTS}, q_in},
+              {"q_leg_ref", vr::q_leg_ref, "Per-leg set points [side, joint]: q_<side>_<joint>_ref", {2, AHC_LEG_JOINTS},
+               q_out}};
+  // the FMI 3.0 Scheduled Execution variant (AnkleHipController3D_se.fmu), as AnkleHipController's
+  m.clock = {"tick", vr::tick, "The control tick: one activation runs one ahc3d_step on the inputs set before it",
+             def.sample_period, "sample_period"};
   return m;
 }
 

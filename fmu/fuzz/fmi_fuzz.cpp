@@ -10,7 +10,9 @@
 //     freed, serialized and deserialized (bit-flipped, truncated, foreign, another instance's),
 //     reset, terminate, cancel, status queries with any kind, debug logging with unknown categories;
 //   otherwise a *deep*, structure-aware program (DeepProgram) through FMI 2.0 (% 4 == 1, 3) or FMI
-//     3.0 (% 4 == 2): a realistic initialization (parameters mostly at or inside their declared
+//     3.0 (% 4 == 2; for a model with a Scheduled Execution clock, every other such program instantiates
+//     it for Scheduled Execution and its steps are clock activations, fmi3ActivateModelPartition):
+//     a realistic initialization (parameters mostly at or inside their declared
 //     ranges, sometimes outside), then mostly steps with plausible inputs (for the unit of each
 //     input: angles of a few degrees, a ZMP on the foot, the robot's weight, pushes of a few
 //     newtons; rarely NaN or huge), interleaved with FMU states got, set, serialized and
@@ -385,9 +387,15 @@ void logger3(fmi3InstanceEnvironment, fmi3Status status, fmi3String, fmi3String 
 struct Api {
   int version = 2;
   void* c = nullptr;
+  // FMI 3.0 Scheduled Execution (the model's ModelInfo::clock): a step is one activation of the clock
+  bool scheduled = false;
+  fmi3ValueReference clock = 0;
 
   bool instantiate(const char* name, const std::string& guid, bool logging) {
-    if (version == 2)
+    if (scheduled)
+      c = fmi3InstantiateScheduledExecution(name, guid.c_str(), "/nonexistent/resources/", fmi3False, logging, nullptr,
+                                            logger3, nullptr, nullptr, nullptr);
+    else if (version == 2)
       c = fmi2Instantiate(name, fmi2CoSimulation, guid.c_str(), "file:///nonexistent/resources", &kCallbacks, fmi2False,
                           logging ? fmi2True : fmi2False);
     else
@@ -410,6 +418,7 @@ struct Api {
   }
   int exit() { return version == 2 ? fmi2ExitInitializationMode(c) : fmi3ExitInitializationMode(c); }
   int step(double t, double h) {
+    if (scheduled) return fmi3ActivateModelPartition(c, clock, t);  // h is the clock's interval (DeepProgram)
     if (version == 2) return fmi2DoStep(c, t, h, fmi2False);
     fmi3Boolean event = fmi3False, terminate = fmi3False, early = fmi3False;
     fmi3Float64 last = 0.0;
@@ -513,8 +522,10 @@ struct DeepProgram {
   std::vector<void*> states;
   std::vector<std::uint8_t> blob;
 
-  explicit DeepProgram(int version) {
+  explicit DeepProgram(int version, bool scheduled = false) {
     a.version = b.version = version;
+    a.scheduled = b.scheduled = scheduled && version == 3 && info.clock.interval > 0.0;
+    a.clock = b.clock = info.clock.vr;
     for (const auto& v : info.variables) {
       if (v.causality == fmuglue::Causality::Parameter && v.variability != fmuglue::Variability::Constant) {
         params.push_back(&v);
@@ -639,8 +650,12 @@ struct DeepProgram {
     for (const fmuglue::Variable* v : inputs) api.set_real(v->vr, input_value(*v, in, phase));
   }
 
+  // The step a program asks for, or the clock's interval for a Scheduled Execution instance.
+  double h_of(double h) const { return a.scheduled ? info.clock.interval : h; }
+
   // One step of a; returns its status. A fall (Discard) ends the run: re-initialize.
   int step(Bytes& in, double h) {
+    h = h_of(h);
     set_inputs(a, in, t * 7.0);
     const int st = a.step(t, h);
     ++g_deep.steps;
@@ -677,7 +692,25 @@ struct DeepProgram {
       }
       out.push_back(bits);
     }
+    if (api.version == 3) check_arrays(api);
     return finite;
+  }
+
+  // FMI 3.0 arrays (ModelInfo::arrays): each reads as its elements, bit for bit, and a wrong
+  // nValues is refused.
+  void check_arrays(Api& api) {
+    for (const auto& arr : info.arrays) {
+      const size_t n = arr.elements.size();
+      std::vector<double> got(n + 1, 0.0), want(n, 0.0);
+      fmi3ValueReference r = arr.vr;
+      if (fmi3GetFloat64(api.c, &r, 1, got.data(), n) != fmi3OK) finding("array get", arr.name.c_str());
+      for (size_t k = 0; k < n; ++k)
+        if (api.get_real(arr.elements[k], want[k]) != fmi2OK) finding("array element get", arr.name.c_str());
+      if (std::memcmp(got.data(), want.data(), n * sizeof(double)) != 0)
+        finding("an array differs from its elements", arr.name.c_str());
+      if (fmi3GetFloat64(api.c, &r, 1, got.data(), n + 1) == fmi3OK || fmi3GetFloat64(api.c, &r, 1, got.data(), 1) == fmi3OK)
+        finding("array get with a wrong nValues accepted", arr.name.c_str());
+    }
   }
 
   // a's state into b; both step k times on the same inputs and must stay bit-identical.
@@ -692,7 +725,7 @@ struct DeepProgram {
     if (b.restore(bytes) != fmi2OK) finding("a genuine serialized state was refused", g_last_error.c_str());
     ++g_deep.restores;
     const int k = 1 + in.u8() % 16;
-    const double h = step_size(in);
+    const double h = h_of(step_size(in));
     std::vector<std::uint64_t> oa, ob;
     for (int i = 0; i < k; ++i) {
       const std::vector<std::uint8_t> chunk = in.rest_chunk(inputs.size() * 2);
@@ -765,7 +798,7 @@ struct DeepProgram {
     for (int i = 0; i < 3; ++i) {
       set_inputs(b, in, tb);
       g_last_error.clear();
-      const int st = b.step(tb, 1e-3);
+      const int st = b.step(tb, h_of(1e-3));
       if (st == fmi2Discard) return;
       if (st > fmi2Warning) {
         // the glue refusing a step the restored state does not allow (it is terminated, failed or
@@ -776,7 +809,7 @@ struct DeepProgram {
         finding("forged state accepted, then its step failed", g_last_error.c_str());
       }
       if (!outputs_of(b, ob)) finding("forged state accepted", "a step returned a non-finite output");
-      tb += 1e-3;
+      tb += h_of(1e-3);
     }
   }
 
@@ -865,7 +898,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     ShallowProgram p;
     p.run(in);
   } else {
-    DeepProgram p(mode == 2 ? 3 : 2);
+    // FMI 3.0 programs of a model with a clock: every other one through Scheduled Execution
+    DeepProgram p(mode == 2 ? 3 : 2, mode == 2 && (data[0] / 4) % 2 == 1);
     p.run(in);
   }
   return 0;

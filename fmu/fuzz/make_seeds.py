@@ -7,7 +7,8 @@ fuzzer starts from deep states instead of discovering the call protocol byte by 
 
 The first byte chooses the decoder (fmi_fuzz.cpp): 0 a shallow program (ShallowProgram: opcodes
 in the low 5 bits, bit 7 the second instance), 1 or 3 a deep program through FMI 2.0, 2 through
-FMI 3.0 (DeepProgram: an initialization, then operations, mostly steps with plausible inputs).
+FMI 3.0 (DeepProgram: an initialization, then operations, mostly steps with plausible inputs), 6
+through FMI 3.0 Scheduled Execution where the model has a clock.
 """
 from __future__ import annotations
 
@@ -71,8 +72,10 @@ def steps(n: int, size: int = 0, wiggle: int = 126) -> list[int]:
     return out
 
 
-def deep(fmi: int, body: list[int], init: list[int] = INIT_DEFAULTS) -> list[int]:
-    return [1 if fmi == 2 else 2] + init + body
+def deep(fmi: int, body: list[int], init: list[int] = INIT_DEFAULTS, scheduled: bool = False) -> list[int]:
+    """scheduled: decoder byte 6 (6 % 4 == 2, bit 2 set): an FMI 3.0 program through Scheduled
+    Execution for a model with a clock (the controller), an ordinary FMI 3.0 one for the others."""
+    return [1 if fmi == 2 else 6 if scheduled else 2] + init + body
 
 
 DEEP = {
@@ -84,6 +87,10 @@ DEEP = {
                         + [COMPARE, 8, 0] + [130] * 40),
     "deep_states_fmi3": deep(3, steps(30) + [GET] + steps(20) + [COMPARE, 15, 0] + [120] * 64 + [SET, 0]
                              + steps(20)),
+    # the same through FMI 3.0 Scheduled Execution (clock activations for steps)
+    "deep_run_fmi3_se": deep(3, steps(60) + [RUN, 31] + [120] * 160 + steps(40), scheduled=True),
+    "deep_states_fmi3_se": deep(3, steps(30) + [GET] + steps(20) + [COMPARE, 15, 0] + [120] * 64 + [SET, 0]
+                                + steps(20), scheduled=True),
     # forged-but-re-signed states at several places, between steps
     "deep_forged": deep(2, steps(25) + [FORGE, 0x10, 0x00, 0, 1, 200] + steps(5) + [FORGE, 0x80, 0x01, 0, 0, 13]
                         + steps(5) + [FORGE, 0x33, 0x02, 0, 17, 64] + steps(10)),

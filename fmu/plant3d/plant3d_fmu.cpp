@@ -47,6 +47,8 @@ enum : fmi2ValueReference {
   first_real_param = 100,  // 100 + index into realParams()
   servo_on = 190, seed = 191, flat_foot_weld = 192,
   first_leg_ref = 200,     // 12 per-leg set points q_<side>_<joint>_ref: 200 + side * 6 + joint
+  // FMI 3.0 arrays (views of the scalars above, ModelInfo::arrays)
+  q = 300, f_cell = 301, fz_feet = 302, slip_speed = 303, gyro = 304, q_leg_ref = 305,
 };
 }
 
@@ -253,6 +255,28 @@ ModelInfo makeInfo() {
   add("link2_com_x", vr::link2_com_x, R, Out, Const, "m",
       "Constant: link 2's CoM (upper body) forward of its line through the hip; set the controller's link2_com_x to it",
       HOAP2_LINK2_COM_X);
+
+  // FMI 3.0: the signals that are naturally vectors also as Float64 arrays of the scalars above
+  // (docs/fmu.md, "FMI 3.0 arrays"): [side][joint] and [side][cell] in the scalars' order (left, right;
+  // hip_yaw, hip, hip_roll, knee, ankle, ankle_roll; front_left, front_right, rear_left, rear_right).
+  auto range = [](fmi2ValueReference first, int n) {
+    std::vector<fmi2ValueReference> v(n);
+    for (int i = 0; i < n; ++i) v[i] = first + static_cast<fmi2ValueReference>(i);
+    return v;
+  };
+  m.arrays = {
+      {"q", vr::q, "Joint angles [side, joint] (sides left, right; joints hip_yaw, hip, hip_roll, knee, ankle, "
+                   "ankle_roll): q_<side>_<joint>", {kLegs, kLegJoints}, range(vr::first_joint, kLegs * kLegJoints)},
+      {"f_cell", vr::f_cell, "Sole load cells [side, corner] (sides left, right; corners front_left, front_right, "
+                             "rear_left, rear_right): f_<side>_<corner>", {kLegs, kCells}, range(vr::first_cell, kLegs * kCells)},
+      {"fz_feet", vr::fz_feet, "Sole loads [side] (left, right): fz_left, fz_right", {kLegs}, {vr::fz_left, vr::fz_right}},
+      {"slip_speed", vr::slip_speed, "Sole slip speeds [side] (left, right): slip_speed_left, slip_speed_right", {kLegs},
+       {vr::slip_speed_left, vr::slip_speed_right}},
+      {"gyro", vr::gyro, "Trunk angular velocity [axis] (the trunk's x, y, z axes): gyro_x, gyro_y, gyro_z", {3}, {vr::gyro_x, vr::gyro_y, vr::gyro_z}},
+      {"q_leg_ref", vr::q_leg_ref, "Per-leg set points [side, joint], the same values as q_<side>_<joint>_ref (setting "
+                                   "either sets both: connect one of them)", {kLegs, kLegJoints},
+       range(vr::first_leg_ref, kLegs * kLegJoints)},
+  };
 
   const auto& params = realParams();
   for (size_t i = 0; i < params.size(); ++i) {

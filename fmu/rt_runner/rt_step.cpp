@@ -103,6 +103,13 @@ bool parseMd(const std::string& xml, Md& md, std::string& err) {
       const std::string type = xml.substr(p + 1, te - p - 1);
       if (type == "Start" || type == "Dimension" || type == "Alias" || type == "Item") continue;
       const std::string tag = xml.substr(p, e - p);
+      if (xml[e - 1] != '/') {  // an element with children: an array (<Dimension>) is skipped, it is
+        const size_t close = xml.find("</" + type + ">", e);  // a view of scalars we read (docs/fmu.md)
+        if (close != std::string::npos && xml.substr(e, close - e).find("<Dimension") != std::string::npos) {
+          p = close;
+          continue;
+        }
+      }
       Var v;
       v.name = attr(tag, "name");
       v.causality = attr(tag, "causality");

@@ -124,7 +124,15 @@ bool resolve(Instance* inst, const char* fn, const fmi2ValueReference vr[], size
   idx.resize(nvr);
   for (size_t k = 0; k < nvr; ++k) {
     int i = inst->indexOf(vr[k]);
-    if (i < 0) { inst->error("%s: unknown value reference %u (element %zu)", fn, vr[k], k); return false; }
+    if (i < 0) {
+      if (const ArrayVariable* arr = inst->arrayOf(vr[k]))
+        inst->error("%s: value reference %u (element %zu) is the FMI 3.0 Float64 array \"%s\" of %zu values: "
+                    "fmi3GetFloat64 / fmi3SetFloat64 with nValues counting them, or its elements' own value references",
+                    fn, vr[k], k, arr->name.c_str(), arr->elements.size());
+      else
+        inst->error("%s: unknown value reference %u (element %zu)", fn, vr[k], k);
+      return false;
+    }
     const Variable& v = inst->info.variables[i];
     if (!accessMatches(v, a)) {
       inst->error("%s: value reference %u is %s \"%s\", not %s", fn, vr[k], xmlTypeName(v), v.name.c_str(),

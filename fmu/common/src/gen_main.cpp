@@ -1,6 +1,6 @@
 // Build-time generator: writes modelDescription.xml and documentation/index.html of one FMU
 // from its ModelInfo (the same table the FMU uses at run time).
-//   <Name>_gen [--fmi3] <out-dir> [<source file>...]
+//   <Name>_gen [--fmi3 | --fmi3-se] <out-dir> [<source file>...]
 //                               writes <out-dir>/modelDescription.xml, <out-dir>/documentation/index.html
 //                               and ModelInfo::resources into <out-dir>/resources/; source files
 //                               (names in sources/) make it a source FMU's description; --fmi3:
@@ -58,13 +58,14 @@ std::string html(const std::string& s) {
 }
 
 void usage(std::ostream& o, const char* prog) {
-  o << "usage: " << prog << " [--fmi3] <out-dir> [<source file>...]\n"
+  o << "usage: " << prog << " [--fmi3 | --fmi3-se] <out-dir> [<source file>...]\n"
     << "       " << prog << " --markdown [--causality C]\n\n"
     << "Generates the FMU's description from its variable table (the table the binary uses at run time):\n"
     << "  <out-dir>       an existing folder: writes modelDescription.xml, documentation/index.html and\n"
     << "                  the model's resources/ files into it; <source file>s (names in sources/) make it\n"
     << "                  a source FMU's description. The build runs this when it packs the FMU.\n"
     << "  --fmi3          the FMI 3.0 Co-Simulation twin's description (same table; default FMI 2.0)\n"
+    << "  --fmi3-se       the FMI 3.0 Scheduled Execution variant's description (ModelInfo::clock)\n"
     << "  --markdown      prints the variable table as Markdown (docs/, scripts/update_docs.py);\n"
     << "  --causality C   with --markdown: only the variables of causality C (input, output, parameter, ...)\n"
     << "  -h, --help      this text\n"
@@ -74,7 +75,8 @@ void usage(std::ostream& o, const char* prog) {
 
 int main(int argc, char** argv) {
   const char* prog = argv[0];
-  const bool fmi3 = argc >= 2 && std::string(argv[1]) == "--fmi3";
+  const bool se = argc >= 2 && std::string(argv[1]) == "--fmi3-se";
+  const bool fmi3 = se || (argc >= 2 && std::string(argv[1]) == "--fmi3");
   if (fmi3) {
     --argc;
     ++argv;
@@ -93,6 +95,10 @@ int main(int argc, char** argv) {
   if (!problems.empty()) {
     std::cerr << info.model_name << ": invalid variable table:\n" << problems;
     return 1;
+  }
+  if (se && !(info.clock.interval > 0.0)) {
+    std::cerr << prog << ": " << info.model_name << " declares no Scheduled Execution clock (ModelInfo::clock)\n";
+    return 2;
   }
   if (std::string(argv[1]) == "--markdown") {
     const bool filter = argc == 4 && std::string(argv[2]) == "--causality";
@@ -122,14 +128,18 @@ int main(int argc, char** argv) {
   const std::vector<std::string> source_files(argv + 2, argv + argc);
   {
     std::ofstream f(dir + "/modelDescription.xml", std::ios::binary);
-    f << (fmi3 ? modelDescriptionXml3(info) : modelDescriptionXml(info, source_files));
+    f << (se ? modelDescriptionXmlSE(info) : fmi3 ? modelDescriptionXml3(info) : modelDescriptionXml(info, source_files));
     if (!f) { std::cerr << "cannot write " << dir << "/modelDescription.xml\n"; return 1; }
   }
   {
     std::ofstream f(dir + "/documentation/index.html", std::ios::binary);
     f << "<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>" << html(info.model_name)
       << "</title></head><body>\n<h1>" << html(info.model_name) << "</h1>\n<p>" << html(info.description)
-      << "</p>\n<p>" << (fmi3 ? "FMI 3.0 Co-Simulation FMU, instantiation token " : "FMI 2.0 co-simulation FMU, GUID ")
+      << "</p>\n<p>"
+      << (se     ? "FMI 3.0 Scheduled Execution FMU (one model partition: every input and output clocked by the "
+                   "input clock " + info.clock.name + "), instantiation token "
+          : fmi3 ? "FMI 3.0 Co-Simulation FMU, instantiation token "
+                 : "FMI 2.0 co-simulation FMU, GUID ")
       << modelGuid(info) << ". Default experiment: "
       << g(info.default_experiment.start_time) << " to " << g(info.default_experiment.stop_time)
       << " s, step " << g(info.default_experiment.step_size) << " s.</p>\n"
@@ -142,7 +152,23 @@ int main(int argc, char** argv) {
         << xmlName(v.causality) << "</td><td>" << xmlName(v.variability) << "</td><td>" << html(v.unit)
         << "</td><td>" << html(startText(v)) << "</td><td>" << g(v.min) << "</td><td>" << g(v.max) << "</td><td>"
         << html(v.description) << "</td></tr>\n";
-    f << "</table>\n</body></html>\n";
+    f << "</table>\n";
+    if (fmi3 && !info.arrays.empty()) {  // FMI 3.0: the arrays, views of the variables above
+      f << "<h2>Float64 arrays (FMI 3.0)</h2>\n<p>Each is the listed variables' values, row-major; reading or "
+           "setting it reads or sets them.</p>\n<table border=\"1\" cellspacing=\"0\" cellpadding=\"3\">\n"
+           "<tr><th>name</th><th>vr</th><th>dimensions</th><th>elements</th><th>description</th></tr>\n";
+      for (const auto& a : info.arrays) {
+        std::string dims, elements;
+        for (int d : a.dimensions) dims += (dims.empty() ? "" : " x ") + std::to_string(d);
+        for (fmi2ValueReference r : a.elements)
+          for (const auto& v : info.variables)
+            if (v.vr == r) elements += (elements.empty() ? "" : ", ") + v.name;
+        f << "<tr><td>" << html(a.name) << "</td><td>" << a.vr << "</td><td>" << dims << "</td><td>" << html(elements)
+          << "</td><td>" << html(a.description) << "</td></tr>\n";
+      }
+      f << "</table>\n";
+    }
+    f << "</body></html>\n";
     if (!f) { std::cerr << "cannot write " << dir << "/documentation/index.html\n"; return 1; }
   }
   if (!info.resources.empty()) std::filesystem::create_directories(dir + "/resources");

@@ -59,6 +59,12 @@ class Instance {
   int indexOf(fmi2ValueReference vr) const {
     return vr < vrIndex_.size() ? vrIndex_[vr] : -1;
   }
+  // The FMI 3.0 array variable with this value reference (ModelInfo::arrays), or nullptr.
+  const ArrayVariable* arrayOf(fmi2ValueReference vr) const {
+    for (const auto& a : info.arrays)  // a handful per FMU
+      if (a.vr == vr) return &a;
+    return nullptr;
+  }
   void resetStore();
   // Whether variable `idx` may be set in the current state (and why not).
   bool settable(int idx, std::string& why) const;
@@ -81,12 +87,16 @@ class Instance {
   double lastSuccessfulTime = 0.0;
   double lastStepSize = 0.0;  // h of the last successful fmi2DoStep: the time rule's tolerance for a restored state
   bool terminatedFlag = false;
+  // Instantiated by fmi3InstantiateScheduledExecution: stepped by fmi3ActivateModelPartition (one
+  // tick of ModelInfo::clock), not by fmi3DoStep.
+  bool scheduled = false;
   bool initDirty = true;
   std::vector<Value> store;
   std::unique_ptr<Model> model;
   Context ctx;
   std::unordered_map<const void*, std::unique_ptr<StateSnapshot>> states;
   std::vector<int> scratch_idx;  // the store indices of the current get/set call (fmi2_api.cpp)
+  std::vector<fmi2ValueReference> scratch_vr;  // an fmi3SetFloat64's value references, arrays flattened
 
  private:
   std::vector<int> vrIndex_;

@@ -309,7 +309,19 @@ const char* xmlName3(const Variable& v) {
   return "?";
 }
 
-std::string xml3(const ModelInfo& info, const std::string& token, const std::string& generated) {
+// The elements of an array variable (validated: they exist and are Real).
+std::vector<const Variable*> arrayElements(const ModelInfo& info, const ArrayVariable& a) {
+  std::vector<const Variable*> out;
+  for (fmi2ValueReference r : a.elements) {
+    auto it = std::find_if(info.variables.begin(), info.variables.end(), [&](const Variable& v) { return v.vr == r; });
+    out.push_back(it == info.variables.end() ? nullptr : &*it);
+  }
+  return out;
+}
+
+// scheduled: the Scheduled Execution variant (modelDescriptionXmlSE), else Co-Simulation.
+std::string xml3(const ModelInfo& info, const std::string& token, const std::string& generated,
+                 bool scheduled = false) {
   std::ostringstream o;
   o << "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n";
   o << "<fmiModelDescription fmiVersion=\"3.0\" modelName=\"" << esc(info.model_name) << "\" instantiationToken=\""
@@ -322,6 +334,12 @@ std::string xml3(const ModelInfo& info, const std::string& token, const std::str
   o << "\n  generationTool=\"anklehip fmuglue " << kGlueInterfaceVersion << "\"";
   if (!generated.empty()) o << "\n  generationDateAndTime=\"" << generated << "\"";
   o << "\n  variableNamingConvention=\"structured\">\n";
+  if (scheduled) {
+    o << "  <ScheduledExecution modelIdentifier=\"" << esc(info.model_name) << "\" needsExecutionTool=\"false\""
+      << " canBeInstantiatedOnlyOncePerProcess=\"false\" canGetAndSetFMUState=\"true\" canSerializeFMUState=\"true\""
+      << " providesDirectionalDerivatives=\"false\" providesAdjointDerivatives=\"false\""
+      << " providesPerElementDependencies=\"false\"/>\n";
+  } else {
   o << "  <CoSimulation modelIdentifier=\"" << esc(info.model_name) << "\" needsExecutionTool=\"false\""
     << " canBeInstantiatedOnlyOncePerProcess=\"false\" canGetAndSetFMUState=\"true\" canSerializeFMUState=\"true\""
     << " providesDirectionalDerivatives=\"false\" providesAdjointDerivatives=\"false\""
@@ -331,6 +349,7 @@ std::string xml3(const ModelInfo& info, const std::string& token, const std::str
   o << " maxOutputDerivativeOrder=\"0\" providesIntermediateUpdate=\"false\" mightReturnEarlyFromDoStep=\"false\""
     << " canReturnEarlyAfterIntermediateUpdate=\"false\" hasEventMode=\"false\""
     << " providesEvaluateDiscreteStates=\"false\"/>\n";
+  }
   o << unitDefinitions(info);
   if (!info.enumerations.empty()) {
     o << "  <TypeDefinitions>\n";
@@ -349,11 +368,20 @@ std::string xml3(const ModelInfo& info, const std::string& token, const std::str
   o << "  <ModelVariables>\n";
   o << "    <Float64 name=\"time\" valueReference=\"" << kTimeValueReference
     << "\" description=\"Simulation time\" causality=\"independent\" variability=\"continuous\"/>\n";
+  // Scheduled Execution: the input clock of the one model partition, and every input and output
+  // clocked by it (clocked variables are discrete: they change only at the clock's ticks).
+  const ScheduledClock& clock = info.clock;
+  if (scheduled)
+    o << "    <Clock name=\"" << esc(clock.name) << "\" valueReference=\"" << clock.vr << "\" description=\""
+      << esc(clock.description) << "\" causality=\"input\" variability=\"discrete\" intervalVariability=\"constant\""
+      << " intervalDecimal=\"" << num(clock.interval) << "\" priority=\"0\"/>\n";
+  auto clocked = [&](Causality c) { return scheduled && (c == Causality::Input || c == Causality::Output); };
   for (const auto& v : info.variables) {
     const char* tag = xmlName3(v);
     o << "    <" << tag << " name=\"" << esc(v.name) << "\" valueReference=\"" << v.vr << "\" description=\""
       << esc(v.description) << "\" causality=\"" << xmlName(v.causality) << "\" variability=\""
-      << xmlName(v.variability) << "\"";
+      << (clocked(v.causality) ? "discrete" : xmlName(v.variability)) << "\"";
+    if (clocked(v.causality)) o << " clocks=\"" << clock.vr << "\"";
     if (v.initial != Initial::Default && v.causality != Causality::Input && v.causality != Causality::Independent)
       o << " initial=\"" << xmlName(v.initial) << "\"";
     const bool st = hasStart(v);
@@ -383,6 +411,29 @@ std::string xml3(const ModelInfo& info, const std::string& token, const std::str
         break;
     }
   }
+  // The arrays: <Float64> with a <Dimension> per dimension; the rest is the elements' (validated
+  // to agree), the start values in row-major order.
+  for (const auto& a : info.arrays) {
+    const auto el = arrayElements(info, a);
+    const Variable& e = *el.front();
+    o << "    <Float64 name=\"" << esc(a.name) << "\" valueReference=\"" << a.vr << "\" description=\""
+      << esc(a.description) << "\" causality=\"" << xmlName(e.causality) << "\" variability=\""
+      << (clocked(e.causality) ? "discrete" : xmlName(e.variability)) << "\"";
+    if (clocked(e.causality)) o << " clocks=\"" << clock.vr << "\"";
+    if (e.initial != Initial::Default && e.causality != Causality::Input) o << " initial=\"" << xmlName(e.initial) << "\"";
+    if (!e.unit.empty()) o << " unit=\"" << esc(e.unit) << "\"";
+    if (const DisplayUnit* du = displayUnit(e.unit)) o << " displayUnit=\"" << du->name << "\"";
+    if (!std::isnan(e.min)) o << " min=\"" << num(e.min) << "\"";
+    if (!std::isnan(e.max)) o << " max=\"" << num(e.max) << "\"";
+    if (hasStart(e)) {
+      o << " start=\"";
+      for (size_t k = 0; k < el.size(); ++k) o << (k ? " " : "") << num(el[k]->start);
+      o << "\"";
+    }
+    o << ">\n";
+    for (int d : a.dimensions) o << "      <Dimension start=\"" << d << "\"/>\n";
+    o << "    </Float64>\n";
+  }
   o << "  </ModelVariables>\n";
 
   // <ModelStructure>: as the FMI 2.0 description's (xmlWithGuid), with value references.
@@ -393,19 +444,35 @@ std::string xml3(const ModelInfo& info, const std::string& token, const std::str
     if (v.causality == Causality::Parameter && effectiveInitial(v) == Initial::Exact) param_vrs.push_back(v.vr);
   }
   o << "  <ModelStructure>\n";
-  for (const auto& v : info.variables)
-    if (v.causality == Causality::Output)
-      o << "    <Output valueReference=\"" << v.vr << "\"" << (info.outputs_depend_on_inputs ? "" : " dependencies=\"\"")
+  // (vr, its variable or an array's first element, the initial inputs): the scalars, then the arrays
+  struct Entry {
+    fmi2ValueReference vr;
+    const Variable* v;
+    std::set<std::string> initial_inputs;
+  };
+  std::vector<Entry> entries;
+  for (const auto& v : info.variables) entries.push_back({v.vr, &v, {v.initial_inputs.begin(), v.initial_inputs.end()}});
+  for (const auto& a : info.arrays) {
+    Entry e{a.vr, arrayElements(info, a).front(), {}};
+    for (const Variable* x : arrayElements(info, a)) e.initial_inputs.insert(x->initial_inputs.begin(), x->initial_inputs.end());
+    entries.push_back(std::move(e));
+  }
+  for (const auto& e : entries)
+    if (e.v->causality == Causality::Output)
+      o << "    <Output valueReference=\"" << e.vr << "\"" << (info.outputs_depend_on_inputs ? "" : " dependencies=\"\"")
         << "/>\n";
-  for (const auto& v : info.variables) {
+  for (const auto& e : entries) {
+    const Variable& v = *e.v;
     const Initial ini = effectiveInitial(v);
-    if (!((v.causality == Causality::Output && (ini == Initial::Approx || ini == Initial::Calculated)) ||
+    // clocked outputs are no initial unknowns (FMI 3.0 section 2.4.8.3): they have values at ticks only
+    if (!((v.causality == Causality::Output && !clocked(v.causality) &&
+           (ini == Initial::Approx || ini == Initial::Calculated)) ||
           v.causality == Causality::CalculatedParameter))
       continue;
     std::vector<fmi2ValueReference> deps = param_vrs;
-    for (const auto& n : v.initial_inputs) deps.push_back(input_vr.at(n));  // validated
+    for (const auto& n : e.initial_inputs) deps.push_back(input_vr.at(n));  // validated
     std::sort(deps.begin(), deps.end());
-    o << "    <InitialUnknown valueReference=\"" << v.vr << "\" dependencies=\"";
+    o << "    <InitialUnknown valueReference=\"" << e.vr << "\" dependencies=\"";
     for (size_t k = 0; k < deps.size(); ++k) o << (k ? " " : "") << deps[k];
     o << "\"/>\n";
   }
@@ -507,6 +574,53 @@ std::string validateModelInfo(const ModelInfo& info) {
         err << w << "initial_inputs names \"" << n << "\", which is not an input\n";
     }
   }
+  // FMI 3.0 arrays: views of Real inputs or outputs that agree in everything but name and start.
+  for (const auto& a : info.arrays) {
+    std::string w = "array \"" + a.name + "\": ";
+    if (a.name.empty()) err << "an array has an empty name\n";
+    if (!names.insert(a.name).second) err << w << "duplicate name\n";
+    if (!vrs.insert(a.vr).second) err << w << "duplicate value reference " << a.vr << "\n";
+    if (a.vr > (1u << 20)) err << w << "value reference " << a.vr << " is too large (max 2^20)\n";
+    if (a.description.empty()) err << w << "missing description\n";
+    size_t n = a.dimensions.empty() ? 0 : 1;
+    for (int d : a.dimensions) {
+      if (d < 1) err << w << "dimension " << d << " < 1\n";
+      n *= static_cast<size_t>(std::max(d, 0));
+    }
+    if (n == 0 || n != a.elements.size()) {
+      err << w << a.elements.size() << " elements for dimensions of " << n << " values\n";
+      continue;
+    }
+    const auto el = arrayElements(info, a);
+    if (std::find(el.begin(), el.end(), nullptr) != el.end()) {
+      err << w << "an element's value reference is no variable of the table\n";
+      continue;
+    }
+    const Variable& f = *el.front();
+    for (const Variable* x : el) {
+      if (x->type != Type::Real || (x->causality != Causality::Input && x->causality != Causality::Output) ||
+          x->causality != f.causality || x->variability != f.variability || x->initial != f.initial ||
+          x->unit != f.unit || !(x->min == f.min || (std::isnan(x->min) && std::isnan(f.min))) ||
+          !(x->max == f.max || (std::isnan(x->max) && std::isnan(f.max))))
+        err << w << "element " << x->name << " is not a Real input or output like the first element\n";
+    }
+  }
+  if (info.clock.interval != 0.0) {
+    const ScheduledClock& c = info.clock;
+    if (!(c.interval > 0.0 && std::isfinite(c.interval))) err << "clock \"" << c.name << "\": interval must be > 0\n";
+    if (c.name.empty() || c.description.empty()) err << "the clock needs a name and a description\n";
+    if (!names.insert(c.name).second) err << "clock \"" << c.name << "\": duplicate name\n";
+    if (!vrs.insert(c.vr).second) err << "clock \"" << c.name << "\": duplicate value reference " << c.vr << "\n";
+    if (c.vr > (1u << 20)) err << "clock \"" << c.name << "\": value reference too large (max 2^20)\n";
+    auto p = std::find_if(info.variables.begin(), info.variables.end(),
+                          [&](const Variable& v) { return v.name == c.period_parameter; });
+    if (!c.period_parameter.empty() && (p == info.variables.end() || p->type != Type::Real ||
+                                        p->causality != Causality::Parameter))
+      err << "clock \"" << c.name << "\": period_parameter \"" << c.period_parameter << "\" is no Real parameter\n";
+    for (const auto& v : info.variables)
+      if (v.causality == Causality::Output && v.variability != Variability::Discrete)
+        err << "variable \"" << v.name << "\": a clocked output (Scheduled Execution) must be discrete\n";
+  }
   return err.str();
 }
 
@@ -527,6 +641,10 @@ std::string modelDescriptionXml(const ModelInfo& info, const std::vector<std::st
 
 std::string modelDescriptionXml3(const ModelInfo& info) {
   return xml3(info, modelGuid(info), generationDateAndTime());
+}
+
+std::string modelDescriptionXmlSE(const ModelInfo& info) {
+  return xml3(info, modelGuid(info), generationDateAndTime(), true);
 }
 
 const char* xmlName(Type t) {

@@ -100,6 +100,34 @@ struct EnumerationType {
   std::vector<EnumerationItem> items;
 };
 
+// An FMI 3.0 array variable (<Float64> with <Dimension>s): a view of Real variables of the table,
+// for a signal that is naturally a vector (a leg's joint angles, a sole's load cells). Declared once,
+// by naming its elements; the elements stay scalar variables of both versions (the FMI 2.0 FMU has
+// only them), and the array is theirs in FMI 3.0: fmi3GetFloat64 reads and fmi3SetFloat64 writes
+// the elements' values (row-major, the last dimension fastest), so the two never disagree and the
+// FMU state is unchanged. Causality, variability, unit, start values and initial dependencies are
+// the elements' (they must agree: validateModelInfo). docs/fmu.md, "FMI 3.0 arrays".
+struct ArrayVariable {
+  std::string name;
+  fmi2ValueReference vr = 0;  // unique among the table's value references
+  std::string description;
+  std::vector<int> dimensions;                   // sizes (each >= 1), e.g. {2, 6}
+  std::vector<fmi2ValueReference> elements;      // product(dimensions) Real variables, row-major
+};
+
+// The FMI 3.0 Scheduled Execution variant's one model partition (docs/fmu.md, "Scheduled
+// Execution"): an input clock of constant period; fmi3ActivateModelPartition(clock, t) runs one
+// fixed step `interval` from t (the model's do_step), with every input and output clocked by it.
+// `period_parameter`: a parameter whose value must equal `interval` (the model's own sample period),
+// checked at fmi3ExitInitializationMode. interval = 0: no Scheduled Execution variant.
+struct ScheduledClock {
+  std::string name;
+  fmi2ValueReference vr = 0;
+  std::string description;
+  double interval = 0.0;
+  std::string period_parameter;
+};
+
 // Extra log category declared by a model (the glue declares its own, see LogCategory).
 struct LogCategoryInfo {
   std::string name;
@@ -136,6 +164,10 @@ struct ModelInfo {
   bool can_interpolate_inputs = false;
   // Files the generator writes into the FMU's resources/ folder: (file name, content).
   std::vector<std::pair<std::string, std::string>> resources;
+  // FMI 3.0 only: array views of scalar Real variables (ArrayVariable), and the clock of the
+  // Scheduled Execution variant (ScheduledClock; interval 0 = none).
+  std::vector<ArrayVariable> arrays;
+  ScheduledClock clock;
 };
 
 // Log categories declared by the glue for every FMU (in this order in <LogCategories>).
@@ -391,6 +423,11 @@ std::string modelDescriptionXml(const ModelInfo& info, const std::vector<std::st
 // is modelGuid(info), so that states move between the two versions. Source files are listed in
 // sources/buildDescription.xml only (FMI 3.0 has no <SourceFiles>).
 std::string modelDescriptionXml3(const ModelInfo& info);
+// The FMI 3.0 Scheduled Execution modelDescription.xml of the same table (ModelInfo::clock must be
+// set): the Co-Simulation twin's variables with every input and output clocked by the one input
+// clock (inputs variability "discrete", as clocked variables must be), the <Clock> itself, and
+// <ScheduledExecution> instead of <CoSimulation>; the same instantiation token and binary.
+std::string modelDescriptionXmlSE(const ModelInfo& info);
 // The modelDescription.xml spelling of each enum value ("" for Initial::Default): one table for the
 // XML, the generated documentation and log messages.
 const char* xmlName(Type t);
