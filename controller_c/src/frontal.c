@@ -552,12 +552,18 @@ static double update_lean(ahc_frontal *c, double ext, const ahc_frontal_sensors 
          * capture point xi = c + c'/w; F28 the planned ZMP p = xi + k (xi - target) + D_y/(m g),
          * inside the soles, which makes xi' = -k w (xi - target) while p is not clamped */
         const double w = c->omega_y, off = c->lean_f / (c->m * c->sp.g);
-        /* the margin yields where holding the target needs the ZMP closer to the edge */
-        const double pm = fabs(next + off) > edge - f->lean_zmp_margin_y ? edge : edge - f->lean_zmp_margin_y;
         const double xi = c->lean + c->lean_rate / w;
+        /* the margin yields where holding the target, or bringing the capture point back from
+         * beyond it, needs the ZMP closer to the edge */
+        const double pm = fabs(next + off) > edge - f->lean_zmp_margin_y || fabs(xi) > edge - f->lean_zmp_margin_y
+                              ? edge : edge - f->lean_zmp_margin_y;
         const double p = clampd(xi + f->lean_capture_gain_y * (xi - next) + off, -pm, pm);
+        const double B = edge - f->lean_margin_y;
         c->lean_p = p;
         c->lean_rate += h * w * w * (c->lean - p + off);
+        /* F29: the capture point stays within +-B, so that the pendulum stays capturable over the
+         * soles if the push ends now (its offset D_y/(m g) gone) */
+        c->lean_rate = clampd(c->lean_rate, w * (-B - c->lean), w * (B - c->lean));
         next = c->lean + h * c->lean_rate;
         if (fabs(next) > edge - f->lean_margin_y) {
             next = clampd(next, -edge + f->lean_margin_y, edge - f->lean_margin_y);

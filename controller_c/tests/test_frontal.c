@@ -303,7 +303,8 @@ static void test_controller3d_zero_offsets(void)
  * the push, with phi leaning the legs there (quasi-static robot: the ZMP from the moment balance);
  * with one sole unloaded the lean holds (within 0.1 um: the estimate holds, the plan is at its
  * target). The pendulum law (F26-F28): its planned ZMP never leaves the soles less
- * lean_zmp_margin_y, and the CoM reference starts away from the push within 100 ms (the first
+ * lean_zmp_margin_y, its capture point never leaves them less lean_margin_y (F29), and the CoM
+ * reference starts away from the push within 100 ms (the first
  * rocking_dwell_y of a run count as not yet flat). What the law
  * gains on the 3D plant is measured by scripts/frontal_limits.py (docs/controller.md §11.5). */
 static void test_lateral_lean(int law)
@@ -315,7 +316,7 @@ static void test_lateral_lean(int law)
     ahc_frontal_outputs o;
     int i;
     const double D = 1.5, m = HOAP2_M1 + HOAP2_M2, mt = m + HOAP2_FEET_MASS;
-    double ry, lean_held, pmax = 0.0, lean_100ms = 0.0;
+    double ry, lean_held, pmax = 0.0, lean_100ms = 0.0, ximax = 0.0;
     ahc_params_default(&sp);
     ahc_frontal_params_default(&f);
     CHECK(f.lean_enabled_y == 1, "the lean is on by default");
@@ -333,12 +334,15 @@ static void test_lateral_lean(int law)
         s.zmp_y = (m * sp.g * ry + D) / s.fz;   /* at rest: p f_z = g m r_y + D (feet at y = 0) */
         ahc_frontal_step(&c, &s, &o);
         if (fabs(c.lean_p) > pmax) pmax = fabs(c.lean_p);
+        if (fabs(c.lean + c.lean_rate / c.omega_y) > ximax) ximax = fabs(c.lean + c.lean_rate / c.omega_y);
         if (i == 99) lean_100ms = c.lean;
     }
     if (law == AHC_LEAN_PENDULUM) {
         CHECK(pmax <= f.ankle_y + 0.5 * f.sole_width - f.lean_zmp_margin_y + 1e-15,
               "the planned ZMP stays lean_zmp_margin_y inside the soles: %g", pmax);
         CHECK(lean_100ms < 0.0, "the CoM reference moves away from the push within 100 ms: %g", lean_100ms);
+        CHECK(ximax <= f.ankle_y + 0.5 * f.sole_width - f.lean_margin_y + 1e-12,
+              "F29: the plan's capture point stays lean_margin_y inside the soles: %g", ximax);
     }
     ahc_frontal_com(&f, &sp, c.phi, c.psi, &ry, NULL);
     /* -D/(m g), less what F11's spring yields to the remaining d_y = m g (p_y - r_y): 10 % */
@@ -408,6 +412,53 @@ static void test_controller3d_foot_roll(void)
     CHECK(lean_rolled == 0.0, "feet rolled 0.05 rad: the lean holds (at 0): %g", lean_rolled);
 }
 
+/* F29 under a push the lean cannot balance inside its margin (D = 4.5 N m: the target -D/(m g) is
+ * clamped at -B = -(outer edge - lean_margin_y)): the plan's capture point never passes -B and the CoM
+ * reference settles at -B; then a 0.2 s pulse of the same moment: the capture point again within
+ * B, and the CoM reference back at 0 once the push has gone. (This rigid quasi-static robot does not
+ * drive the plan past B even without F29; the closed loop that does, a 12 N 0.2 s push at 45 deg on
+ * the 3D plant, is tests/test_frontal_lean.py.) */
+static void test_pendulum_capture_bound(void)
+{
+    ahc_params sp;
+    ahc_frontal_params f;
+    ahc_frontal c;
+    ahc_frontal_sensors s;
+    ahc_frontal_outputs o;
+    const double D = 4.5, m = HOAP2_M1 + HOAP2_M2, mt = m + HOAP2_FEET_MASS;
+    double ry, ximax = 0.0, B;
+    int i;
+    ahc_params_default(&sp);
+    ahc_frontal_params_default(&f);
+    B = f.ankle_y + 0.5 * f.sole_width - f.lean_margin_y;
+    CHECK(ahc_frontal_init(&c, &f, &sp) == AHC_OK, "init");
+    memset(&s, 0, sizeof s);
+    s.fz = mt * sp.g;
+    s.fz_left = s.fz_right = 0.5 * s.fz;
+    for (i = 0; i < 3000; ++i) {
+        s.phi = c.phi;
+        s.psi = c.psi;
+        ahc_frontal_com(&f, &sp, s.phi, s.psi, &ry, NULL);
+        s.zmp_y = (m * sp.g * ry + D) / s.fz;
+        ahc_frontal_step(&c, &s, &o);
+        if (fabs(c.lean + c.lean_rate / c.omega_y) > ximax) ximax = fabs(c.lean + c.lean_rate / c.omega_y);
+    }
+    CHECK(ximax <= B + 1e-12, "F29: the capture point stays within B = %g: %g", B, ximax);
+    CHECK(fabs(c.lean + B) < 1e-6, "the CoM reference settles at -B: %g vs %g", c.lean, -B);
+    CHECK(ahc_frontal_init(&c, &f, &sp) == AHC_OK, "init");
+    ximax = 0.0;
+    for (i = 0; i < 4000; ++i) {
+        s.phi = c.phi;
+        s.psi = c.psi;
+        ahc_frontal_com(&f, &sp, s.phi, s.psi, &ry, NULL);
+        s.zmp_y = (m * sp.g * ry + (i >= 100 && i < 300 ? D : 0.0)) / s.fz;
+        ahc_frontal_step(&c, &s, &o);
+        if (fabs(c.lean + c.lean_rate / c.omega_y) > ximax) ximax = fabs(c.lean + c.lean_rate / c.omega_y);
+    }
+    CHECK(ximax <= B + 1e-12, "F29, a 0.2 s pulse: the capture point stays within B = %g: %g", B, ximax);
+    CHECK(fabs(c.lean) < 1e-3, "a 0.2 s pulse: the CoM reference back at 0: %g", c.lean);
+}
+
 int main(void)
 {
     test_ik_fk();
@@ -417,6 +468,7 @@ int main(void)
     test_lateral_lean(AHC_LEAN_LOWPASS);
     test_lateral_lean(AHC_LEAN_PENDULUM);
     test_controller3d_foot_roll();
+    test_pendulum_capture_bound();
     test_controller3d_zero_offsets();
     test_frontal_fault_string();
     TEST_MAIN_END();
