@@ -1,6 +1,6 @@
 /*
  * leg_ik.h — the legs' analytic inverse and forward kinematics, feet flat on the ground, for the
- * 3D controller (docs/controller.md §11.4). A leg as HOAP-2's (hoap2/bodies.h): a hip whose yaw,
+ * 3D controller (docs/controller.md §11.4), and for any foot pose (ahc_leg_ik_pose, below). A leg as HOAP-2's (hoap2/bodies.h): a hip whose yaw,
  * pitch and roll axes meet (trunk -> thigh: Rz(yaw) Ry(-hip) Rx(hip_roll)), a knee (thigh ->
  * shank: Ry(knee), + = flexed), an ankle whose pitch and roll axes meet (shank -> foot:
  * Ry(-ankle) Rx(ankle_roll)). The pitch angles are in the sagittal sense (+ = the body above
