@@ -214,7 +214,7 @@ void ahc_legs_frontal_angles(const ahc_leg_geometry *g, const double q[2][AHC_LE
     *psi = atan2(-R[7], R[4]);
 }
 
-/* ---- A general foot pose ------------------------------------------------------------------------ */
+/* ---- Any foot pose ------------------------------------------------------------------------------ */
 
 void ahc_leg_limits_hoap2(int side, ahc_leg_limits *lim)
 {
