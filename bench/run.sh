@@ -19,10 +19,13 @@ build="${ANKLEHIP_BUILD_DIR:-$root/build}"
 py="$root/.venv/bin/python"
 quick=0
 if [ "${1:-}" = "--quick" ]; then quick=1; fi
-cmake --build "$build" --target controller_step_bench plant_bench plant3d_bench anklehip_closed_loop >/dev/null
+cmake --build "$build" --target controller_step_bench leg_ik_bench plant_bench plant3d_bench anklehip_closed_loop >/dev/null
 passes=20; [ "$quick" -eq 1 ] && passes=1
 echo "== controller: ahc_step (C99 library), $passes passes over an 8 s sequence through all phases"
 "$build/bench/controller_step_bench" "$passes"
+echo
+echo "== leg IK: the closed-form kinematics of a leg for any foot pose (controller_c leg_ik.h)"
+"$build/bench/leg_ik_bench" "$passes"
 echo
 echo "== 3D plant: Hoap2Plant3D model on ODE, 1 ms communication steps, configurations side by side"
 "$build/plant3d/plant3d_bench"

@@ -232,6 +232,8 @@ def frontal_numbers(bodies: dict[str, Body]) -> dict:
     # the left hip roll turns the thigh about +x: + moves the foot outward (abduction)
     out["hip_abduction_max"], out["hip_adduction_max"] = j["lleg_joint_2"]["max"], -j["lleg_joint_2"]["min"]
     out["knee_min"], out["knee_max"] = j["lleg_joint_4"]["min"], j["lleg_joint_4"]["max"]
+    # the left hip yaw turns the thigh about +z: + turns the toes outward
+    out["hip_yaw_out_max"], out["hip_yaw_in_max"] = j["lleg_joint_1"]["max"], -j["lleg_joint_1"]["min"]
     return out
 
 
@@ -282,6 +284,8 @@ MACROS = [
     ("HIP_ADDUCTION_MAX", "hip_adduction_max", "Hip roll limit inward [rad]."),
     ("KNEE_MIN", "knee_min", "Knee lower limit [rad] (+ = flexed; the proto's lleg_joint_4)."),
     ("KNEE_MAX", "knee_max", "Knee upper limit [rad]."),
+    ("HIP_YAW_OUT_MAX", "hip_yaw_out_max", "Hip yaw limit outward (the toes turned away from the mid-plane) [rad]."),
+    ("HIP_YAW_IN_MAX", "hip_yaw_in_max", "Hip yaw limit inward [rad]."),
 ]
 
 

@@ -26,6 +26,7 @@ def test_every_benchmark_runs_to_the_end_in_its_quick_mode(tmp_path, fmu_dir):
     # each benchmark's section and a figure of each
     for header, figure in [
             ("== controller: ahc_step", r"median [\d.]+ ns/step"),
+            ("== leg IK", r"ahc_leg_ik_pose\s+median [\d.]+ ns/call"),
             ("== 3D plant: Hoap2Plant3D model on ODE", r"default\s+[\d.]+\s+[\d.]+"),
             ("== closed loop on the 3D plant", r"as shipped\s+native \+CSV\s+[\d.]+"),
             ("== closed loop, FMPy master", r"real-time factor [\d.]+"),

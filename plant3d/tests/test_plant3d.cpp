@@ -12,6 +12,7 @@
 
 #include <ode/ode.h>
 
+#include "ahc/leg_ik.h"
 #include "hoap2/nominal.h"
 #include "hoap2plant3d/plant3d.hpp"
 #include "check.h"  // CHECK, g_fail (hoap2/testing)
@@ -728,6 +729,106 @@ static void test_one_leg_statics() {
               o.fz_foot[Left], mg, 1e3 * rise, worst, largest);
 }
 
+// Establishes: the leg's closed-form kinematics of the controller library (controller_c leg_ik.h:
+// ahc_leg_fk_pose, ahc_leg_ik_pose, on hoap2/nominal.h's thigh and shank) are this plant's, built
+// from the proto's bodies and joints: with gravity off, both legs driven (per-leg set points) to
+// joint angles that the IK computed for four pairs of foot poses (a swing foot yawed, a crouch, a
+// tilted sole, a side step; the right leg's the left's mirrored), at each pose
+//   - the forward kinematics of the joint angles the plant reads equal the foot's pose relative to
+//     the trunk in the plant's bodies (the ankle joint's anchor from the hip's, in the trunk's axes;
+//     the foot body's orientation) within 1e-9;
+//   - the IK of the plant's foot pose gives back the joint angles the plant reads within 1e-9;
+//   - the plant's feet are at the poses asked within 1e-6 (m, rotation entries; the servos settle).
+// Each pose is reached smoothly (a quintic in 1 s) and held 1 s, so that the floating robot does
+// not spin: a robot spinning at 0.3 rad/s stretches ODE's joints by about 1e-9 m.
+static void test_leg_ik() {
+  Params P = default_params();
+  P.g = 0.0;
+  P.mu = 0.0;
+  P.flat_foot_weld = false;                      // legs of different shapes
+  P.fall_foot_pitch = P.fall_body_pitch = 4.0;   // never: without gravity the robot floats
+  Plant3D p(P);
+  CHECK(p.initialize(0.0), "%s", p.message().c_str());
+  const ahc_leg_geometry g{HOAP2_THIGH, HOAP2_SHANK, HOAP2_HIP_Y, HOAP2_ANKLE_Y};
+  // the left foot's pose: the ankle moved from below the hip (dx, dz up, dy outward), the foot at
+  // Rz(yaw) Ry(pitch) Rx(roll) (yaw outward, pitch toes down, roll outward side down)
+  struct Pose {
+    double dx, dy, dz, yaw, pitch, roll;
+  };
+  const Pose poses[] = {{0.04, 0.01, 0.03, 0.2, -0.1, 0.0},
+                        {-0.01, 0.0, 0.04, 0.0, 0.0, 0.0},
+                        {0.02, -0.005, 0.02, -0.1, 0.1, 0.15},
+                        {0.0, 0.03, 0.015, 0.1, 0.0, -0.05}};
+  auto rot = [](double yaw, double pitch, double roll, double R[9]) {
+    const double cy = std::cos(yaw), sy = std::sin(yaw), cp = std::cos(pitch), sp = std::sin(pitch),
+                 cr = std::cos(roll), sr = std::sin(roll);
+    const double r[9] = {cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr,
+                         sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr,
+                         -sp,     cp * sr,                cp * cr};
+    std::copy(r, r + 9, R);
+  };
+  double worst_fk = 0, worst_ik = 0, worst_target = 0, from[kLegs][kLegJoints] = {};
+  for (const Pose& ps : poses) {
+    double want_a[kLegs][3], want_R[kLegs][9];
+    Inputs u;
+    for (int s = 0; s < kLegs; ++s) {
+      const double out = s == Left ? 1.0 : -1.0;  // the right leg mirrored
+      const double a[3] = {ps.dx, out * ps.dy, -(HOAP2_THIGH + HOAP2_SHANK) + ps.dz};
+      std::copy(a, a + 3, want_a[s]);
+      rot(out * ps.yaw, ps.pitch, out * ps.roll, want_R[s]);
+      ahc_leg_limits lim;
+      ahc_leg_limits_hoap2(s == Left ? AHC_LEFT : AHC_RIGHT, &lim);
+      double q[AHC_LEG_JOINTS];
+      const int status = ahc_leg_ik_pose(&g, &lim, want_a[s], want_R[s], q);
+      CHECK(status == 0, "pose (%g, %g, %g): IK status %d", ps.dx, ps.dy, ps.dz, status);
+      for (int k = 0; k < kLegJoints; ++k) u.leg_ref[s][k] = q[k];   // leg_ik.h's order and senses
+    }
+    // moved there smoothly (quintic, 1 s), then held 1 s
+    const double t0 = p.time();
+    const auto r = run(p, 2000, [&](double t, Inputs& in) {
+      const double x = std::clamp(t - t0, 0.0, 1.0), w = x * x * x * (10 - 15 * x + 6 * x * x);
+      for (int s = 0; s < kLegs; ++s)
+        for (int k = 0; k < kLegJoints; ++k) in.leg_ref[s][k] = from[s][k] + w * (u.leg_ref[s][k] - from[s][k]);
+    });
+    std::copy(&u.leg_ref[0][0], &u.leg_ref[0][0] + 12, &from[0][0]);
+    CHECK(r == Plant3D::Result::Ok, "%s", p.message().c_str());
+    const Outputs& o = p.outputs();
+    const auto joints = p.joints();
+    double Rt[9];
+    p.body_rotation(0, Rt);
+    for (int s = 0; s < kLegs; ++s) {
+      // the plant's foot pose relative to the trunk: hip (ball) and ankle (universal) anchors
+      const double* hip = joints[s * kLegJoints + HipYaw].anchor;
+      const double* ank = joints[s * kLegJoints + AnklePitch].anchor;
+      const double d[3] = {ank[0] - hip[0], ank[1] - hip[1], ank[2] - hip[2]};
+      double Rf[9], a[3], R[9];
+      p.body_rotation(1 + s * kLegBodies + Foot, Rf);
+      for (int i = 0; i < 3; ++i) {
+        a[i] = Rt[i] * d[0] + Rt[3 + i] * d[1] + Rt[6 + i] * d[2];
+        for (int c = 0; c < 3; ++c) R[i * 3 + c] = Rt[i] * Rf[c] + Rt[3 + i] * Rf[3 + c] + Rt[6 + i] * Rf[6 + c];
+      }
+      double fa[3], fR[9], qi[AHC_LEG_JOINTS];
+      ahc_leg_fk_pose(&g, o.joint[s], fa, fR);
+      ahc_leg_ik_pose(&g, nullptr, a, R, qi);
+      for (int i = 0; i < 3; ++i) {
+        worst_fk = std::max(worst_fk, std::fabs(fa[i] - a[i]));
+        worst_target = std::max(worst_target, std::fabs(a[i] - want_a[s][i]));
+      }
+      for (int i = 0; i < 9; ++i) {
+        worst_fk = std::max(worst_fk, std::fabs(fR[i] - R[i]));
+        worst_target = std::max(worst_target, std::fabs(R[i] - want_R[s][i]));
+      }
+      for (int k = 0; k < kLegJoints; ++k) worst_ik = std::max(worst_ik, std::fabs(qi[k] - o.joint[s][k]));
+    }
+  }
+  CHECK(worst_fk < 1e-9, "FK of the plant's joint angles differs from its foot poses by %g", worst_fk);
+  CHECK(worst_ik < 1e-9, "IK of the plant's foot poses differs from its joint angles by %g rad", worst_ik);
+  CHECK(worst_target < 1e-6, "the feet %g from the poses asked", worst_target);
+  std::printf("  8 foot poses: FK(plant joints) = plant foot pose within %.2g; IK(plant foot pose) = plant joints\n"
+              "  within %.2g rad; feet at the poses asked within %.2g (servo settling)\n",
+              worst_fk, worst_ik, worst_target);
+}
+
 int main(int argc, char** argv) {
   const std::string which = argc > 1 ? argv[1] : "all";
   struct T {
@@ -740,7 +841,8 @@ int main(int argc, char** argv) {
                {"snapshot", test_snapshot},
                {"instances", test_instances},           {"joint_statics", test_joint_statics},
                {"kinematics", test_kinematics},         {"per_leg_set_points", test_per_leg_set_points},
-               {"one_leg_statics", test_one_leg_statics}, {"ode_lifetime", test_ode_lifetime}};
+               {"one_leg_statics", test_one_leg_statics}, {"ode_lifetime", test_ode_lifetime},
+               {"leg_ik", test_leg_ik}};
   bool ran = false;
   for (auto& t : tests)
     if (which == "all" || which == t.name) {

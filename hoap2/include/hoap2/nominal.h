@@ -96,6 +96,10 @@
 #define HOAP2_KNEE_MIN (-0.017453)
 /* Knee upper limit [rad]. */
 #define HOAP2_KNEE_MAX 2.26893
+/* Hip yaw limit outward (the toes turned away from the mid-plane) [rad]. */
+#define HOAP2_HIP_YAW_OUT_MAX 1.58825
+/* Hip yaw limit inward [rad]. */
+#define HOAP2_HIP_YAW_IN_MAX 0.541052
 
 /* --- derived ------------------------------------------------------------------------------- */
 /* Mass of the two-link body above the ankle [kg] (m = m1 + m2 of the paper). */
