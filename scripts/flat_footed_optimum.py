@@ -10,7 +10,8 @@ The robot's numbers are the plant FMUs' (Hoap2Plant: masses, lengths, inertias, 
 servo limits; completed by the robot header it carries: the joint ranges, leg segments; Hoap2Plant3D:
 the friction coefficient mu), recorded in the file with the settings and the sha256 of the model's
 source, so a stale cache is detected (tests/test_flat_footed.py, anklehip.analysis.bounds.optimum_matches).
-The file is written whole or not at all. About 30 min on one core.
+The file is written whole or not at all; an interrupted run resumes from its journal
+(<out>.partial.jsonl). About 40 min on one core of a loaded machine.
 
     .venv/bin/python scripts/flat_footed_optimum.py [--fmu-dir build/fmus] [--out FILE] [--quick]
 """
@@ -34,7 +35,8 @@ from anklehip.analysis import flat_footed as ff  # noqa: E402
 from anklehip.analysis.bounds import (NOMINAL_DURATIONS, OPTIMUM_FILE, bounds_parameters,  # noqa: E402
                                       optimum_parameters, plant_header)
 
-DT = 0.02             # the coarse mesh's longest interval [s]; the cached value is the mesh of DT/2
+DT = 0.02             # the coarse mesh's longest interval [s] for pushes up to 1 s; the cached value is the mesh of DT/2
+DT_LONG = 0.04        # the same for longer pushes (their hold is smooth; the solves' cost grows with the intervals)
 T_AFTER = 1.5         # horizon after the push [s]
 T_AFTER_CHECK = 3.0   # the horizon check's
 HEIGHTS = (0.26, 0.30, 0.38, 0.42, 0.46)          # scenarios/sweeps/force_height.toml (1 s pushes, 50 ms rise)
@@ -66,6 +68,11 @@ def source_hash() -> str:
     return hashlib.sha256((ROOT / "anklehip" / "analysis" / "flat_footed.py").read_bytes()).hexdigest()
 
 
+def coarse_dt(pt: dict) -> float:
+    """The coarse mesh of a point: DT for pushes up to 1 s, DT_LONG for longer ones."""
+    return DT if pt["duration"] <= 1.0 else DT_LONG
+
+
 def solve_point(params: dict, pt: dict, dt: float, t_after: float, f_guess=None) -> ff.Solution:
     pb = ff.with_height(ff.problem_from_params(params, pt["direction"]), pt["height"])
     return ff.solve(pb, pt["duration"], pt["rise"], dt=dt, t_after=t_after, f_guess=f_guess)
@@ -82,13 +89,29 @@ def main(argv=None) -> int:
     pts = grid(h0)[:2] if a.quick else grid(h0)
     t_start = time.perf_counter()
     out = []
+    # points already solved (this robot, this model, these settings) are kept in a journal next to
+    # the output, so an interrupted run resumes; the journal is removed when the file is written
+    journal = Path(a.out + ".partial.jsonl")
+    key = json.dumps([source_hash(), optimum_parameters(params), params["mu"], DT, DT_LONG, T_AFTER, a.quick])
+    done = {}
+    if journal.is_file():
+        for line in journal.read_text().splitlines():
+            j = json.loads(line)
+            if j.get("key") == key:
+                done[json.dumps(j["point"], sort_keys=True)] = j["row"]
     for i, pt in enumerate(pts):
-        c = solve_point(params, pt, DT, T_AFTER)
+        pk = json.dumps(pt, sort_keys=True)
+        if pk in done:
+            out.append(done[pk])
+            print(f"[{i + 1}/{len(pts)}] {pt}: {done[pk]['f_peak']:.3f} N (from {journal.name})", flush=True)
+            continue
+        dt = coarse_dt(pt)
+        c = solve_point(params, pt, dt, T_AFTER)
         if a.quick:
             f = c
         else:
-            f = solve_point(params, pt, DT / 2, T_AFTER, f_guess=c.f_peak)
-        row = {**pt, "f_peak": f.f_peak, "ok": bool(c.ok and f.ok), "status": f.status,
+            f = solve_point(params, pt, dt / 2, T_AFTER, f_guess=c.f_peak)
+        row = {**pt, "dt": dt / (1 if a.quick else 2), "f_peak": f.f_peak, "ok": bool(c.ok and f.ok), "status": f.status,
                "f_peak_coarse": c.f_peak, "status_coarse": c.status,
                "rel_change_mesh": (f.f_peak - c.f_peak) / f.f_peak if f.f_peak else math.nan,
                "intervals": f.n_intervals, "seconds": round(c.seconds + (0 if a.quick else f.seconds), 1),
@@ -96,13 +119,15 @@ def main(argv=None) -> int:
                "max_hip_rate": float(abs(f.dq[:, 1]).max()), "max_ankle_rate": float(abs(f.dq[:, 0]).max()),
                "max_hip_torque": float(abs(f.tau[:, 1]).max()), "max_ankle_torque": float(abs(f.tau[:, 0]).max())}
         out.append(row)
+        with journal.open("a") as fh:
+            fh.write(json.dumps({"key": key, "point": pt, "row": row}) + "\n")
         print(f"[{i + 1}/{len(pts)}] dir {pt['direction']:+d} rise {pt['rise']:g} h {pt['height']:g} "
               f"D {pt['duration']:g}: {f.f_peak:.3f} N ({f.status}; coarse {c.f_peak:.3f}, "
               f"{100 * row['rel_change_mesh']:+.3f} %) {row['seconds']:.0f} s", flush=True)
     horizon, static = [], {}
     if not a.quick:
         for pt in [p for p in pts if p["height"] == h0 and p["rise"] == 0.05 and p["duration"] in (0.1, 1.0, 4.0)]:
-            s = solve_point(params, pt, DT, T_AFTER_CHECK)
+            s = solve_point(params, pt, coarse_dt(pt), T_AFTER_CHECK)
             base = next(r["f_peak_coarse"] for r in out if all(r[k] == pt[k] for k in pt))
             horizon.append({**pt, "t_after": T_AFTER_CHECK, "f_peak_coarse": s.f_peak, "status": s.status,
                             "rel_change_horizon": (s.f_peak - base) / base})
@@ -119,7 +144,8 @@ def main(argv=None) -> int:
         "parameters": {**optimum_parameters(params), "mu": params["mu"]},
         "settings": {"transcription": f"direct collocation, Radau IIA degree {ff.DEGREE}, torques at the collocation "
                                       "points, mesh aligned with the push's break points",
-                     "dt": DT / (1 if a.quick else 2), "dt_coarse": DT, "t_after": T_AFTER, "reg": ff.REG,
+                     "dt": "per point (its dt): the coarse mesh's halved", "dt_coarse": [DT, DT_LONG],
+                     "dt_coarse_rule": "DT up to 1 s pushes, DT_LONG beyond", "t_after": T_AFTER, "reg": ff.REG,
                      "ipopt": {k: v for k, v in ff.IPOPT_OPTIONS.items() if k.startswith("ipopt.")}},
         "points": out, "horizon_check": horizon, "static": static,
         "seconds": round(time.perf_counter() - t_start),
@@ -131,6 +157,7 @@ def main(argv=None) -> int:
         json.dump(data, fh, indent=1)
         fh.write("\n")
     os.replace(tmp, dest)
+    journal.unlink(missing_ok=True)
     print(f"wrote {dest} ({len(out)} points, {data['seconds']} s)")
     return 0 if all(r["ok"] for r in out) else 1
 

@@ -485,3 +485,14 @@ def test_hoap2_step_reach():
     assert t == pytest.approx(2 * math.asin(l / 0.4) / 5.0, rel=1e-12) and t == pytest.approx(DT_S, abs=5e-4)
     with pytest.raises(ValueError, match="ankle_max"):
         step_reach(p, hip_drop=0.15)
+
+
+def test_docs_n_step_table_is_the_modules(fmu_path):
+    """Establishes: the N-step table of docs/capability.md section 9 is what `python -m
+    anklehip.analysis.bounds` prints for the sagittal plant FMU's robot (n_step_table)."""
+    from anklehip.analysis.bounds import n_step_table
+    from anklehip.running.fmu import FMUInfo
+    from conftest import REPO_ROOT
+    plant = FMUInfo.load(fmu_path("Hoap2Plant"))
+    table = n_step_table(bounds_parameters(plant.start_values(), plant_header(plant.unzipdir)))
+    assert table in (REPO_ROOT / "docs" / "capability.md").read_text()

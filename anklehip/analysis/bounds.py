@@ -417,6 +417,35 @@ def sustained_push_limit_stepped(r: Robot, l_max: float, direction: float = +1) 
         m = r.m_b * (r.x_toe - r.x_heel + l_max) + r.m_f * (r.x_f - r.x_heel + l_max / 2)
     return r.g * m / r.h
 
+
+STEP_COUNTS = (0, 1, 2, 3, math.inf)
+
+
+def n_step_table(params: dict, durations=None, rise: float = 0.05, hip_drop: float = 0.01) -> str:
+    """The N-step bounds of the nominal robot (docs/capability.md section 9) as markdown: HOAP-2's step
+    (step_reach), the capture margins d_N, the impulse limits and the force limits of the sweeps'
+    pushes on the back and the chest for N = 0 (the LIP bound), 1, 2, 3 and infinitely many steps."""
+    durations = NOMINAL_DURATIONS if durations is None else durations
+    r = robot_from_plant_params(params)
+    l_max, dt_s = step_reach(params, hip_drop)
+    head = ["quantity"] + [("∞ steps" if math.isinf(n) else f"{n} step" + ("s" if n != 1 else "")) for n in STEP_COUNTS]
+    out = [f"HOAP-2's step (hip lowered {1000 * hip_drop:g} mm): l_max = {1000 * l_max:.1f} mm, "
+           f"dt_s = {1000 * dt_s:.0f} ms; ω = {r.omega:.3f} s⁻¹.", "",
+           "| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+    for d, side in ((1, "back"), (-1, "chest")):
+        rm = _edge_moment(r, d) / r.m_b
+        out.append(f"| capture margin d_N, {side} [mm] | "
+                   + " | ".join(f"{1000 * capture_margin(rm, l_max, r.omega, dt_s, n):.1f}" for n in STEP_COUNTS) + " |")
+        out.append(f"| impulse limit, {side} [N·s] | "
+                   + " | ".join(f"{n_step_impulse_limit(r, d, n, l_max, dt_s):.3f}" for n in STEP_COUNTS) + " |")
+        for D in durations:
+            out.append(f"| {D:g} s push, {side} [N] | "
+                       + " | ".join(f"{float(n_step_force_limit(r, D, rise, d, n, l_max, dt_s)):.1f}" for n in STEP_COUNTS)
+                       + " |")
+        out.append(f"| sustained-push limit, {side} [N] | {sustained_push_limit(r, d):.2f} | "
+                   + " | ".join(f"{sustained_push_limit_stepped(r, l_max, d):.2f}" for _ in STEP_COUNTS[1:]) + " |")
+    return "\n".join(out)
+
 # ---------------------------------------------------------------------------------------------
 # every horizontal direction: the robot on both feet (docs/capability.md section 7)
 
@@ -714,8 +743,10 @@ if __name__ == "__main__":      # pragma: no cover - prints the doc's tables
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--fmu-dir")
     fmu_dir = ap.parse_args().fmu_dir
-    print(nominal_table(FMUInfo.load(find_fmu(PLANT_FMU, fmu_dir)).start_values()))
+    plant = FMUInfo.load(find_fmu(PLANT_FMU, fmu_dir))
+    print(nominal_table(plant.start_values()))
     # the 3D plant standing in the default controller's erect posture, as a sweep on it sees it
     p = bounds_parameters_of(Models.load(fmu_dir, plant_model="3d"), Scenario("bounds", None, plant_model="3d"))
     print("\n" + nominal_tables_3d(p, p.get("theta_ankle_erect", 0.0), p.get("theta_hip_erect", 0.0)))
     print("\n" + optimum_table())          # the cached flat-footed optimum (section 8)
+    print("\n" + n_step_table(bounds_parameters(plant.start_values(), plant_header(plant.unzipdir))))   # section 9
