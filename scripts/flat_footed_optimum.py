@@ -13,7 +13,7 @@ source, so a stale cache is detected (tests/test_flat_footed.py, anklehip.analys
 The file is written whole or not at all; an interrupted run resumes from its journal
 (<out>.partial.jsonl). About 40 min on one core of a loaded machine.
 
-    .venv/bin/python scripts/flat_footed_optimum.py [--fmu-dir build/fmus] [--out FILE] [--quick]
+    .venv/bin/python scripts/flat_footed_optimum.py [--fmu-dir build/fmus] [--out FILE] [--quick] [--reg-check]
 """
 from __future__ import annotations
 
@@ -83,8 +83,19 @@ def main(argv=None) -> int:
     ap.add_argument("--fmu-dir", help="folder of the plant FMUs (default: the checkout's build)")
     ap.add_argument("--out", default=str(ROOT / "anklehip" / "analysis" / "data" / OPTIMUM_FILE))
     ap.add_argument("--quick", action="store_true", help="two points on the coarse mesh only (a smoke test)")
+    ap.add_argument("--reg-check", action="store_true",
+                    help="the smoothness term's effect: the 0.2 s push on the back, coarse mesh, with and without it")
     a = ap.parse_args(argv)
     params = robot_parameters(a.fmu_dir)
+    if a.reg_check:
+        pt = dict(direction=1, rise=0.05, height=params["h_push"], duration=0.2)
+        with_reg = solve_point(params, pt, coarse_dt(pt), T_AFTER)
+        reg, ff.REG = ff.REG, 0.0
+        without = solve_point(params, pt, coarse_dt(pt), T_AFTER)
+        ff.REG = reg
+        print(f"REG {reg:g}: {with_reg.f_peak:.6f} N ({with_reg.status}); REG 0: {without.f_peak:.6f} N "
+              f"({without.status}); difference {without.f_peak - with_reg.f_peak:+.6f} N")
+        return 0
     h0 = params["h_push"]
     pts = grid(h0)[:2] if a.quick else grid(h0)
     t_start = time.perf_counter()

@@ -155,17 +155,21 @@ def _cached(direction, rise=0.05, h=None):
 @pytest.mark.parametrize("direction", [+1, -1])
 def test_optimum_between_the_bounds(direction):
     """Establishes: the cached optimum sits where physics puts it: never below the LIP bound of the
-    ankle strategy (the hip can only add), decreasing with the push's duration, never above the
-    static optimum of the same model plus the rise's advantage for long pushes (4 s within 10 % of
-    the model's static limit: a push that lasts is a static problem), above the static tipping
-    force everywhere, and (on the back) F h within 10 % across the cached heights (moment limits)."""
+    ankle strategy (the hip can only add), decreasing with the push's duration and converged by 2 s
+    (a longer push of 50 ms rise is a step push: 2 s and 4 s within 0.5 %), below the model's static
+    optimum (a push that lasts must be held), the slow pushes (1 s ramps) above the static optimum
+    (the optimizer knows the push ramps down slowly: it leans into it and rides it back, section
+    8.5) and decreasing with duration, above the static tipping force everywhere, and (on the back) F h within 10 % across the cached heights (moment limits)."""
     r = ff.problem_from_params(_data()["parameters"], direction).robot
     D, F = _cached(direction)
     assert np.all(np.diff(F) < 0)
     assert np.all(F >= 0.999 * B.lip_force_limit(r, D, 0.05, direction))
     assert np.all(F > B.static_tipping_force(r, direction))
     static = _data()["static"][str(direction)]["nonlinear"]
-    assert F[-1] == pytest.approx(static, rel=0.10)
+    assert F[-1] <= static and F[-1] == pytest.approx(F[-2], rel=0.005)     # 2 s and 4 s: a step push
+    if direction > 0:          # a slow ramp lets the clairvoyant optimum lean into the push and ride it back
+        Ds, Fs = _cached(1, rise=1.0)
+        assert np.all(np.diff(Fs) < 0) and np.all(Fs > static)
     if direction > 0:          # the height grid: on the back, as the force x height sweep pushes
         hs = sorted({x["height"] for x in _data()["points"] if x["direction"] == 1 and x["duration"] == 1.0
                      and x["rise"] == 0.05})
@@ -177,6 +181,7 @@ def _measured():
     """The measured boundaries of docs/capability.md "Measured maps" (force x duration, on the back):
     {variant: (durations, forces, at_least)}, at_least where every force tried stood (">= F")."""
     doc = (REPO_ROOT / "docs" / "capability.md").read_text()
+    doc = doc[doc.index("## Measured maps"):]
     lines = doc[doc.index("| duration [s] | 0.1 |"):].splitlines()
     durations = [float(x) for x in lines[0].strip("|").split("|")[1:]]
     out = {}
@@ -274,9 +279,11 @@ def test_capability_maps_draw_the_optimum_and_the_stepping_bounds(tmp_path):
     fig = capability_figure(sf, [], {**PARAMS, "m2": 5.0})
     assert not any(ln.get_label().startswith("flat-footed") for ln in fig.axes[0].get_lines())
     assert "m2 differ" in fig.axes[0].get_title()
-    p.write_text(head + '[grid]\n"push.force" = [4, 8]\n"push.height" = [0.26, 0.46]\n')
+    p.write_text(head.replace("rise = 0.05", "rise = 0.05\nduration = 1.0") +
+                 '[grid]\n"push.force" = [4, 8]\n"push.height" = [0.26, 0.46]\n')
     fig = capability_figure(load_sweep_file(p), [], PARAMS)
     opt = next(ln for ln in fig.axes[0].get_lines() if ln.get_label().startswith("flat-footed optimum"))
     x, y = (np.asarray(a, float) for a in opt.get_data())
     assert np.isfinite(y[(x >= 0.26) & (x <= 0.46)]).all()
-    assert y[np.argmin(x)] > y[np.argmax(x)]
+    fin = np.isfinite(y)
+    assert y[fin][np.argmin(x[fin])] > y[fin][np.argmax(x[fin])]       # lower pushes: more force
