@@ -192,13 +192,17 @@ def test_plot_capability_applies_to_force_by_duration_or_height(tmp_path):
 
 def test_sweep_writes_the_capability_map(tmp_path, capsys):
     """Establishes: `anklehip sweep FILE` on a 2 x 2 grid over push.force and push.duration runs the
-    points and writes capability.png next to the other figures, naming it in its output."""
+    points and writes capability.png next to the other figures, naming it in its output, and prints
+    the bounds with the flat-footed optimum (docs/capability.md section 8) at the grid's durations."""
     p = tmp_path / "tiny.toml"
     p.write_text(CAP_HEAD.split("[[variant]]")[0] + '[grid]\n"push.force" = [6, 30]\n"push.duration" = [0.2, 1.0]\n')
     out = tmp_path / "out"
     assert main(["sweep", str(p), "--workers", "1", "--engine", "native", "--out", str(out)]) == 0
     assert (out / "capability.png").stat().st_size > 1000
-    assert f"figure {out / 'capability.png'}" in capsys.readouterr().out
+    printed = capsys.readouterr().out
+    assert f"figure {out / 'capability.png'}" in printed
+    # the bounds at the grid's durations under the boundaries, the flat-footed optimum among them
+    assert "  flat-footed opt. 0.2: 27.1  1: 16.1" in printed
 
 
 # ---------------------------------------------------------------------------------------------
