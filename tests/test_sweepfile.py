@@ -105,7 +105,9 @@ def test_small_sweep_end_to_end_and_resume(tmp_path, capsys):
     # 0.2 s for every variant, 30 N fell everywhere: the boundary is 6 N, not ">=")
     printed = capsys.readouterr().out
     assert "largest push.force that stood, every smaller one standing too [N], by push.duration:" in printed
-    boundary = [ln.split() for ln in printed.splitlines() if ln.startswith("  ") and "0.2:" in ln]
+    names = {r["variant"] for r in rows}       # (the bounds' lines follow the variants')
+    boundary = [ln.split() for ln in printed.splitlines() if ln.startswith("  ") and "0.2:" in ln
+                and ln.split()[0] in names]
     assert len(boundary) == len({r["variant"] for r in rows}) and all(ln[1:3] == ["0.2:", "6"] for ln in boundary), printed
     assert main(["sweep", str(p), "--workers", "1", "--engine", "native", "--out", str(out)]) == 0
     assert "8 from an earlier run" in capsys.readouterr().out
