@@ -406,3 +406,93 @@ def test_docs_tables_are_the_modules():
     doc = (REPO_ROOT / "docs" / "capability.md").read_text()
     assert stance_table(st) in doc
     assert direction_table(st) in doc
+
+
+# ---------------------------------------------------------------------------------------------
+# N-step capturability of the LIP with a maximum step length (Koolen et al. 2012; docs/capability.md section 9)
+
+from anklehip.analysis.bounds import (capture_margin, n_step_force_limit, n_step_impulse_limit,  # noqa: E402
+                                      step_reach, sustained_push_limit_stepped)
+
+L_MAX, DT_S = 0.1249, 0.127
+
+
+def test_capture_margins_are_koolens_recursion():
+    """Establishes: capture_margin is Koolen et al.'s d_N of the LIP with a finite foot (IJRR 2012,
+    section 5): d_0 = r_max, d_N = (d_{N-1} - r_max + l_max) e^(-w dt_s) + r_max, its limit
+    r_max + l_max e^(-w dt_s)/(1 - e^(-w dt_s)) for N -> inf; the point foot (r_max = 0) gives
+    d_1 = l_max e^(-w dt_s); the margins grow with N and stay below the limit."""
+    w, rm = R.omega, 0.06
+    d = rm
+    for n in range(12):
+        assert capture_margin(rm, L_MAX, w, DT_S, n) == pytest.approx(d, rel=1e-13)
+        d = (d - rm + L_MAX) * math.exp(-w * DT_S) + rm
+    E = math.exp(-w * DT_S)
+    assert capture_margin(rm, L_MAX, w, DT_S, math.inf) == pytest.approx(rm + L_MAX * E / (1 - E), rel=1e-13)
+    assert capture_margin(rm, L_MAX, w, DT_S, 400) == pytest.approx(capture_margin(rm, L_MAX, w, DT_S, math.inf), rel=1e-12)
+    assert capture_margin(0.0, L_MAX, w, DT_S, 1) == pytest.approx(L_MAX * E, rel=1e-13)
+    dn = capture_margin(rm, L_MAX, w, DT_S, np.array([0, 1, 2, 3, math.inf]))
+    assert np.all(np.diff(dn) > 0)
+
+
+def test_zero_steps_is_the_lip_bound():
+    """Establishes: 0 steps is exactly the LIP bound of the ankle strategy with the sole as the foot
+    (force and impulse, both directions), and 0-length steps add nothing."""
+    D = np.array([0.1, 0.3, 1.0, 4.0])
+    for d in (+1, -1):
+        assert np.allclose(n_step_force_limit(R, D, 0.05, d, 0, L_MAX, DT_S), lip_force_limit(R, D, 0.05, d), rtol=1e-13)
+        assert n_step_impulse_limit(R, d, 0, L_MAX, DT_S) == pytest.approx(lip_impulse_limit(R, d), rel=1e-13)
+        assert np.allclose(n_step_force_limit(R, D, 0.05, d, 3, 0.0, DT_S), lip_force_limit(R, D, 0.05, d), rtol=1e-13)
+        assert sustained_push_limit_stepped(R, 0.0, d) == pytest.approx(sustained_push_limit(R, d), rel=1e-13)
+
+
+@pytest.mark.parametrize("steps", [1, 2])
+def test_n_step_bound_is_the_capture_threshold_of_the_stepping_pendulum(steps):
+    """Establishes: n_step_force_limit is the threshold of the model it is derived from: the pendulum
+    of test_lip_limit_is_the_capture_threshold_of_the_pendulum whose foot (sole edge and feet
+    with it) moves l_max forward at dt_s, 2 dt_s, ...: a 0.3 s push 1 % below the bound ends
+    swinging back over the last foot, 1 % above it diverges over that foot's edge."""
+    w, mu, dur, rise = R.omega, R.m_f / R.m_b, 0.3, 0.05
+    prof = PushProfile.from_segments([PushSegment("pulse", t=0, force=1.0, duration=dur, rise=rise)])
+    fmax = float(n_step_force_limit(R, dur, rise, 1, steps, L_MAX, DT_S))
+    assert fmax > float(lip_force_limit(R, dur, rise, 1))
+    F = np.array([0.99, 1.01]) * fmax
+
+    def shift(t):
+        return L_MAX * min(steps, math.floor(t / DT_S + 1e-12))
+
+    def deriv(t, x, v):
+        p, xf = R.x_toe + shift(t), R.x_f + shift(t)
+        u = F * float(prof.value(t)) * R.h / (R.m_b * R.g)
+        return v, w * w * ((x - p) + mu * (xf - p) + u)
+
+    x = _rk4(deriv, n=4000, dt=1e-3 / 1)
+    last = steps * L_MAX
+    assert x[0] - last < 0             # 1 % below: swung back behind the last foot's ankle
+    assert x[1] - last > 0.1           # 1 % above: diverged over its edge
+
+
+def test_hoap2_step_reach():
+    """Establishes: HOAP-2's step from its numbers (docs/capability.md section 9): legs of thigh + shank
+    = 0.2 m, the pelvis lowered 10 mm, reach 2 sqrt(L^2 - (L - 0.01)^2) = 124.9 mm between the
+    ankles; the swing leg's 2 x 0.318 rad at the hip's 5 rad/s: 127 ms; a lowering that needs more
+    leg pitch than the ankle's range is refused."""
+    p = {**PARAMS, "thigh": NOMINAL["THIGH"], "shank": NOMINAL["SHANK"], "ankle_min": NOMINAL["ANKLE_MIN"],
+         "ankle_max": NOMINAL["ANKLE_MAX"], "hip_min": NOMINAL["HIP_MIN"], "hip_max": NOMINAL["HIP_MAX"],
+         "vel_max_hip": 5.0}
+    l, t = step_reach(p)
+    assert l == pytest.approx(2 * math.sqrt(0.2 ** 2 - 0.19 ** 2), rel=1e-12) and l == pytest.approx(L_MAX, abs=1e-4)
+    assert t == pytest.approx(2 * math.asin(l / 0.4) / 5.0, rel=1e-12) and t == pytest.approx(DT_S, abs=5e-4)
+    with pytest.raises(ValueError, match="ankle_max"):
+        step_reach(p, hip_drop=0.15)
+
+
+def test_docs_n_step_table_is_the_modules(fmu_path):
+    """Establishes: the N-step table of docs/capability.md section 9 is what `python -m
+    anklehip.analysis.bounds` prints for the sagittal plant FMU's robot (n_step_table)."""
+    from anklehip.analysis.bounds import n_step_table
+    from anklehip.running.fmu import FMUInfo
+    from conftest import REPO_ROOT
+    plant = FMUInfo.load(fmu_path("Hoap2Plant"))
+    table = n_step_table(bounds_parameters(plant.start_values(), plant_header(plant.unzipdir)))
+    assert table in (REPO_ROOT / "docs" / "capability.md").read_text()

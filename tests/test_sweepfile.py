@@ -105,7 +105,9 @@ def test_small_sweep_end_to_end_and_resume(tmp_path, capsys):
     # 0.2 s for every variant, 30 N fell everywhere: the boundary is 6 N, not ">=")
     printed = capsys.readouterr().out
     assert "largest push.force that stood, every smaller one standing too [N], by push.duration:" in printed
-    boundary = [ln.split() for ln in printed.splitlines() if ln.startswith("  ") and "0.2:" in ln]
+    names = {r["variant"] for r in rows}       # (the bounds' lines follow the variants')
+    boundary = [ln.split() for ln in printed.splitlines() if ln.startswith("  ") and "0.2:" in ln
+                and ln.split()[0] in names]
     assert len(boundary) == len({r["variant"] for r in rows}) and all(ln[1:3] == ["0.2:", "6"] for ln in boundary), printed
     assert main(["sweep", str(p), "--workers", "1", "--engine", "native", "--out", str(out)]) == 0
     assert "8 from an earlier run" in capsys.readouterr().out
@@ -192,13 +194,17 @@ def test_plot_capability_applies_to_force_by_duration_or_height(tmp_path):
 
 def test_sweep_writes_the_capability_map(tmp_path, capsys):
     """Establishes: `anklehip sweep FILE` on a 2 x 2 grid over push.force and push.duration runs the
-    points and writes capability.png next to the other figures, naming it in its output."""
+    points and writes capability.png next to the other figures, naming it in its output, and prints
+    the bounds with the flat-footed optimum (docs/capability.md section 8) at the grid's durations."""
     p = tmp_path / "tiny.toml"
     p.write_text(CAP_HEAD.split("[[variant]]")[0] + '[grid]\n"push.force" = [6, 30]\n"push.duration" = [0.2, 1.0]\n')
     out = tmp_path / "out"
     assert main(["sweep", str(p), "--workers", "1", "--engine", "native", "--out", str(out)]) == 0
     assert (out / "capability.png").stat().st_size > 1000
-    assert f"figure {out / 'capability.png'}" in capsys.readouterr().out
+    printed = capsys.readouterr().out
+    assert f"figure {out / 'capability.png'}" in printed
+    # the bounds at the grid's durations under the boundaries, the flat-footed optimum among them
+    assert "  flat-footed opt. 0.2: 27.1  1: 16.1" in printed
 
 
 # ---------------------------------------------------------------------------------------------

@@ -71,6 +71,7 @@ def test_wheel_contents(wheel, build_dir, tmp_path):
              for p in (REPO_ROOT / "tests" / "steptests").rglob("*") if p.is_file()}
     assert {k.removeprefix("steptests/") for k in data if k.startswith("steptests/")} == cases
     assert any(n.endswith("anklehip/cli/__init__.py") for n in names)
+    assert any(n.endswith("anklehip/analysis/data/flat_footed_optimum.json") for n in names)   # the cached optimum
     # the native engine: glibc 2.17, nothing but glibc, only its own entry points exported
     p = _run(["objdump", "-p", lib]).stdout
     needed = set(re.findall(r"^\s*NEEDED\s+(\S+)", p, re.M))

@@ -190,6 +190,262 @@ def lip_impulse_limit(r: Robot, direction: float = +1, omega: float | None = Non
     return r.g * _edge_moment(r, direction) / (r.h * w)
 
 
+
+# ---------------------------------------------------------------------------------------------
+# the flat-footed optimum (docs/capability.md section 8): cached trajectory-optimization results
+
+OPTIMUM_FILE = "flat_footed_optimum.json"       # in anklehip/analysis/data/, made by scripts/flat_footed_optimum.py
+# the numbers the optimum depends on (bounds_parameters' names); mu: Hoap2Plant3D's friction coefficient
+OPTIMUM_PARAMETERS = ("g", "m1", "l1", "lg1", "I1", "m2", "lg2", "I2", "feet_mass", "feet_com_x", "toe_x", "heel_x",
+                      "ankle_height", "h_push", "tau_max_ankle", "tau_max_hip", "vel_max_ankle", "vel_max_hip",
+                      "ankle_min", "ankle_max", "hip_min", "hip_max")
+
+
+def optimum_parameters(params: dict) -> dict[str, float]:
+    """The numbers of bounds_parameters (plant parameters completed by the header) the flat-footed
+    optimum depends on, by name; KeyError naming the missing ones."""
+    missing = [k for k in OPTIMUM_PARAMETERS if k not in params]
+    if missing:
+        raise KeyError(f"the flat-footed optimum needs {', '.join(missing)}")
+    return {k: float(params[k]) for k in OPTIMUM_PARAMETERS}
+
+
+def load_optimum(path=None) -> dict:
+    """The cached flat-footed optimum (JSON written by scripts/flat_footed_optimum.py): its parameters,
+    settings and points. path: the package's data file unless given."""
+    import json
+    from pathlib import Path
+    p = Path(path) if path is not None else Path(__file__).parent / "data" / OPTIMUM_FILE
+    try:
+        return json.loads(p.read_text())
+    except FileNotFoundError:
+        from ..errors import InputError
+        raise InputError(f"{p}: no cached flat-footed optimum (make it: python scripts/flat_footed_optimum.py)") from None
+
+
+def optimum_matches(data: dict, params: dict, rel: float = 1e-9) -> list[str]:
+    """The names of the numbers in which params (bounds_parameters') differ from those the cached
+    optimum was computed for (relative rel); push heights other than the cached ones are allowed
+    where the cache has them, so h_push is not compared. [] when the cache applies."""
+    try:
+        mine = optimum_parameters(params)
+    except KeyError as e:
+        return [str(e)]
+    theirs = data["parameters"]
+    return [k for k in OPTIMUM_PARAMETERS if k != "h_push"
+            and not math.isclose(mine[k], theirs.get(k, math.nan), rel_tol=rel, abs_tol=1e-15)]
+
+
+def flat_footed_optimum(duration, rise: float = 0.05, direction: float = +1, height: float | None = None,
+                        params: dict | None = None, data: dict | None = None):
+    """Largest peak force [N, magnitude] of a trapezoid push (duration, rise; the sweeps' pulse) on the
+    back (direction +1) or the chest (-1) at `height` (the cached nominal h_push unless given) that
+    any flat-footed controller survives: the cached trajectory optimum of the sagittal model with the
+    robot's limits (anklehip.analysis.flat_footed, docs/capability.md section 8).
+
+    Between cached durations F is interpolated linearly in log(duration); between cached heights (only
+    where the cache holds a height grid for that duration) F h linearly in h. Exact cached rises only.
+    InputError (a ValueError) outside the cache, naming the cached range; and when params (the
+    plant's bounds_parameters) are given and differ from the cached robot (the cache is stale for
+    that robot). Vectorised over duration."""
+    from ..errors import InputError
+    data = load_optimum() if data is None else data
+    if params is not None:
+        bad = optimum_matches(data, params)
+        if bad:
+            raise InputError(f"the cached flat-footed optimum ({OPTIMUM_FILE}) was computed for another robot: "
+                             f"{', '.join(bad)} differ; regenerate it with scripts/flat_footed_optimum.py")
+    d = 1 if direction >= 0 else -1
+    h0 = data["parameters"]["h_push"]
+    h = h0 if height is None else float(height)
+    pts = [p for p in data["points"] if p["direction"] == d and p["ok"]]
+    rises = sorted({p["rise"] for p in pts})
+    same_rise = [p for p in pts if math.isclose(p["rise"], rise, rel_tol=1e-9, abs_tol=1e-12)]
+    if not same_rise:
+        raise InputError(f"flat-footed optimum: rise {rise:g} s is not cached (cached rises: "
+                         f"{', '.join(f'{x:g}' for x in rises)} s)")
+    D = np.asarray(duration, float)
+
+    def along_duration(rows, x):
+        ds = np.array([p["duration"] for p in rows])
+        fs = np.array([p["f_peak"] for p in rows])
+        o = np.argsort(ds)
+        ds, fs = ds[o], fs[o]
+        if np.any(x < ds[0] * (1 - 1e-9)) or np.any(x > ds[-1] * (1 + 1e-9)):
+            raise InputError(f"flat-footed optimum: duration {np.min(x):g}..{np.max(x):g} s outside the cached "
+                             f"{ds[0]:g}..{ds[-1]:g} s (rise {rise:g} s, direction {d:+d}, h {h:g} m)")
+        return np.interp(np.log(np.clip(x, ds[0], ds[-1])), np.log(ds), fs)
+
+    at_h = [p for p in same_rise if math.isclose(p["height"], h, rel_tol=1e-9)]
+    if len({p["duration"] for p in at_h}) >= 2:
+        out = along_duration(at_h, D)
+        return float(out) if np.ndim(out) == 0 else out
+    # a height grid at single durations
+    rows = [p for p in same_rise if np.all(np.isclose(D, p["duration"], rtol=1e-9))]
+    hs = np.array(sorted({p["height"] for p in rows}))
+    if len(hs) < 2 or not hs[0] * (1 - 1e-9) <= h <= hs[-1] * (1 + 1e-9):
+        have = sorted({(p["duration"], p["height"]) for p in same_rise if not math.isclose(p["height"], h0)})
+        raise InputError(f"flat-footed optimum: height {h:g} m (duration {np.max(D):g} s, rise {rise:g} s) is not "
+                         f"cached; heights are cached at h = {h0:g} m for every duration and at "
+                         f"{sorted({x for _, x in have}) or 'no other height'} for durations "
+                         f"{sorted({x for x, _ in have}) or '-'} s")
+    fh = np.array([next(p["f_peak"] for p in rows if p["height"] == x) * x for x in hs])
+    out = np.full(D.shape, float(np.interp(h, hs, fh)) / h)
+    return float(out) if np.ndim(out) == 0 else out
+
+
+
+def optimum_table(data: dict | None = None) -> str:
+    """The cached flat-footed optimum (docs/capability.md section 8) as markdown tables: per duration
+    against the LIP bound (50 ms rises, back and chest), the slow pushes (1 s ramps), the heights
+    (1 s pushes; these two on the back, as their sweeps push), and the static optimum of the same model against the sustained-push limit."""
+    data = load_optimum() if data is None else data
+    P = data["parameters"]
+    r0 = robot_from_plant_params(P)
+    h0 = P["h_push"]
+    out = []
+
+    def table(rise, h, head):
+        ds = sorted({x["duration"] for x in data["points"] if x["rise"] == rise and x["height"] == h})
+        dirs = sorted({x["direction"] for x in data["points"] if x["rise"] == rise and x["height"] == h}, reverse=True)
+        lines = [f"| {head} | " + " | ".join(f"{d:g}" for d in ds) + " |", "|---|" + "---|" * len(ds)]
+        r = dataclasses.replace(r0, h=h)
+        for d in dirs:
+            side = "back" if d > 0 else "chest"
+            opt = flat_footed_optimum(ds, rise, d, h, data=data)
+            lip = lip_force_limit(r, ds, rise, d)
+            lines.append(f"| flat-footed optimum, {side} [N] | " + " | ".join(f"{x:.2f}" for x in opt) + " |")
+            lines.append(f"| LIP bound, {side} [N] | " + " | ".join(f"{x:.2f}" for x in lip) + " |")
+            lines.append(f"| optimum / LIP bound, {side} | " + " | ".join(f"{a / b:.2f}" for a, b in zip(opt, lip)) + " |")
+        return "\n".join(lines)
+
+    out.append(table(0.05, h0, f"duration [s] (50 ms rise, h = {h0:g} m)"))
+    out.append(table(1.0, h0, f"duration [s] (1 s ramps, h = {h0:g} m)"))
+    hs = sorted({x["height"] for x in data["points"] if x["duration"] == 1.0 and x["rise"] == 0.05})
+    lines = ["| height [m] (1 s pushes, 50 ms rise) | " + " | ".join(f"{h:g}" for h in hs) + " |", "|---|" + "---|" * len(hs)]
+    for d, side in ((1, "back"),):
+        lines.append(f"| flat-footed optimum, {side} [N] | "
+                     + " | ".join(f"{flat_footed_optimum(1.0, 0.05, d, h, data=data):.2f}" for h in hs) + " |")
+        lines.append(f"| static tipping force, {side} [N] | "
+                     + " | ".join(f"{static_tipping_force(dataclasses.replace(r0, h=h), d):.2f}" for h in hs) + " |")
+    out.append("\n".join(lines))
+    st = data.get("static", {})
+    if st:
+        lines = ["| a push that never ends | back | chest |", "|---|---|---|"]
+        lines.append("| static optimum of the model [N] | " + " | ".join(f"{st[k]['nonlinear']:.2f}" for k in ("1", "-1")) + " |")
+        lines.append("| the same, moment arm held at h [N] | " + " | ".join(f"{st[k]['rigid_height']:.2f}" for k in ("1", "-1")) + " |")
+        lines.append("| sustained-push limit (section 3) [N] | " + " | ".join(f"{sustained_push_limit(r0, d):.2f}" for d in (1, -1)) + " |")
+        out.append("\n".join(lines))
+    return "\n\n".join(out)
+
+# ---------------------------------------------------------------------------------------------
+# N-step capturability of the linear inverted pendulum with a finite foot (Koolen, de Boer, Smith,
+# Pratt, Hutter, "Capturability-based analysis and control of legged locomotion, Part 1", IJRR 31(9)
+# 2012, section 5): the instantaneous capture point at most d_N ahead of the stance ankle is
+# capturable in N steps, each at most l_max long and at least dt_s after the previous one.
+
+def capture_margin(r_max: float, l_max: float, omega: float, dt_s: float, steps) -> np.ndarray | float:
+    """d_N [m], the largest distance of the instantaneous capture point ahead of the ankle from which the
+    LIP with a foot (the CoP up to r_max ahead of the ankle) comes to rest in N = steps steps
+    (Koolen et al. 2012, section 5): d_0 = r_max, d_N = (d_{N-1} - r_max + l_max) e^(-omega dt_s) + r_max,
+    i.e. d_N = r_max + l_max sum_{k=1..N} e^(-k omega dt_s); steps = inf gives
+    d_inf = r_max + l_max e^(-omega dt_s) / (1 - e^(-omega dt_s)). Vectorised over steps."""
+    n = np.asarray(steps, float)
+    E = math.exp(-omega * dt_s)
+    with np.errstate(invalid="ignore"):
+        geo = np.where(np.isinf(n), E / (1 - E), E * (1 - E ** np.where(np.isinf(n), 0, n)) / (1 - E))
+    out = r_max + l_max * geo
+    return float(out) if np.ndim(out) == 0 else out
+
+
+def n_step_force_limit(r: Robot, duration, rise: float = 0.0, direction: float = +1, steps=1,
+                       l_max: float = 0.0, dt_s: float = math.inf, omega: float | None = None):
+    """Largest peak force [N, magnitude] of a trapezoid push (duration, rise) from which the LIP of the
+    ankle strategy (lip_force_limit's pendulum, the CoP at the sole edge from the onset) is
+    capturable with `steps` steps of at most l_max [m], the first dt_s [s] after the push onset and
+    each next dt_s later (Koolen et al. 2012: d_N of capture_margin with r_max the sole edge's
+    effective distance Delta = F_s h/(m_b g), feet included):
+    F_N = m_b g d_N / (h omega S), S = integral s(t) e^(-omega t) dt. steps = 0 is lip_force_limit.
+    Assumes what lip_force_limit assumes, plus Koolen's model: instantaneous steps (no double
+    support), the CoP up to Delta ahead of each new ankle, the CoM height unchanged, the push
+    continuing whatever the steps. A necessary condition, as lip_force_limit. Vectorised over
+    duration (or steps)."""
+    w = r.omega if omega is None else omega
+    d_n = capture_margin(_edge_moment(r, direction) / r.m_b, l_max, w, dt_s, steps)
+    return r.g * r.m_b * d_n / (r.h * w * trapezoid_integral(w, duration, rise))
+
+
+def n_step_impulse_limit(r: Robot, direction: float = +1, steps=1, l_max: float = 0.0, dt_s: float = math.inf,
+                         omega: float | None = None):
+    """Largest impulse [N s] of a very short push capturable in `steps` steps: m_b g d_N / (h omega),
+    the limit of n_step_force_limit * duration for duration -> 0 (steps = 0: lip_impulse_limit)."""
+    w = r.omega if omega is None else omega
+    return r.g * r.m_b * capture_margin(_edge_moment(r, direction) / r.m_b, l_max, w, dt_s, steps) / (r.h * w)
+
+
+def step_reach(params: dict, hip_drop: float = 0.01) -> tuple[float, float]:
+    """HOAP-2's step as the N-step bounds see it, from the robot's numbers: (l_max [m], dt_s [s]).
+    The legs (thigh + shank, the header's THIGH and SHANK) stand on flat feet with the pelvis lowered
+    by hip_drop from its straight-legged height (the knees bend; the LIP's CoM height changes by
+    that much at most): each leg then reaches sqrt(L^2 - (L - hip_drop)^2) forward or back of the hip,
+    so the ankles can be l_max = 2 sqrt(L^2 - (L - hip_drop)^2) apart, provided the leg's pitch
+    asin(l_max/2/L) is inside the ankle and hip pitch ranges (ValueError otherwise). The swing leg
+    turns by twice that pitch at no more than the hip servo's velocity limit (vel_max_hip):
+    dt_s = 2 asin(l_max/(2L)) / vel_max_hip, a lower bound of the step time (lift-off, weight shift
+    and touch-down take more). Both optimistic, as a bound must be."""
+    L = float(params["thigh"]) + float(params["shank"])
+    reach = math.sqrt(L * L - (L - hip_drop) ** 2)
+    pitch = math.asin(reach / L)
+    for k in ("ankle_max", "hip_max"):
+        if k in params and pitch > float(params[k]):
+            raise ValueError(f"step_reach: leg pitch {pitch:.3f} rad beyond {k} = {float(params[k]):.3f} rad "
+                             f"(hip_drop {hip_drop:g} m)")
+    for k in ("ankle_min", "hip_min"):
+        if k in params and -pitch < float(params[k]):
+            raise ValueError(f"step_reach: leg pitch {-pitch:.3f} rad beyond {k} = {float(params[k]):.3f} rad")
+    return 2 * reach, 2 * pitch / float(params["vel_max_hip"])
+
+
+def sustained_push_limit_stepped(r: Robot, l_max: float, direction: float = +1) -> float:
+    """sustained_push_limit after a step of l_max along the push: the support polygon l_max longer
+    (the stepping foot, half the feet's mass, l_max ahead), the ZMP at its far edge and the body CoM
+    at its near one: F h = g [m_b (x_toe - x_heel + l_max) + m_f (x_toe + l_max - x_f - l_max/2)]
+    (mirrored on the chest). Assumes what sustained_push_limit assumes."""
+    if direction >= 0:
+        m = r.m_b * (r.x_toe - r.x_heel + l_max) + r.m_f * (r.x_toe + l_max / 2 - r.x_f)
+    else:
+        m = r.m_b * (r.x_toe - r.x_heel + l_max) + r.m_f * (r.x_f - r.x_heel + l_max / 2)
+    return r.g * m / r.h
+
+
+STEP_COUNTS = (0, 1, 2, 3, math.inf)
+
+
+def n_step_table(params: dict, durations=None, rise: float = 0.05, hip_drop: float = 0.01) -> str:
+    """The N-step bounds of the nominal robot (docs/capability.md section 9) as markdown: HOAP-2's step
+    (step_reach), the capture margins d_N, the impulse limits and the force limits of the sweeps'
+    pushes on the back and the chest for N = 0 (the LIP bound), 1, 2, 3 and infinitely many steps."""
+    durations = NOMINAL_DURATIONS if durations is None else durations
+    r = robot_from_plant_params(params)
+    l_max, dt_s = step_reach(params, hip_drop)
+    head = ["quantity"] + [("∞ steps" if math.isinf(n) else f"{n} step" + ("s" if n != 1 else "")) for n in STEP_COUNTS]
+    out = [f"HOAP-2's step (hip lowered {1000 * hip_drop:g} mm): l_max = {1000 * l_max:.1f} mm, "
+           f"dt_s = {1000 * dt_s:.0f} ms; ω = {r.omega:.3f} s⁻¹.", "",
+           "| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+    for d, side in ((1, "back"), (-1, "chest")):
+        rm = _edge_moment(r, d) / r.m_b
+        out.append(f"| capture margin d_N, {side} [mm] | "
+                   + " | ".join(f"{1000 * capture_margin(rm, l_max, r.omega, dt_s, n):.1f}" for n in STEP_COUNTS) + " |")
+        out.append(f"| impulse limit, {side} [N·s] | "
+                   + " | ".join(f"{n_step_impulse_limit(r, d, n, l_max, dt_s):.3f}" for n in STEP_COUNTS) + " |")
+        for D in durations:
+            out.append(f"| {D:g} s push, {side} [N] | "
+                       + " | ".join(f"{float(n_step_force_limit(r, D, rise, d, n, l_max, dt_s)):.1f}" for n in STEP_COUNTS)
+                       + " |")
+        out.append(f"| sustained-push limit, {side} [N] | {sustained_push_limit(r, d):.2f} | "
+                   + " | ".join(f"{sustained_push_limit_stepped(r, l_max, d):.2f}" for _ in STEP_COUNTS[1:]) + " |")
+    return "\n".join(out)
+
 # ---------------------------------------------------------------------------------------------
 # every horizontal direction: the robot on both feet (docs/capability.md section 7)
 
@@ -351,7 +607,9 @@ HEADER_NAMES = {"g": "G", "m1": "M1", "l1": "L1", "lg1": "LG1", "I1": "I1", "m2"
                 "feet_mass": "FEET_MASS", "feet_com_x": "FEET_COM_X", "toe_x": "TOE_X", "heel_x": "HEEL_X",
                 "ankle_height": "ANKLE_HEIGHT", "ankle_y": "ANKLE_Y", "sole_width": "SOLE_WIDTH",
                 "I1_roll": "I1_ROLL", "link2_com_y": "LINK2_COM_Y", "ankle_roll_max": "ANKLE_ROLL_MAX",
-                "hip_abduction_max": "HIP_ABDUCTION_MAX", "hip_adduction_max": "HIP_ADDUCTION_MAX"}
+                "hip_abduction_max": "HIP_ABDUCTION_MAX", "hip_adduction_max": "HIP_ADDUCTION_MAX",
+                "ankle_min": "ANKLE_MIN", "ankle_max": "ANKLE_MAX", "hip_min": "HIP_MIN", "hip_max": "HIP_MAX",
+                "thigh": "THIGH", "shank": "SHANK"}
 
 
 def header_numbers(text: str) -> dict[str, float]:
@@ -485,7 +743,10 @@ if __name__ == "__main__":      # pragma: no cover - prints the doc's tables
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--fmu-dir")
     fmu_dir = ap.parse_args().fmu_dir
-    print(nominal_table(FMUInfo.load(find_fmu(PLANT_FMU, fmu_dir)).start_values()))
+    plant = FMUInfo.load(find_fmu(PLANT_FMU, fmu_dir))
+    print(nominal_table(plant.start_values()))
     # the 3D plant standing in the default controller's erect posture, as a sweep on it sees it
     p = bounds_parameters_of(Models.load(fmu_dir, plant_model="3d"), Scenario("bounds", None, plant_model="3d"))
     print("\n" + nominal_tables_3d(p, p.get("theta_ankle_erect", 0.0), p.get("theta_hip_erect", 0.0)))
+    print("\n" + optimum_table())          # the cached flat-footed optimum (section 8)
+    print("\n" + n_step_table(bounds_parameters(plant.start_values(), plant_header(plant.unzipdir))))   # section 9

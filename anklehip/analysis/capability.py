@@ -10,7 +10,9 @@ A grid over push.force and push.duration (or push.height) also gives the capabil
 bounds of anklehip/analysis/bounds.py (docs/capability.md). A grid over push.force and push.angle
 (and at most one of push.duration, push.height: a panel per value) gives the polar capability map
 instead (`capability.png`): each variant's boundary per push direction against the bounds in
-every direction (docs/capability.md section 7).
+every direction (docs/capability.md section 7). On the sagittal maps the flat-footed optimum (the
+cached trajectory optimum, docs/capability.md section 8) is drawn beside the analytic bounds, and on
+a stepping sweep's map the N-step capturability bounds (section 9).
 """
 from __future__ import annotations
 
@@ -210,7 +212,116 @@ def _bounds_along(sf, plant_params: dict, rise: float):
             stance.body.h, f"toward {angle:g} deg")
 
 
-def capability_figure(sf, rows: list[dict[str, Any]], plant_params: dict):
+
+def sweep_steps(sf) -> bool:
+    """Whether a sweep declares stepping: a variant whose controller overrides switch on a parameter
+    whose name has "step" in it (e.g. stepping_enabled = 1). Its map then shows the N-step bounds."""
+    return any(("step" in k) and bool(v) for x in sf.variants for k, v in x.controller.items())
+
+
+def optimum_curve(plant_params: dict, direction: int, rise: float, kx: str, xx, h0: float, dur: float):
+    """The flat-footed optimum (anklehip.analysis.bounds.flat_footed_optimum) along the map's x: over
+    durations at the height h0, or over heights for the push of duration dur; NaN where x is outside
+    the cache. (values, None), or (None, the reason) when the cache does not apply to this push or
+    robot (another rise, a stale cache)."""
+    from ..errors import InputError
+    from . import bounds as B
+    xx = np.asarray(xx, float)
+    y = np.full(xx.shape, np.nan)
+    try:
+        data = B.load_optimum()
+        bad = B.optimum_matches(data, plant_params)
+        if bad:
+            return None, f"flat-footed optimum cached for another robot ({', '.join(bad)} differ)"
+        if kx == "push.duration":
+            ds = [p["duration"] for p in data["points"] if p["direction"] == direction and p["ok"]
+                  and math.isclose(p["rise"], rise, abs_tol=1e-12) and math.isclose(p["height"], h0, rel_tol=1e-9)]
+            if len(ds) < 2:
+                return None, f"flat-footed optimum not cached for {1000 * rise:g} ms rises at h = {h0:g} m"
+            m = (xx >= min(ds)) & (xx <= max(ds))
+            y[m] = B.flat_footed_optimum(xx[m], rise, direction, h0, data=data)
+            return y, None
+        for i, h in enumerate(xx):
+            try:
+                y[i] = B.flat_footed_optimum(dur, rise, direction, h, data=data)
+            except InputError:
+                pass
+        return (y, None) if np.isfinite(y).any() else (None, f"flat-footed optimum not cached for {dur:g} s pushes "
+                                                              f"of {1000 * rise:g} ms rise over heights")
+    except InputError as e:
+        return None, str(e)
+
+
+def cached_points(direction: int, rise: float, kx: str, h0: float, dur: float) -> list[dict]:
+    """The cache's points on a map's line: at the height h0 over durations, or of duration dur over
+    heights ([] without a cache)."""
+    from ..errors import InputError
+    from .bounds import load_optimum
+    try:
+        pts = load_optimum()["points"]
+    except InputError:
+        return []
+    same = [p for p in pts if p["direction"] == direction and p["ok"] and math.isclose(p["rise"], rise, abs_tol=1e-12)]
+    if kx == "push.duration":
+        return [p for p in same if math.isclose(p["height"], h0, rel_tol=1e-9)]
+    return [p for p in same if math.isclose(p["duration"], dur, rel_tol=1e-9)]
+
+
+def stepping_curves(plant_params: dict, robot, direction: int, rise: float, kx: str, xx, dur: float, at_height):
+    """The N-step capturability bounds (anklehip.analysis.bounds.n_step_force_limit, N = 1, 2, inf)
+    along the map's x with HOAP-2's step (step_reach), and the sustained-push limit after one step:
+    {label: values}; {} when the parameters do not give the leg."""
+    from . import bounds as B
+    try:
+        l_max, dt_s = B.step_reach(plant_params)
+    except (KeyError, ValueError):
+        return {}
+    out = {}
+    for n in (1, 2, math.inf):
+        lab = f"LIP capturable in {'∞' if math.isinf(n) else n} step{'s' if n != 1 else ''} (l_max {1000 * l_max:.0f} mm, {1000 * dt_s:.0f} ms)"
+        if kx == "push.duration":
+            out[lab] = np.asarray(B.n_step_force_limit(robot, xx, rise, direction, n, l_max, dt_s))
+        else:
+            out[lab] = np.array([float(B.n_step_force_limit(at_height(h), dur, rise, direction, n, l_max, dt_s)) for h in xx])
+    lab = "sustained-push limit after one step"
+    out[lab] = (np.full(np.shape(xx), B.sustained_push_limit_stepped(robot, l_max, direction)) if kx == "push.duration"
+                else np.array([B.sustained_push_limit_stepped(at_height(h), l_max, direction) for h in xx]))
+    return out
+
+
+def bound_lines(sf, plant_params: dict) -> list[str]:
+    """The bounds at the grid's x values as text lines (printed by anklehip sweep under the boundaries):
+    static tipping, sustained, LIP, the flat-footed optimum, and on a stepping sweep the N-step
+    bounds. [] when the sweep has no capability map along a push property, or a fixed push.angle."""
+    kx = capability_key(sf)
+    if kx is None or sf.push.get("angle") is not None:
+        return []
+    from . import bounds as B
+    try:
+        robot = B.robot_from_plant_params(plant_params)
+    except KeyError:
+        return []
+    import dataclasses
+    d = 1 if sf.push["direction"] >= 0 else -1
+    rise, dur = sf.push["rise"], sf.push["duration"]
+    xv = np.array(sorted(set(sf.axes[kx])), float)
+    at = (lambda x: robot) if kx == "push.duration" else (lambda x: dataclasses.replace(robot, h=x))
+    rows = {"static tipping": [B.static_tipping_force(at(x), d) for x in xv],
+            "sustained limit": [B.sustained_push_limit(at(x), d) for x in xv],
+            "LIP bound": [float(B.lip_force_limit(at(x), x if kx == "push.duration" else dur, rise, d)) for x in xv]}
+    opt, why = optimum_curve(plant_params, d, rise, kx, xv, robot.h, dur)
+    if opt is not None:
+        rows["flat-footed opt."] = list(opt)
+    if sweep_steps(sf):
+        for k, v in stepping_curves(plant_params, robot, d, rise, kx, xv, dur, at).items():
+            rows[k.split(" (")[0].replace("LIP capturable in", "LIP,")] = list(v)
+    out = [f"  {k:<16} " + "  ".join(f"{x:g}: {f:.1f}" for x, f in zip(xv, vals)) for k, vals in rows.items()]
+    if why:
+        out.append(f"  ({why})")
+    return out
+
+
+def capability_figure(sf, rows: list[dict[str, Any]], plant_params: dict, stepping: bool | None = None):
     """The capability map: one axes, x = push.duration (log) or push.height, y = peak push force; each
     variant's survive/fall boundary (survive_boundary) as a step line, each value held back to the
     previous x (a longer or higher push is harder), the best variant's region shaded, and the
@@ -220,7 +331,9 @@ def capability_figure(sf, rows: list[dict[str, Any]], plant_params: dict):
     A grid over push.force and push.angle gives polar_figure instead. None when the sweep is
     neither, or the parameters are not the robot's (the sagittal model's; for the polar map also
     the stance's: anklehip.analysis.bounds.stance_from_params). A fixed push.angle gives the
-    bounds in that direction."""
+    bounds in that direction. On the sagittal model the flat-footed optimum is drawn too where it is
+    cached for this robot and push (optimum_curve); stepping (default: sweep_steps(sf)) adds the
+    N-step capturability bounds (stepping_curves)."""
     if polar_panels(sf) is not None:
         return polar_figure(sf, rows, plant_params)
 
@@ -270,7 +383,26 @@ def capability_figure(sf, rows: list[dict[str, Any]], plant_params: dict):
     ax.plot(xx, static, "--", color="k", lw=1.3, label="static tipping force (erect, rigid)")
     ax.plot(xx, sustained, ":", color="0.35", lw=1.6, label="sustained-push limit (any flat-footed strategy)")
     ax.plot(xx, lip, "-", color="k", lw=1.3, label=lip_label)
-    fmax = max(max(sf.axes["push.force"]), float(np.max(sustained)))
+    tops = [float(np.max(sustained))]
+    why = None
+    if sf.push.get("angle") is None:       # the sagittal model's: the optimum and the stepping bounds
+        d = 1 if sf.push["direction"] >= 0 else -1
+        robot = at_height(h0)
+        opt, why = optimum_curve(plant_params, d, rise, kx, xx, h0, dur)
+        if opt is not None:       # the cached points as dots, the line between them interpolated
+            ax.plot(xx, opt, "-", color="tab:purple", lw=2.0, alpha=0.8,
+                    label="flat-footed optimum (trajectory optimization, any flat-footed controller)")
+            xc = np.array(sorted({p[kx.split(".")[1]] for p in cached_points(d, rise, kx, h0, dur)}))
+            xc = xc[(xc >= xx[0]) & (xc <= xx[-1])]
+            if len(xc):
+                yc, _ = optimum_curve(plant_params, d, rise, kx, xc, h0, dur)
+                ax.plot(xc, yc, "o", color="tab:purple", ms=4, alpha=0.8)
+        if sweep_steps(sf) if stepping is None else stepping:
+            for j, (lab, y) in enumerate(stepping_curves(plant_params, robot, d, rise, kx, xx, dur, at_height).items()):
+                ax.plot(xx, y, "-." if "steps" in lab or "step (" in lab else ":", color=f"C{6 + j}", lw=1.2, label=lab)
+                if "1 step (" in lab or "after one step" in lab:     # the y range: what one step allows at the far x
+                    tops.append(float(y[-1]))
+    fmax = max([max(sf.axes["push.force"])] + tops)
     ax.set_ylim(0.0, 1.15 * fmax)
     ax.set_xlim(xx[0], xx[-1])
     if log:
@@ -286,6 +418,8 @@ def capability_figure(sf, rows: list[dict[str, Any]], plant_params: dict):
         note += f"; {errors} points failed (error), see points.csv"
     if any(v.plant != sf.variants[0].plant for v in sf.variants):
         note += f"; bounds for the plant of variant {sf.variants[0].name}"
+    if why:
+        note += f"\n({why})"
     ax.set_title(f"{sf.name}: capability map, {shape}\n{note}", fontsize=9)
     ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.12), ncol=2, fontsize=8, frameon=False)
     return fig

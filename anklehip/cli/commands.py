@@ -337,13 +337,16 @@ def _print_boundaries(sf, rows, plant_params: dict | None = None) -> None:
     stood with every smaller one standing too (the capability map's boundary; >= when all stood).
     A force grid over push.angle: the same per direction, a block per duration or height, with the
     bounds in those directions (the polar map's)."""
-    from ..analysis.capability import capability_key, panel_rows, polar_bounds, polar_panels, stance_of, survive_boundary
+    from ..analysis.capability import (bound_lines, capability_key, panel_rows, polar_bounds, polar_panels, stance_of,
+                                       survive_boundary)
     kx = capability_key(sf)
     if kx is not None:
         print(f"largest push.force that stood, every smaller one standing too [N], by {kx}:")
         for v in sf.variants:
             xs, fs, top = survive_boundary(rows, v.name, kx)
             print(f"  {v.name:<16} " + "  ".join(f"{x:g}: {'>=' if t else ''}{f:g}" for x, f, t in zip(xs, fs, top)))
+        for line in bound_lines(sf, plant_params or {}):     # the bounds at the same x (docs/capability.md)
+            print(line)
         return
     stance = stance_of(plant_params or {})
     for panel in polar_panels(sf) or []:
