@@ -1,6 +1,7 @@
 """The native closed-loop engine (fmu/closed_loop, anklehip/running/native.py) against the FMPy master.
 
-Establishes: on every committed scenario (sagittal and 3D plants) the native engine gives the FMPy
+Establishes: on every committed scenario (sagittal and 3D plants, with the controller it names) the
+native engine gives the FMPy
 master's result bit for bit (every row, every column, outcome, message, controller start values),
 and its CSV writer gives FMPy's write_csv bytes, so `anklehip run --engine native` writes the same
 CSV file; edge values (NaN, infinities, -0.0, subnormals, the bounds of positional notation)
@@ -29,7 +30,9 @@ SCENARIOS = sorted(p.stem for p in scenarios_dir().glob("*.toml"))
 
 @pytest.fixture(scope="module")
 def models():
-    return {m: Models.load(plant_model=m) for m in ("sagittal", "3d")}
+    """(plant model, controller model) -> Models; the scenarios name both."""
+    return {(p, c): Models.load(plant_model=p, controller_model=c)
+            for p in ("sagittal", "3d") for c in ("sagittal", "3d")}
 
 
 def _same(a, b):
@@ -42,7 +45,7 @@ def _same(a, b):
 @pytest.mark.parametrize("name", SCENARIOS)
 def test_every_scenario_bit_for_bit(models, name, tmp_path):
     sc = load_scenario(scenarios_dir() / f"{name}.toml")
-    m = models[sc.plant_model]
+    m = models[sc.plant_model, sc.controller_model]
     a = simulate(sc, m, progress=False)
     b = simulate(sc, m, engine="native")
     _same(a, b)
@@ -56,8 +59,8 @@ def test_a_fall_ends_the_same(models):
     at the same time and close the record with the same last row."""
     sc = load_scenario(scenarios_dir() / "hip_saves_push.toml")
     push = sc.push.scaled(3.0)
-    a = simulate(sc, models["sagittal"], push=push, progress=False)
-    b = simulate(sc, models["sagittal"], push=push, engine="native")
+    a = simulate(sc, models["sagittal", "sagittal"], push=push, progress=False)
+    b = simulate(sc, models["sagittal", "sagittal"], push=push, engine="native")
     assert a.outcome == "fell"
     _same(a, b)
 
@@ -85,10 +88,10 @@ def test_cli_engine_native_writes_the_same_files(tmp_path):
 def test_sensor_faults_refused(models):
     sc = load_scenario(scenarios_dir() / "hip_saves_push.toml")
     with pytest.raises(ScenarioError, match=r"hip_saves_push.*native engine.*--engine fmpy"):
-        simulate(sc, models["sagittal"], faults=Faults(zmp_noise=0.001), engine="native")
+        simulate(sc, models["sagittal", "sagittal"], faults=Faults(zmp_noise=0.001), engine="native")
     # parameter faults are parameters: the native engine runs them, like the FMPy master
-    a = simulate(sc, models["sagittal"], faults=Faults(torque_scale=0.8), progress=False, stop_time=3.0)
-    b = simulate(sc, models["sagittal"], faults=Faults(torque_scale=0.8), engine="native", stop_time=3.0)
+    a = simulate(sc, models["sagittal", "sagittal"], faults=Faults(torque_scale=0.8), progress=False, stop_time=3.0)
+    b = simulate(sc, models["sagittal", "sagittal"], faults=Faults(torque_scale=0.8), engine="native", stop_time=3.0)
     _same(a, b)
 
 
