@@ -10,6 +10,18 @@
 #include <string.h>
 
 #include "ahc/controller.h"
+#include "ahc/leg_ik.h"
+
+/* HOAP-2's legs (hoap2/nominal.h), for the leg-kinematics tests. */
+static inline ahc_leg_geometry ahc_test_hoap2_legs(void)
+{
+    ahc_leg_geometry g;
+    g.thigh = HOAP2_THIGH;
+    g.shank = HOAP2_SHANK;
+    g.hip_y = HOAP2_HIP_Y;
+    g.ankle_y = HOAP2_ANKLE_Y;
+    return g;
+}
 
 static int ahc_test_failures = 0;
 static int ahc_test_checks = 0;

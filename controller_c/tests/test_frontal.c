@@ -23,19 +23,10 @@
 #include "ahc/controller3d.h"
 #include "ahc_test.h"
 
-static ahc_leg_geometry geometry(void)
-{
-    ahc_leg_geometry g;
-    g.thigh = HOAP2_THIGH;
-    g.shank = HOAP2_SHANK;
-    g.hip_y = HOAP2_HIP_Y;
-    g.ankle_y = HOAP2_ANKLE_Y;
-    return g;
-}
 
 static void test_ik_fk(void)
 {
-    const ahc_leg_geometry g = geometry();
+    const ahc_leg_geometry g = ahc_test_hoap2_legs();
     unsigned long long st = 7;
     int n, j;
     for (n = 0; n < 200; ++n) {
@@ -57,7 +48,7 @@ static void test_ik_fk(void)
 
 static void test_planes(void)
 {
-    const ahc_leg_geometry g = geometry();
+    const ahc_leg_geometry g = ahc_test_hoap2_legs();
     double q[2][AHC_LEG_JOINTS];
     int side;
     CHECK(ahc_legs_from_planes(&g, 0.08, 0.3, 0.0, 0.0, q) == 0, "sagittal pose reachable");
@@ -96,7 +87,7 @@ static void test_planes(void)
  * into the thigh and shank segments in proportion to put its CoM at lg1 on the straight leg. */
 static void placed_com(const ahc_frontal_params *f, const ahc_params *sp, double phi, double psi, double *ry)
 {
-    const ahc_leg_geometry g = geometry();
+    const ahc_leg_geometry g = ahc_test_hoap2_legs();
     double q[2][AHC_LEG_JOINTS], y = 0.0;
     const double m = sp->m1 + sp->m2, mleg = 0.5 * sp->m1;
     /* segment masses: thigh mass mt at the thigh's middle, shank ms at the shank's middle,

@@ -30,15 +30,6 @@
 
 #define PI 3.14159265358979323846
 
-static ahc_leg_geometry geometry(void)
-{
-    ahc_leg_geometry g;
-    g.thigh = HOAP2_THIGH;
-    g.shank = HOAP2_SHANK;
-    g.hip_y = HOAP2_HIP_Y;
-    g.ankle_y = HOAP2_ANKLE_Y;
-    return g;
-}
 
 static double max_abs_diff(const double *a, const double *b, int n)
 {
@@ -87,7 +78,7 @@ static void test_limits_are_the_protos(void)
 
 static void test_two_forward_chains(void)
 {
-    const ahc_leg_geometry g = geometry();
+    const ahc_leg_geometry g = ahc_test_hoap2_legs();
     unsigned long long st = 3;
     double worst = 0.0;
     int n, i;
@@ -110,7 +101,7 @@ static void test_two_forward_chains(void)
 /* FK(IK) and IK(FK) over random joint vectors inside each leg's limits */
 static void test_round_trips_within_limits(void)
 {
-    const ahc_leg_geometry g = geometry();
+    const ahc_leg_geometry g = ahc_test_hoap2_legs();
     unsigned long long st = 11;
     double worst_p = 0.0, worst_R = 0.0, worst_q = 0.0, worst_q_straight = 0.0;
     int side, n, j, flagged = 0, mirrored = 0;
@@ -153,7 +144,7 @@ static void test_round_trips_within_limits(void)
 /* FK(IK) over random poses anywhere: the foot at any orientation, the ankle anywhere in reach */
 static void test_any_pose(void)
 {
-    const ahc_leg_geometry g = geometry();
+    const ahc_leg_geometry g = ahc_test_hoap2_legs();
     const double L = g.thigh + g.shank;
     unsigned long long st = 5;
     double worst_p = 0.0, worst_R = 0.0;
@@ -196,7 +187,7 @@ static void test_any_pose(void)
 
 static void test_flat_foot_agrees(void)
 {
-    const ahc_leg_geometry g = geometry();
+    const ahc_leg_geometry g = ahc_test_hoap2_legs();
     unsigned long long st = 17;
     double worst = 0.0;
     int n, j;
@@ -225,7 +216,7 @@ static void test_flat_foot_agrees(void)
 
 static void test_named_poses(void)
 {
-    const ahc_leg_geometry g = geometry();
+    const ahc_leg_geometry g = ahc_test_hoap2_legs();
     ahc_leg_limits lim;
     /* a swing foot: the right ankle 5 cm forward, 2 cm out, 3 cm lifted from standing straight
      * (0.2 m below the hip), the foot yawed out 0.3 rad, its sole pitched toes-up 0.1 rad */
@@ -251,7 +242,7 @@ static void test_named_poses(void)
 
 static void test_out_of_reach(void)
 {
-    const ahc_leg_geometry g = geometry();
+    const ahc_leg_geometry g = ahc_test_hoap2_legs();
     const double L = g.thigh + g.shank;
     unsigned long long st = 23;
     int n, j;
@@ -276,7 +267,7 @@ static void test_out_of_reach(void)
 
 static void test_limits_reported(void)
 {
-    const ahc_leg_geometry g = geometry();
+    const ahc_leg_geometry g = ahc_test_hoap2_legs();
     int side, j;
     for (side = 0; side < 2; ++side) {
         ahc_leg_limits lim;
@@ -312,7 +303,7 @@ static void test_limits_reported(void)
 
 static void test_singularities(void)
 {
-    const ahc_leg_geometry g = geometry();
+    const ahc_leg_geometry g = ahc_test_hoap2_legs();
     double q[AHC_LEG_JOINTS], q2[AHC_LEG_JOINTS], ankle[3], Rf[9], a2[3], R2[9];
     int status;
     /* the hip's gimbal: hip pitch pi/2 (yaw and hip roll about one axis); both signs */
