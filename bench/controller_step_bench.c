@@ -119,12 +119,16 @@ typedef struct {
     ahc_frontal_params f;
     ahc_controller c;
     ahc3d c3;
+    ahc_step_params st;
     double sink;
     int phases;
 } bench_state;
 
 static void init2(bench_state *b) { ahc_init(&b->c, &b->p); }
 static void init3(bench_state *b) { ahc3d_init(&b->c3, &b->p, &b->f); }
+/* the stepping layer on and triggered at once (its threshold inside the soles): a step runs through
+ * most of the sequence, each tick estimating the CoM, planning and solving both legs' IK */
+static void init3s(bench_state *b) { ahc3d_init_stepping(&b->c3, &b->p, &b->f, &b->st); }
 
 static void step2(bench_state *b, int n)
 {
@@ -140,6 +144,14 @@ static void step3(bench_state *b, int n)
     ahc3d_step(&b->c3, &seq3[n], &o);
     b->sink += o.sag.theta_ankle_ref + o.q_ref_offset[0][2];
     b->phases |= 1 << o.sag.phase;
+}
+
+static void step3s(bench_state *b, int n)
+{
+    ahc3d_outputs o;
+    ahc3d_step(&b->c3, &seq3[n], &o);
+    b->sink += o.sag.theta_ankle_ref + o.q_ref_offset[0][2];
+    b->phases |= 1 << o.step.phase; /* here: the stepping phases seen */
 }
 
 /* Times `step` over the sequence `passes` times, a fresh instance (`init`) per pass; prints its line. */
@@ -167,7 +179,7 @@ static void run(const char *name, void (*init)(bench_state *), void (*step)(benc
     }
     batch = (now_ns() - t0) / (double)total;
     qsort(dt, total, sizeof *dt, cmp_double);
-    printf("%-10s %zu ticks (%d passes x %d, sagittal phases seen mask 0x%x): median %.1f ns/step, min %.1f ns, "
+    printf("%-15s %zu ticks (%d passes x %d, phases seen mask 0x%x): median %.1f ns/step, min %.1f ns, "
            "p99 %.1f ns; batch mean %.1f ns/step\n",
            name, total, passes, N_TICKS, b->phases, dt[total / 2], dt[0], dt[(size_t)(0.99 * (double)(total - 1))],
            batch);
@@ -198,6 +210,10 @@ int main(int argc, char **argv)
     printf("timer overhead %.1f ns subtracted\n", overhead);
     run("ahc_step", init2, step2, &b, passes, overhead, dt);
     run("ahc3d_step", init3, step3, &b, passes, overhead, dt);
+    ahc_step_params_default(&b.st);
+    b.st.stepping_enabled = 1;
+    b.st.step_trigger_x = -0.05;
+    run("ahc3d_step+step", init3s, step3s, &b, passes, overhead, dt);
     if (!isfinite(b.sink)) printf("non-finite output\n");
     free(dt);
     return 0;

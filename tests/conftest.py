@@ -302,8 +302,9 @@ def sensor_signals_3d(times, peak=9.0, peak_y=8.0):
     `peak_y` N toward +y through the same quasi-static model (ZMP_y shifted by F h / (m g), the
     soles' loads shared by the moment balance about the ankles' mid-point, both legs leaning by
     phi = F h / Ka_y: ankle rolls +phi, hip rolls -phi), the pitch joints at the sagittal angles.
-    The trunk stays level (psi = 0, imu_roll = 0: the feet flat). Adds zmp_y, fz_left, fz_right,
-    every q_<side>_<joint> and imu_roll to sensor_signals' columns."""
+    The trunk stays level (psi = 0, imu_roll = 0: the feet flat), its pitch theta_ankle + theta_hip
+    (imu_pitch, read by the stepping layer only). Adds zmp_y, fz_left, fz_right, every
+    q_<side>_<joint>, imu_roll and imu_pitch to sensor_signals' columns."""
     import numpy as np
 
     m, g, h, ka_y = NOMINAL_MASS, NOMINAL["G"], 0.335, 250.0
@@ -311,12 +312,13 @@ def sensor_signals_3d(times, peak=9.0, peak_y=8.0):
     fy = push_force(base["time"], peak=peak_y, t_on=0.5)
     q = [f"q_{s}_{j}" for s in LEG_SIDES for j in LEG_JOINTS]
     rows = np.zeros(base.size, dtype=base.dtype.descr + [(n, float) for n in ["zmp_y", "fz_left", "fz_right"] + q
-                                                         + ["imu_roll"]])
+                                                         + ["imu_roll", "imu_pitch"]])
     for n in base.dtype.names:
         rows[n] = base[n]
     rows["zmp_y"] = fy * h / (m * g)
     rows["fz_left"] = 0.5 * base["fz"] * (1 + rows["zmp_y"] / NOMINAL["ANKLE_Y"])   # ankles at +-ANKLE_Y
     rows["fz_right"] = base["fz"] - rows["fz_left"]
+    rows["imu_pitch"] = base["theta_ankle"] + base["theta_hip"]
     phi = fy * h / ka_y
     for s in LEG_SIDES:
         rows[f"q_{s}_ankle"], rows[f"q_{s}_hip"] = base["theta_ankle"], base["theta_hip"]

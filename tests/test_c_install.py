@@ -14,7 +14,7 @@ import pytest
 from conftest import REPO_ROOT
 
 CONSUMER = REPO_ROOT / "tests" / "c_consumer"
-HEADERS = ("ahc/controller.h", "ahc/frontal.h", "ahc/leg_ik.h", "ahc/controller3d.h")
+HEADERS = ("ahc/controller.h", "ahc/frontal.h", "ahc/leg_ik.h", "ahc/stepping.h", "ahc/controller3d.h")
 INSTALLED = {*(f"include/{h}" for h in HEADERS), "include/hoap2/nominal.h", "lib/libahc.a",
              "lib/cmake/ahc/ahcConfig.cmake", "lib/cmake/ahc/ahcConfigVersion.cmake",
              "lib/cmake/ahc/ahcTargets.cmake", "lib/pkgconfig/ahc.pc"}

@@ -148,6 +148,58 @@ def test_state_restored_bit_for_bit_into_a_fresh_instance(fmu3d, tmp_path):
         assert a.get(outs) == b.get(outs), k
 
 
+# a step starts at once (docs/controller.md §12): the threshold 50 mm inside the toe edge, the trunk
+# pitched forward (the CoM estimate ahead of it)
+STEPPING_NOW = {"stepping_enabled": 1, "step_trigger_x": -0.05}
+LEANING = {"imu_pitch": 0.2}
+
+
+def test_stepping_off_by_default_and_its_outputs_at_rest(fmu3d, tmp_path):
+    """The stepping layer's variables exist; off by default it never leaves phase 0."""
+    u = _unzip(fmu3d, tmp_path)
+    c = Inst(u)
+    assert c.var["stepping_enabled"].start in ("0", 0)
+    assert c.var["imu_pitch"].causality == "input" and c.var["imu_pitch"].valueReference == 8
+    assert c.var["step_phase"].valueReference == 71
+    for k in range(600):
+        for n, x in _inputs(k, 0.05).items():
+            c.set(n, x)
+        c.step()
+        assert c.get(["step_phase", "steps", "swing_side"]) == [0, 0, -1], k
+
+
+def test_a_step_is_logged_and_its_state_restored_bit_for_bit(fmu3d, tmp_path, capfd):
+    """With stepping on, a step runs through its phases (logged), and a state saved in the middle of
+    the swing, restored into a fresh instance, continues bit for bit."""
+    u = _unzip(fmu3d, tmp_path)
+    a = Inst(u, params=STEPPING_NOW, name="a")
+    phases = set()
+    for k in range(150):
+        for n, x in {**_inputs(k, 0.0), **LEANING}.items():
+            a.set(n, x)
+        a.step()
+        phases.add(a.get(["step_phase"])[0])
+    assert 1 in phases or 2 in phases, phases
+    logged = capfd.readouterr().out
+    assert "stepping phase 0 (stand) -> 1 (shift)" in logged, logged[-2000:]
+    state = a.f.serializeFMUstate(a.f.getFMUstate())
+    b = Inst(u, params=STEPPING_NOW, name="b")
+    b.f.setFMUstate(b.f.deSerializeFMUstate(state))
+    b.t = a.t
+    outs = [v.name for v in a.md.modelVariables if v.causality == "output"]
+    for k in range(150, 900):
+        for inst in (a, b):
+            for n, x in {**_inputs(k, 0.0), **LEANING}.items():
+                inst.set(n, x)
+            inst.step()
+        assert a.get(outs) == b.get(outs), k
+    # the state carries the stepping parameters with it (docs/fmu.md: parameters are restored with the
+    # state), as it carries the other planes'
+    c = Inst(u, params={**STEPPING_NOW, "step_height": 0.02}, name="c")
+    c.f.setFMUstate(c.f.deSerializeFMUstate(state))
+    assert c.get(["step_height"]) == [0.015]
+
+
 def test_non_finite_input_is_held_and_logged(fmu3d, tmp_path, capfd):
     u = _unzip(fmu3d, tmp_path)
     c = Inst(u)

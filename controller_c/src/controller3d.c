@@ -17,6 +17,13 @@ static void geometry(ahc3d *c)
 
 int ahc3d_init(ahc3d *c, const ahc_params *sp, const ahc_frontal_params *fp)
 {
+    ahc_step_params stp;
+    ahc_step_params_default(&stp);
+    return ahc3d_init_stepping(c, sp, fp, &stp);
+}
+
+int ahc3d_init_stepping(ahc3d *c, const ahc_params *sp, const ahc_frontal_params *fp, const ahc_step_params *stp)
+{
     int rc;
     if (!c) return AHC_ERR_NULL;
     memset(c, 0, sizeof *c);
@@ -24,21 +31,23 @@ int ahc3d_init(ahc3d *c, const ahc_params *sp, const ahc_frontal_params *fp)
     if (rc != AHC_OK) return rc;
     rc = ahc_frontal_init(&c->frontal, fp, sp);
     geometry(c);
-    return rc;
+    if (rc != AHC_OK) return rc;
+    return ahc_step_init(&c->step, stp, sp, fp);
 }
 
 void ahc3d_reset(ahc3d *c)
 {
     ahc_reset(&c->sag);
     ahc_frontal_reset(&c->frontal);
+    ahc_step_reset(&c->step);
     geometry(c);
 }
 
-void ahc3d_step(ahc3d *c, const ahc3d_sensors *s, ahc3d_outputs *out)
+/* The flat-footed layers: the paper's sagittal controller, the frontal one, the legs' set points. */
+static void flat_footed(ahc3d *c, const ahc3d_sensors *s, ahc3d_outputs *out)
 {
     ahc_frontal_sensors fs;
     int side, j;
-    memset(out, 0, sizeof *out);
     /* 1. the paper's controller, on the sagittal sensors alone */
     ahc_step(&c->sag, &s->sag, &out->sag);
     /* 2. the frontal angles, measured on the pivot leg the frontal reference names */
@@ -72,6 +81,85 @@ void ahc3d_step(ahc3d *c, const ahc3d_sensors *s, ahc3d_outputs *out)
     }
 }
 
+/* Both legs' joint set points of the outputs: both-legs + per-leg. */
+static void joint_set_points(const ahc3d_outputs *out, double q[2][AHC_LEG_JOINTS])
+{
+    int side, j;
+    for (side = 0; side < 2; ++side)
+        for (j = 0; j < AHC_LEG_JOINTS; ++j) q[side][j] = out->q_ref_offset[side][j];
+    for (side = 0; side < 2; ++side) {
+        q[side][AHC_LEG_ANKLE_PITCH] += out->sag.theta_ankle_ref;
+        q[side][AHC_LEG_HIP_PITCH] += out->sag.theta_hip_ref;
+    }
+}
+
+/* The stepping layer's set points as both-legs pitch (the legs' mean) + per-leg. */
+static void from_step(ahc3d_outputs *out)
+{
+    int side, j;
+    double (*q)[AHC_LEG_JOINTS] = out->step.q_ref;
+    const double th1 = 0.5 * (q[0][AHC_LEG_ANKLE_PITCH] + q[1][AHC_LEG_ANKLE_PITCH]);
+    const double th2 = 0.5 * (q[0][AHC_LEG_HIP_PITCH] + q[1][AHC_LEG_HIP_PITCH]);
+    out->sag.theta_ankle_ref = th1;
+    out->sag.theta_hip_ref = th2;
+    out->sag.dtheta_ankle_ref = out->sag.dtheta_hip_ref = 0.0;
+    for (side = 0; side < 2; ++side)
+        for (j = 0; j < AHC_LEG_JOINTS; ++j) out->q_ref_offset[side][j] = q[side][j];
+    for (side = 0; side < 2; ++side) {
+        out->q_ref_offset[side][AHC_LEG_ANKLE_PITCH] -= th1;
+        out->q_ref_offset[side][AHC_LEG_HIP_PITCH] -= th2;
+    }
+}
+
+void ahc3d_step(ahc3d *c, const ahc3d_sensors *s, ahc3d_outputs *out)
+{
+    ahc_step_sensors ss;
+    double flat_q[2][AHC_LEG_JOINTS];
+    int stepping, side, j;
+    memset(out, 0, sizeof *out);
+    if (!c->step.p.stepping_enabled || !c->step.valid) {
+        /* stepping off: the flat-footed layers alone, as before the stepping layer existed */
+        flat_footed(c, s, out);
+        out->step.swing_side = -1;
+        return;
+    }
+    for (side = 0; side < 2; ++side)
+        for (j = 0; j < AHC_LEG_JOINTS; ++j) ss.q[side][j] = s->q[side][j];
+    ss.imu_roll = s->imu_roll;
+    ss.imu_pitch = s->imu_pitch;
+    ss.fz_left = s->fz_left;
+    ss.fz_right = s->fz_right;
+    stepping = c->step.phase != AHC_STEP_STAND;
+    if (!stepping) {
+        flat_footed(c, s, out);
+        joint_set_points(out, flat_q);
+        ahc_step_step(&c->step, &ss, (const double(*)[AHC_LEG_JOINTS])flat_q, &out->step);
+    } else {
+        /* while a step runs the flat-footed layers rest; when it ends they restart from the posture
+         * (their bumpless start) and the step's last set points blend into theirs */
+        ahc_step_step(&c->step, &ss, NULL, &out->step);
+        if (out->step.phase != AHC_STEP_STAND) {
+            /* the resting layers' clocks run on (their tick counts are the instance's time) */
+            c->sag.tick++;
+            c->frontal.tick++;
+        } else {
+            const unsigned long long sag_tick = c->sag.tick, frontal_tick = c->frontal.tick;
+            ahc_reset(&c->sag);
+            ahc_frontal_reset(&c->frontal);
+            c->sag.tick = sag_tick;
+            c->frontal.tick = frontal_tick;
+            {
+                ahc_step_outputs keep = out->step;
+                flat_footed(c, s, out);
+                out->step = keep;
+            }
+            joint_set_points(out, flat_q);
+            ahc_step_handover(&c->step, (const double(*)[AHC_LEG_JOINTS])flat_q, &out->step);
+        }
+    }
+    if (out->step.active) from_step(out);
+}
+
 int ahc3d_state_validate(const ahc3d *c, char *msg, size_t msg_size)
 {
     int rc;
@@ -79,6 +167,8 @@ int ahc3d_state_validate(const ahc3d *c, char *msg, size_t msg_size)
     rc = ahc_state_validate(&c->sag, msg, msg_size);
     if (rc != AHC_OK) return rc;
     rc = ahc_frontal_state_validate(&c->frontal, msg, msg_size);
+    if (rc != AHC_OK) return rc;
+    rc = ahc_step_state_validate(&c->step, msg, msg_size);
     if (rc != AHC_OK) return rc;
     if (c->legs.thigh != c->frontal.f.thigh || c->legs.shank != c->frontal.f.shank ||
         c->legs.hip_y != c->frontal.f.hip_y || c->legs.ankle_y != c->frontal.f.ankle_y)

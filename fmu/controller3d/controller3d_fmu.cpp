@@ -38,13 +38,17 @@ enum : fmi2ValueReference {
   com_x = 15, com_z = 16, disturbance_moment = 17, k_w = 18, com_x_desired = 19, fault = 20,
   theta_ankle_erect = 30, theta_hip_erect = 31,
   // the frontal plane
-  zmp_y = 4, fz_left = 5, fz_right = 6, imu_roll = 7,
+  zmp_y = 4, fz_left = 5, fz_right = 6, imu_roll = 7, imu_pitch = 8,
   first_joint = 40,  // q_<side>_<joint>: 40 + 6 side + joint (AHC_LEFT, AHC_RIGHT; leg_ik.h order)
   phi_ref = 60, psi_ref = 61, dphi_ref = 62, dpsi_ref = 63, phase_y = 64, com_y = 65, com_z_frontal = 66,
   disturbance_moment_y = 67, k_w_y = 68, com_y_desired = 69, fault_y = 70,
+  // the stepping layer
+  step_phase = 71, swing_side = 72, steps = 73, capture_point_x = 74, capture_point_y = 75, landing_x = 76,
+  landing_y = 77, com_ref_x = 78, com_ref_y = 79, zmp_plan_x = 92, zmp_plan_y = 93,
   first_joint_ref = 80,  // q_<side>_<joint>_ref: 80 + 6 side + joint
   first_param = 100,     // row i of ahc_param_table()
   first_frontal_param = 400,  // row i of ahc_frontal_param_table()
+  first_step_param = 600,     // row i of ahc_step_param_table()
   q = 300, q_leg_ref = 301,   // FMI 3.0 arrays of the q_<side>_<joint> inputs and _ref outputs
   tick = 1000                 // the Scheduled Execution variant's clock
 };
@@ -113,6 +117,8 @@ ModelInfo makeInfo() {
   in("fz_right", vr::fz_right, "N", "Right sole's normal load (start: half the model's weight)", 0.5 * weight);
   in("imu_roll", vr::imu_roll, "rad", "Trunk roll in the world, an IMU's (+ turns the top toward -y; Hoap2Plant3D's imu_roll)",
      0.0);
+  in("imu_pitch", vr::imu_pitch, "rad",
+     "Trunk pitch in the world, an IMU's (+ forward; Hoap2Plant3D's imu_pitch); read by the stepping layer only", 0.0);
   for (int s = 0; s < 2; ++s)
     for (int j = 0; j < AHC_LEG_JOINTS; ++j)
       in(std::string("q_") + kSide[s] + "_" + kJoint[j], jointVr(vr::first_joint, s, j), "rad",
@@ -146,6 +152,19 @@ ModelInfo makeInfo() {
   out("k_w_y", vr::k_w_y, Type::Real, "1", "Frontal reactionless weight (F23)");
   out("com_y_desired", vr::com_y_desired, Type::Real, "m", "Desired CoM y r_y_d (= com_y in phase 0)");
   out("fault_y", vr::fault_y, Type::Integer, "", "Frontal fault bit mask (AHC_FFAULT_*; docs/fmu.md)");
+  out("step_phase", vr::step_phase, Type::Integer, "",
+      "Stepping phase: 0 stand, 1 shift, 2 swing, 3 transfer, 4 close, 5 settle (docs/controller.md section 12)");
+  out("swing_side", vr::swing_side, Type::Integer, "", "The swinging (or last swung) foot while stepping: 0 left, 1 right, -1 none");
+  out("steps", vr::steps, Type::Integer, "", "Steps landed since the start");
+  out("capture_point_x", vr::capture_point_x, Type::Real, "m",
+      "Instantaneous capture point x of the stepping layer's CoM estimate (from the ankles' mid-point at rest)");
+  out("capture_point_y", vr::capture_point_y, Type::Real, "m", "Instantaneous capture point y (+ left)");
+  out("landing_x", vr::landing_x, Type::Real, "m", "The swing foot's planned landing point (ankle) x, in the step's frame");
+  out("landing_y", vr::landing_y, Type::Real, "m", "The swing foot's planned landing point (ankle) y");
+  out("com_ref_x", vr::com_ref_x, Type::Real, "m", "The stepping layer's CoM reference x while a step runs, in the step's frame");
+  out("com_ref_y", vr::com_ref_y, Type::Real, "m", "The stepping layer's CoM reference y while a step runs");
+  out("zmp_plan_x", vr::zmp_plan_x, Type::Real, "m", "The ZMP the step's CoM reference plans in this phase, x");
+  out("zmp_plan_y", vr::zmp_plan_y, Type::Real, "m", "The ZMP the step's CoM reference plans in this phase, y");
   for (int s = 0; s < 2; ++s)
     for (int j = 0; j < AHC_LEG_JOINTS; ++j)
       out(std::string("q_") + kSide[s] + "_" + kJoint[j] + "_ref", jointVr(vr::first_joint_ref, s, j), Type::Real,
@@ -164,6 +183,10 @@ ModelInfo makeInfo() {
   ahcfmu::addParamVariables(m, table, count, vr::first_param, &def, isTunable);
   table = ahc_frontal_param_table(&count);
   ahcfmu::addParamVariables(m, table, count, vr::first_frontal_param, &fdef, isTunable);
+  ahc_step_params stdef;
+  ahc_step_params_default(&stdef);
+  table = ahc_step_param_table(&count);
+  ahcfmu::addParamVariables(m, table, count, vr::first_step_param, &stdef, isTunable);
   // the named configurations of both planes
   m.resources.emplace_back("configurations.toml", ahcfmu::configurationsToml("AnkleHipController3D", frontalRows));
   // FMI 3.0: the legs' joint angles in and per-leg set points out also as [side, joint] arrays, named as
@@ -193,19 +216,21 @@ class Controller3DModel final : public Model {
     lastPhase_ = lastPhaseY_ = 0;
     lastFault_ = lastFaultY_ = 0;
     nonfinite_ = 0;
+    lastStepPhase_ = 0;
   }
 
   fmi2Status exit_initialization(Context& ctx) override {
     ahc_params p;
     ahc_frontal_params f;
-    readParams(ctx, p, f);
+    ahc_step_params st;
+    readParams(ctx, p, f, st);
     char msg[256] = {0};
-    const int rc = ahc_frontal_params_validate(&f, &p, msg, sizeof msg);
+    const int rc = ahc_step_params_validate(&st, &p, &f, msg, sizeof msg);
     if (rc != AHC_OK) {
       ctx.log(kLogStatusError, fmi2Error, "invalid parameter: %s (%s)", msg, ahc_error_string(rc));
       return fmi2Error;
     }
-    if (ahc3d_init(&ctl_, &p, &f) != AHC_OK) {
+    if (ahc3d_init_stepping(&ctl_, &p, &f, &st) != AHC_OK) {
       ctx.log(kLogStatusError, fmi2Error, "ahc3d_init failed");
       return fmi2Error;
     }
@@ -214,6 +239,7 @@ class Controller3DModel final : public Model {
     lastPhase_ = lastPhaseY_ = AHC_PHASE_ANKLE;
     lastFault_ = lastFaultY_ = 0;
     nonfinite_ = 0;
+    lastStepPhase_ = 0;
     writeInitialOutputs(ctx, p);
     return fmi2OK;
   }
@@ -221,7 +247,8 @@ class Controller3DModel final : public Model {
   fmi2Status update_initial_outputs(Context& ctx) override {
     ahc_params p;
     ahc_frontal_params f;
-    readParams(ctx, p, f);
+    ahc_step_params st;
+    readParams(ctx, p, f, st);
     writeInitialOutputs(ctx, p);
     return fmi2OK;
   }
@@ -267,9 +294,10 @@ class Controller3DModel final : public Model {
     s.fz_left = ctx.real(vr::fz_left);
     s.fz_right = ctx.real(vr::fz_right);
     s.imu_roll = ctx.real(vr::imu_roll);
+    s.imu_pitch = ctx.real(vr::imu_pitch);
     bool bad = !std::isfinite(s.sag.theta_ankle) || !std::isfinite(s.sag.theta_hip) || !std::isfinite(s.sag.zmp_x) ||
                !std::isfinite(s.sag.fz) || !std::isfinite(s.zmp_y) || !std::isfinite(s.fz_left) ||
-               !std::isfinite(s.fz_right) || !std::isfinite(s.imu_roll);
+               !std::isfinite(s.fz_right) || !std::isfinite(s.imu_roll) || !std::isfinite(s.imu_pitch);
     for (int side = 0; side < 2; ++side)
       for (int j = 0; j < AHC_LEG_JOINTS; ++j) {
         s.q[side][j] = ctx.real(jointVr(vr::first_joint, side, j));
@@ -304,6 +332,13 @@ class Controller3DModel final : public Model {
         ctx.log(kLogEvents, fmi2OK, "t=%.9g: phase %d (%s) -> %d (%s)", tk, lastPhase_, ahc_phase_name(lastPhase_),
                 out_.sag.phase, ahc_phase_name(out_.sag.phase));
         lastPhase_ = out_.sag.phase;
+      }
+      if (out_.step.phase != lastStepPhase_) {
+        ctx.log(kLogEvents, fmi2OK, "t=%.9g: stepping phase %d (%s) -> %d (%s), swing foot %s, landing (%.4f, %.4f) m", tk,
+                lastStepPhase_, ahc_step_phase_name(lastStepPhase_), out_.step.phase,
+                ahc_step_phase_name(out_.step.phase), out_.step.swing_side == AHC_LEFT ? "left" : out_.step.swing_side == AHC_RIGHT ? "right" : "none",
+                out_.step.landing[0], out_.step.landing[1]);
+        lastStepPhase_ = out_.step.phase;
       }
       if (out_.frontal.phase != lastPhaseY_) {
         ctx.log(kLogEvents, fmi2OK, "t=%.9g: frontal phase %d (%s) -> %d (%s)", tk, lastPhaseY_,
@@ -341,6 +376,7 @@ class Controller3DModel final : public Model {
     w.u32(lastFault_);
     w.u32(lastFaultY_);
     w.i32(nonfinite_);
+    w.i32(lastStepPhase_);
   }
 
   bool load_state(Context& ctx, StateReader& r, std::string& err) override {
@@ -353,10 +389,10 @@ class Controller3DModel final : public Model {
     ahc3d_outputs o;
     std::uint64_t ticks = 0;
     double t0 = 0;
-    std::int32_t phase = 0, phase_y = 0, nonfinite = 0;
+    std::int32_t phase = 0, phase_y = 0, nonfinite = 0, step_phase = 0;
     std::uint32_t fault = 0, fault_y = 0;
     if (!r.pod(c) || !r.pod(o) || !r.u64(ticks) || !r.f64(t0) || !r.i32(phase) || !r.i32(phase_y) ||
-        !r.u32(fault) || !r.u32(fault_y) || !r.i32(nonfinite)) {
+        !r.u32(fault) || !r.u32(fault_y) || !r.i32(nonfinite) || !r.i32(step_phase)) {
       err = "controller state truncated";
       return false;
     }
@@ -368,7 +404,8 @@ class Controller3DModel final : public Model {
     // the start time is the instance's once initialized (before, t0 is 0 whatever the set-up says)
     if (t0 != (ctx.initialized() ? ctx.start_time() : 0.0) || ticks != c.sag.tick || ticks != c.frontal.tick ||
         phase < 0 || phase > 3 || phase_y < 0 || phase_y > 3 || (fault & ~unsigned(AHC_FAULT_ALL_MASK)) ||
-        (fault_y & ~unsigned(AHC_FFAULT_ALL_MASK)) || nonfinite < 0 || nonfinite > 1) {
+        (fault_y & ~unsigned(AHC_FFAULT_ALL_MASK)) || nonfinite < 0 || nonfinite > 1 || step_phase < 0 ||
+        step_phase >= AHC_STEP_PHASES || (c.step.valid && c.step.p.stepping_enabled && ticks != c.step.tick)) {
       err = "controller state corrupt (start time, tick counters, phases, fault masks or input flag)";
       return false;
     }
@@ -379,7 +416,8 @@ class Controller3DModel final : public Model {
     if (ctx.initialized() && c.sag.valid) {
       ahc_params p;
       ahc_frontal_params f;
-      readParams(ctx, p, f);
+      ahc_step_params st;
+      readParams(ctx, p, f, st);
       const double due = std::floor((ctx.time() - t0) / p.sample_period + 1e-9);
       if (!(due >= 0.0 && due <= static_cast<double>(AHC_TICK_MAX))) {
         char buf[200];
@@ -398,6 +436,10 @@ class Controller3DModel final : public Model {
       if (why.empty()) {
         table = ahc_param_table(&n);
         why = ahcfmu::firstDifferingParam(table, n, &c.frontal.sp, &p);
+      }
+      if (why.empty()) {
+        table = ahc_step_param_table(&n);
+        why = ahcfmu::firstDifferingParam(table, n, &c.step.p, &st);
       }
       if (!why.empty()) {
         err = "controller state rejected: " + why;
@@ -418,18 +460,22 @@ class Controller3DModel final : public Model {
     lastFault_ = fault;
     lastFaultY_ = fault_y;
     nonfinite_ = nonfinite;
+    lastStepPhase_ = step_phase;
     return true;
   }
 
  private:
-  static void readParams(Context& ctx, ahc_params& p, ahc_frontal_params& f) {
+  static void readParams(Context& ctx, ahc_params& p, ahc_frontal_params& f, ahc_step_params& st) {
     ahc_params_default(&p);
     ahc_frontal_params_default(&f);
+    ahc_step_params_default(&st);
     size_t n = 0;
     const ahc_param_info* t = ahc_param_table(&n);
     ahcfmu::readParamVariables(ctx, t, n, vr::first_param, &p);
     t = ahc_frontal_param_table(&n);
     ahcfmu::readParamVariables(ctx, t, n, vr::first_frontal_param, &f);
+    t = ahc_step_param_table(&n);
+    ahcfmu::readParamVariables(ctx, t, n, vr::first_step_param, &st);
   }
 
   // Before the first tick: the sagittal outputs as the sagittal FMU's, the frontal ones at rest.
@@ -440,6 +486,7 @@ class Controller3DModel final : public Model {
     ahc_com(&p, th1, th2, &rx, &rz);
     ahc3d_outputs o;
     std::memset(&o, 0, sizeof o);
+    o.step.swing_side = -1;
     o.sag.theta_ankle_ref = th1;
     o.sag.theta_hip_ref = th2;
     o.sag.com_x = o.sag.com_x_desired = fin(rx);
@@ -473,6 +520,17 @@ class Controller3DModel final : public Model {
     ctx.set_real(vr::k_w_y, o.frontal.k_w);
     ctx.set_real(vr::com_y_desired, o.frontal.com_y_desired);
     ctx.set_integer(vr::fault_y, static_cast<int>(o.frontal.fault));
+    ctx.set_integer(vr::step_phase, o.step.phase);
+    ctx.set_integer(vr::swing_side, o.step.swing_side);
+    ctx.set_integer(vr::steps, o.step.steps);
+    ctx.set_real(vr::capture_point_x, o.step.capture[0]);
+    ctx.set_real(vr::capture_point_y, o.step.capture[1]);
+    ctx.set_real(vr::landing_x, o.step.landing[0]);
+    ctx.set_real(vr::landing_y, o.step.landing[1]);
+    ctx.set_real(vr::com_ref_x, o.step.com_ref[0]);
+    ctx.set_real(vr::com_ref_y, o.step.com_ref[1]);
+    ctx.set_real(vr::zmp_plan_x, o.step.zmp_plan[0]);
+    ctx.set_real(vr::zmp_plan_y, o.step.zmp_plan[1]);
     for (int s = 0; s < 2; ++s)
       for (int j = 0; j < AHC_LEG_JOINTS; ++j) ctx.set_real(jointVr(vr::first_joint_ref, s, j), o.q_ref_offset[s][j]);
   }
@@ -484,6 +542,7 @@ class Controller3DModel final : public Model {
   int lastPhase_ = 0, lastPhaseY_ = 0;
   unsigned lastFault_ = 0, lastFaultY_ = 0;  // the fault masks last logged
   int nonfinite_ = 0;
+  int lastStepPhase_ = 0;
 };
 
 }  // namespace

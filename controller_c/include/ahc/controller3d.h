@@ -12,6 +12,7 @@
 #include "ahc/controller.h"
 #include "ahc/frontal.h"
 #include "ahc/leg_ik.h"
+#include "ahc/stepping.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -24,6 +25,8 @@ typedef struct {
     double q[2][AHC_LEG_JOINTS];       /* measured joint angles, [AHC_LEFT], [AHC_RIGHT] [rad]    */
     double imu_roll;                   /* the trunk's roll in the world (an IMU's; Hoap2Plant3D's
                                           imu_roll: + turns the top toward -y) [rad]             */
+    double imu_pitch;                  /* the trunk's pitch in the world (+ forward; Hoap2Plant3D's
+                                          imu_pitch); read by the stepping layer only [rad]      */
 } ahc3d_sensors;
 
 typedef struct {
@@ -34,16 +37,24 @@ typedef struct {
      * sagittal references alone. Exactly 0 while the frontal references are 0. */
     double q_ref_offset[2][AHC_LEG_JOINTS];
     int legs_out_of_reach;             /* legs whose hip the kinematics could not reach (0)       */
+    /* The stepping layer (stepping.h). While step.active its joint set points replace the flat-footed
+     * layers': sag.theta_ankle_ref and theta_hip_ref are then the two legs' mean pitch set points and
+     * q_ref_offset the rest, so that both-legs + per-leg = step.q_ref. */
+    ahc_step_outputs step;
 } ahc3d_outputs;
 
 typedef struct {
     ahc_controller sag;
     ahc_frontal frontal;
     ahc_leg_geometry legs;
+    ahc_stepper step;
 } ahc3d;
 
-/* Validate both parameter sets (sp and fp) and initialise. AHC_OK or the first AHC_ERR_*. */
+/* Validate both parameter sets (sp and fp) and initialise, stepping off (its defaults). AHC_OK or
+ * the first AHC_ERR_*. */
 int ahc3d_init(ahc3d *c, const ahc_params *sp, const ahc_frontal_params *fp);
+/* The same with the stepping layer's parameters (stepping.h). */
+int ahc3d_init_stepping(ahc3d *c, const ahc_params *sp, const ahc_frontal_params *fp, const ahc_step_params *stp);
 void ahc3d_reset(ahc3d *c);
 void ahc3d_step(ahc3d *c, const ahc3d_sensors *s, ahc3d_outputs *out);
 int ahc3d_state_validate(const ahc3d *c, char *msg, size_t msg_size);

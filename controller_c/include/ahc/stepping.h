@@ -1,0 +1,190 @@
+/*
+ * stepping.h — the third strategy of the paper's Fig. 1: a recovery step, beside the ankle and hip
+ * strategies of both planes (docs/controller.md §12). Our design: the paper names stepping as its
+ * next step and gives no law for it.
+ *
+ * The decision: the instantaneous capture point xi = c + c'/omega of the linear inverted pendulum
+ * (omega = sqrt(g / z_c), c the CoM from the measured joint angles and the trunk's IMU) leaves the
+ * feet's support polygon by more than step_trigger_x (toward the toes or the heels) or
+ * step_trigger_y (sideways). The flat-footed strategies cannot bring a capture point back from
+ * there (docs/capability.md §8-9).
+ *
+ * The step, as phases that continue the paper's Table I (AHC_STEP_*):
+ *   SHIFT     both feet down: the CoM reference's pendulum moves the capture point over the stance
+ *             foot (skipped when it is there already, or for a side step outward);
+ *   SWING     one foot down: the stance foot's ZMP holds the capture point, or slows it at the
+ *             sole's edge; the swing foot lifts, travels to the landing point (the capture point
+ *             predicted at touch-down, within the leg's reach and clear of the stance foot) and
+ *             comes down; it has landed when its sole carries step_touchdown_fz;
+ *   TRANSFER  both feet down, apart: the capture point is moved over the foot that landed;
+ *   CLOSE     (step_close) one foot down: the other one is brought beside it;
+ *   SETTLE    both feet down, together: the CoM reference comes to rest over the feet, the legs
+ *             stretch back to the erect height; then the sagittal and frontal controllers take
+ *             over from the last references (bumpless), in phase 0.
+ * The CoM reference is the pendulum's under a constant planned ZMP in each phase (SETTLE: a quintic),
+ * so the feet's ZMP is where the plan puts it while the robot follows its references. The joint set
+ * points are the legs' analytic inverse kinematics (leg_ik.h, ahc_leg_ik_pose) of the pelvis that
+ * carries that CoM and of the feet, plus each servo's lead (its kd/kp) times the reference's rate.
+ * Every switch blends the references with a quintic weight (eqs. 23-24's) over step_blend_time.
+ *
+ * Frame: the ground frame fixed when the step is decided, its origin the mid-point between the
+ * ankles' ground projections, x forward, y left, z up; the feet flat in it.
+ * C99, no heap, no globals, one POD struct.
+ */
+#ifndef AHC_STEPPING_H
+#define AHC_STEPPING_H
+
+#include <stddef.h>
+
+#include "ahc/controller.h"
+#include "ahc/frontal.h"
+#include "ahc/leg_ik.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* Stepping phases (ahc_step_outputs.phase): the paper's Table I has the flat-footed phases 0-3 of
+ * each plane; while a step runs, this is the phase. */
+enum {
+    AHC_STEP_STAND = 0,    /* no step: the ankle and hip strategies act                         */
+    AHC_STEP_SHIFT = 1,    /* both feet: the capture point moves over the stance foot           */
+    AHC_STEP_SWING = 2,    /* one foot: the other swings to the landing point                   */
+    AHC_STEP_TRANSFER = 3, /* both feet, apart: the capture point moves over the landed foot     */
+    AHC_STEP_CLOSE = 4,    /* one foot: the other is brought beside it                           */
+    AHC_STEP_SETTLE = 5    /* both feet, together: to rest and erect; then back to STAND         */
+};
+#define AHC_STEP_PHASES 6
+
+/* Parameters (SI). Every field is listed in ahc_step_param_table(). The robot's geometry is the
+ * sagittal and frontal parameters' (sole, ankles, hips, legs, masses). */
+typedef struct {
+    int stepping_enabled;      /* 0: never steps (the outputs are those of the flat-footed layers) */
+    double step_trigger_x;     /* the capture point beyond the toe or heel edge by this: step [m]  */
+    double step_trigger_y;     /* ... beyond the outer sole edges by this: step [m]                */
+    double step_swing_time;    /* the swing's planned duration [s]                                 */
+    double step_height;        /* the swing foot's lift [m]                                        */
+    double step_length_max;    /* the landing ankle at most this far from the stance ankle,
+                                  forward or back [m]                                             */
+    double step_width_max;     /* ... and sideways (ankle to ankle) [m]                            */
+    double step_pelvis_drop;   /* the hips lower by this while stepping (the legs' reach) [m]      */
+    double step_zmp_margin;    /* planned ZMPs stay this far inside the sole edges [m]             */
+    double step_touchdown_fz;  /* the swing sole carries this: it has landed [N]                   */
+    double step_transfer_time_min; /* TRANSFER lasts at least this [s]                              */
+    double step_settle_time;   /* SETTLE's duration [s]                                            */
+    double step_blend_time;    /* quintic blend of the references at every switch [s]              */
+    double step_velocity_tau;  /* low-pass of the CoM's finite-difference rate [s]                 */
+    double step_servo_lead;    /* the servos' kd/kp: the reference leads by this times its rate,
+                                  every joint but the hip pitch [s]                               */
+    double step_servo_lead_hip; /* ... the hip pitch servo's [s]                                    */
+    int step_close;            /* 1: a second step brings the feet back together                   */
+    double step_drop_time;     /* the hips lower by step_pelvis_drop over this time [s]            */
+    double step_shift_time_max; /* SHIFT lasts at most this [s] (0: the foot lifts at once)         */
+    double step_pitch_time;    /* the trunk's pitch returns to erect over this [s]                 */
+    double step_hip_hike;      /* the pelvis rolls the swing hip up by this at mid-swing [rad]     */
+    double step_lead_max;      /* the servo lead adds at most this to a reference [rad]            */
+    double step_touchdown_after; /* a load on the swing sole is the landing after this fraction of
+                                    the swing [-]                                                 */
+    double step_pelvis_rate;   /* the hips' planned height moves at most this fast [m/s]          */
+    double step_touchdown_tol; /* a loaded swing sole has landed only this close to its target [m] */
+    double step_lead_tau;      /* low-pass of the reference rate the servo lead multiplies [s]    */
+} ahc_step_params;
+
+/* HOAP-2 defaults (docs/controller.md §12): stepping off. */
+void ahc_step_params_default(ahc_step_params *p);
+/* Validate against itself and the robot (sp, fp). AHC_OK or AHC_ERR_*, message as ahc_params_validate. */
+int ahc_step_params_validate(const ahc_step_params *p, const ahc_params *sp, const ahc_frontal_params *fp, char *msg,
+                             size_t msg_size);
+/* Parameter metadata (the same row type and rules as ahc_param_table: rows are only appended). */
+const ahc_param_info *ahc_step_param_table(size_t *count);
+const ahc_param_info *ahc_step_param_find(const char *name);
+const char *ahc_step_phase_name(int phase);
+
+/* What the stepping layer reads: the legs' joint angles, the trunk's attitude, the soles' loads. */
+typedef struct {
+    double q[2][AHC_LEG_JOINTS]; /* [AHC_LEFT], [AHC_RIGHT], leg_ik.h's senses [rad]              */
+    double imu_roll, imu_pitch;  /* the trunk's roll (+ top toward -y) and pitch (+ forward) [rad] */
+    double fz_left, fz_right;    /* each sole's normal load [N]                                     */
+} ahc_step_sensors;
+
+typedef struct {
+    int active;                  /* 1: the joint set points below replace the flat-footed layers' */
+    int phase;                   /* AHC_STEP_*                                                     */
+    int swing_side;              /* AHC_LEFT, AHC_RIGHT; -1 while standing                         */
+    int steps;                   /* steps landed since the start                                   */
+    double q_ref[2][AHC_LEG_JOINTS]; /* the legs' set points while active [rad]                    */
+    double com[2], com_rate[2];  /* the CoM's estimate, ground frame of the feet at rest / of the
+                                    step [m], [m/s]                                               */
+    double capture[2];           /* the instantaneous capture point [m]                            */
+    double com_ref[2];           /* the CoM reference while active [m]                             */
+    double zmp_plan[2];          /* the ZMP the reference's pendulum plans in this phase [m]        */
+    double landing[2];           /* the swing foot's landing point (ankle) while active [m]        */
+} ahc_step_outputs;
+
+/* Instance: plain old data (snapshot = memcpy). Fields are private. */
+typedef struct {
+    ahc_step_params p;
+    int valid;
+    /* the robot, from the sagittal and frontal parameters */
+    double g, mass, m1, m2, lg1, l1, lg2, link2_com_x, feet_mass, feet_com_x, feet_com_z, ankle_height;
+    double toe_x, heel_x, sole_width, hip_y, ankle_y, omega, z_com;
+    ahc_leg_geometry legs;
+    double dt;
+    unsigned long long tick;
+    /* the estimate */
+    int est_valid;
+    double com_prev[2], com_rate[2];
+    /* the step */
+    int phase, swing_side, steps;
+    double phase_time;
+    double feet[2][2];          /* both ankles' ground points in the step's frame [m]           */
+    double zmp[2];              /* this phase's planned ZMP [m]                                   */
+    double phase_duration;
+    double c0[2], v0[2];        /* the CoM reference at the phase's start                          */
+    ahc_quintic settle[2];      /* SETTLE: the CoM reference                                       */
+    double swing_from[2], landing[2];
+    ahc_quintic swing[2];       /* the swing foot's x, y                                           */
+    double swing_pos[2], swing_vel[2], swing_acc[2];
+    double pitch_prev, pitch_rate; /* the trunk's measured pitch and its low-passed rate            */
+    ahc_quintic pitch_plan;     /* the trunk's pitch reference, from the decision or the landing    */
+    double pitch_time;          /* time on pitch_plan [s]                                          */
+    double pitch_erect;         /* the sagittal model's erect trunk pitch (theta1 + theta2)         */
+    double step_clock;          /* time since the decision [s]                                     */
+    double tilt[2];             /* the stance foot's measured pitch and roll, low-passed [rad]      */
+    int tilt_valid;
+    double pelvis_z;            /* the hips' planned height last tick [m]                           */
+    int pelvis_z_valid;
+    double knee_settle;         /* the legs' planned knee bend at SETTLE's start [rad]              */
+    double q_prev[2][AHC_LEG_JOINTS];   /* last tick's planned joint angles (rates)                 */
+    double q_rate[2][AHC_LEG_JOINTS];   /* their low-passed rates (the servo lead)                  */
+    int q_prev_valid;
+    double q_out[2][AHC_LEG_JOINTS];    /* last tick's set points                                   */
+    double blend_from[2][AHC_LEG_JOINTS]; /* the set points' offset blended out after a switch      */
+    double blend_time;
+    int blend_from_flat;        /* the pending blend starts from the flat-footed layers' set points
+                                   (the decision), else from the step's last ones (a landing)     */
+} ahc_stepper;
+
+int ahc_step_init(ahc_stepper *c, const ahc_step_params *p, const ahc_params *sp, const ahc_frontal_params *fp);
+void ahc_step_reset(ahc_stepper *c);
+/* One tick. flat_q: the flat-footed layers' set points this tick (both legs' plus per-leg), so that
+ * a step starts from them without a jump. out->active says whether the step's set points apply. */
+void ahc_step_step(ahc_stepper *c, const ahc_step_sensors *s, const double flat_q[2][AHC_LEG_JOINTS],
+                   ahc_step_outputs *out);
+/* The tick a step ends (out->phase back to AHC_STEP_STAND), after ahc_step_step without flat_q:
+ * the flat-footed layers' first set points flat_q, the step's last ones blended into them. A no-op
+ * otherwise. */
+void ahc_step_handover(ahc_stepper *c, const double flat_q[2][AHC_LEG_JOINTS], ahc_step_outputs *out);
+int ahc_step_state_validate(const ahc_stepper *c, char *msg, size_t msg_size);
+
+/* The CoM of the lumped model (both legs' link-1 parts, link 2, the feet) for joint angles q and the
+ * trunk's attitude, relative to the ankle of `anchor` (AHC_LEFT, AHC_RIGHT) flat on the ground, in
+ * world axes [m]; also the pelvis centre (the hips' mid-point). Exposed for the tests. */
+void ahc_step_com(const ahc_stepper *c, const double q[2][AHC_LEG_JOINTS], double roll, double pitch, int anchor,
+                  double com[3], double pelvis[3]);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* AHC_STEPPING_H */

@@ -1,0 +1,964 @@
+/*
+ * stepping.c — the recovery step (stepping.h, docs/controller.md §12).
+ */
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "ahc/stepping.h"
+#include "hoap2/nominal.h"
+
+/* ---- parameters ---------------------------------------------------------------------------- */
+
+void ahc_step_params_default(ahc_step_params *p)
+{
+    memset(p, 0, sizeof *p);
+    p->stepping_enabled = 0;
+    p->step_trigger_x = 0.0;
+    p->step_trigger_y = 0.0;
+    p->step_swing_time = 0.2;
+    p->step_height = 0.015;
+    p->step_length_max = 0.12;
+    p->step_width_max = 0.16;
+    p->step_pelvis_drop = 0.01;
+    p->step_drop_time = 0.25;
+    p->step_shift_time_max = 0.1;
+    p->step_pitch_time = 0.25;
+    p->step_hip_hike = 0.1;
+    p->step_lead_max = 0.1;
+    p->step_touchdown_after = 0.5;
+    p->step_pelvis_rate = 0.1;
+    p->step_touchdown_tol = 0.015;
+    p->step_lead_tau = 0.03;
+    p->step_zmp_margin = 0.01;
+    p->step_touchdown_fz = 0.2 * HOAP2_TOTAL_MASS * HOAP2_G;
+    p->step_transfer_time_min = 0.05;
+    p->step_settle_time = 0.5;
+    p->step_blend_time = 0.05;
+    p->step_velocity_tau = 0.01;
+    p->step_servo_lead = 0.05;      /* Hoap2Plant3D's ankle, knee, roll and yaw servos: kd/kp = 20/400 */
+    p->step_servo_lead_hip = 5.0 / 150.0; /* its hip pitch servo: 5/150                           */
+    p->step_close = 1;
+}
+
+#define SD(field, unit, lo, hi, desc) \
+    { #field, unit, desc, lo, hi, offsetof(ahc_step_params, field), 0 }
+#define SI(field, lo, hi, desc) \
+    { #field, "", desc, lo, hi, offsetof(ahc_step_params, field), 1 }
+
+/* Append new rows at the end only (value references). */
+static const ahc_param_info k_stable[] = {
+    SI(stepping_enabled, 0.0, 1.0, "Stepping: 1 a recovery step when the capture point leaves the feet; 0 never"),
+    SD(step_trigger_x, "m", -0.05, 1.0, "Step when the capture point lies beyond the toe or heel edge by more than this (< 0: inside the sole)"),
+    SD(step_trigger_y, "m", 0.0, 1.0, "Step when the capture point lies beyond the outer sole edges by more than this"),
+    SD(step_swing_time, "s", 0.05, 2.0, "Planned duration of the swing"),
+    SD(step_height, "m", 0.0, 0.1, "Lift of the swing foot"),
+    SD(step_length_max, "m", 0.0, 0.3, "Landing ankle at most this far forward or back of the stance ankle"),
+    SD(step_width_max, "m", 0.0, 0.4, "Landing ankle at most this far sideways from the stance ankle"),
+    SD(step_pelvis_drop, "m", 0.0, 0.1, "The hips lower by this while stepping (the legs' reach)"),
+    SD(step_zmp_margin, "m", 0.0, 0.1, "Planned ZMPs stay this far inside the sole edges"),
+    SD(step_touchdown_fz, "N", 0.0, 1e4, "The swing sole has landed when it carries this"),
+    SD(step_transfer_time_min, "s", 0.0, 2.0, "Both feet down after a landing for at least this"),
+    SD(step_settle_time, "s", 0.05, 5.0, "Duration of the settling to rest over the feet after the steps"),
+    SD(step_blend_time, "s", 0.001, 1.0, "Quintic blend of the joint references at the start and end of a step"),
+    SD(step_velocity_tau, "s", 0.0, 1.0, "Low-pass time constant of the CoM rate estimate"),
+    SD(step_servo_lead, "s", 0.0, 1.0, "Servo lead kd/kp of every joint but the hip pitch: the reference leads by this times its rate"),
+    SD(step_servo_lead_hip, "s", 0.0, 1.0, "Servo lead kd/kp of the hip pitch"),
+    SI(step_close, 0.0, 1.0, "1: a second step brings the feet back together"),
+    SD(step_drop_time, "s", 0.01, 2.0, "The hips lower by step_pelvis_drop over this time from the decision (a quintic)"),
+    SD(step_shift_time_max, "s", 0.0, 1.0, "The weight shift before the swing lasts at most this (0: the foot lifts at once)"),
+    SD(step_hip_hike, "rad", 0.0, 0.5, "The pelvis rolls the swing hip up by this at mid-swing"),
+    SD(step_lead_max, "rad", 0.0, 1.0, "The servo lead adds at most this to a joint reference"),
+    SD(step_touchdown_after, "1", 0.0, 1.0, "A load on the swing sole counts as the landing after this fraction of the swing"),
+    SD(step_pelvis_rate, "m/s", 0.001, 10.0, "The hips' planned height moves at most this fast"),
+    SD(step_touchdown_tol, "m", 0.0, 1.0, "A loaded swing sole counts as landed only this close to its landing point"),
+    SD(step_lead_tau, "s", 0.0, 1.0, "Low-pass time constant of the reference rate the servo lead multiplies"),
+    SD(step_pitch_time, "s", 0.05, 5.0, "The trunk's pitch returns to erect over this (a quintic from the measured pitch and rate at the decision and at the landing)"),
+};
+#define STABLE_LEN (sizeof k_stable / sizeof k_stable[0])
+
+const ahc_param_info *ahc_step_param_table(size_t *count)
+{
+    if (count) *count = STABLE_LEN;
+    return k_stable;
+}
+
+const ahc_param_info *ahc_step_param_find(const char *name)
+{
+    size_t i;
+    if (!name) return NULL;
+    for (i = 0; i < STABLE_LEN; ++i)
+        if (strcmp(k_stable[i].name, name) == 0) return &k_stable[i];
+    return NULL;
+}
+
+const char *ahc_step_phase_name(int phase)
+{
+    static const char *const names[AHC_STEP_PHASES] = {"stand", "shift", "swing", "transfer", "close", "settle"};
+    return phase >= 0 && phase < AHC_STEP_PHASES ? names[phase] : "?";
+}
+
+static int fail(char *msg, size_t n, int code, const char *fmt, ...)
+{
+    if (msg && n > 0) {
+        va_list ap;
+        va_start(ap, fmt);
+        vsnprintf(msg, n, fmt, ap);
+        va_end(ap);
+    }
+    return code;
+}
+
+static double field_value(const ahc_step_params *p, const ahc_param_info *e)
+{
+    const char *base = (const char *)p + e->offset;
+    if (e->is_int) {
+        int v;
+        memcpy(&v, base, sizeof v);
+        return (double)v;
+    } else {
+        double v;
+        memcpy(&v, base, sizeof v);
+        return v;
+    }
+}
+
+int ahc_step_params_validate(const ahc_step_params *p, const ahc_params *sp, const ahc_frontal_params *fp, char *msg,
+                             size_t msg_size)
+{
+    size_t i;
+    int rc;
+    if (msg && msg_size > 0) msg[0] = '\0';
+    if (!p || !sp || !fp) return fail(msg, msg_size, AHC_ERR_NULL, "params pointer is NULL");
+    rc = ahc_frontal_params_validate(fp, sp, msg, msg_size);
+    if (rc != AHC_OK) return rc;
+    for (i = 0; i < STABLE_LEN; ++i) {
+        const ahc_param_info *e = &k_stable[i];
+        const double v = field_value(p, e);
+        if (!isfinite(v)) return fail(msg, msg_size, AHC_ERR_NONFINITE, "%s = %g must be finite", e->name, v);
+        if (v < e->min) return fail(msg, msg_size, AHC_ERR_RANGE, "%s = %.6g must be >= %.6g", e->name, v, e->min);
+        if (v > e->max) return fail(msg, msg_size, AHC_ERR_RANGE, "%s = %.6g must be <= %.6g", e->name, v, e->max);
+    }
+    if (!(2.0 * p->step_zmp_margin < fp->sole_width) || !(2.0 * p->step_zmp_margin < sp->toe_x - sp->heel_x))
+        return fail(msg, msg_size, AHC_ERR_INCONSISTENT,
+                    "step_zmp_margin = %.6g leaves no room on a sole (%.6g x %.6g m)", p->step_zmp_margin,
+                    sp->toe_x - sp->heel_x, fp->sole_width);
+    if (!(p->step_width_max >= 2.0 * fp->ankle_y))
+        return fail(msg, msg_size, AHC_ERR_INCONSISTENT,
+                    "step_width_max = %.6g must be >= the stance width 2 ankle_y = %.6g", p->step_width_max,
+                    2.0 * fp->ankle_y);
+    if (!(p->step_pelvis_drop + p->step_height < 0.5 * sp->l1))
+        return fail(msg, msg_size, AHC_ERR_INCONSISTENT,
+                    "step_pelvis_drop + step_height = %.6g must be < l1 / 2 = %.6g",
+                    p->step_pelvis_drop + p->step_height, 0.5 * sp->l1);
+    return AHC_OK;
+}
+
+/* ---- small vector helpers -------------------------------------------------------------------- */
+
+static void rot_trunk(double roll, double pitch, double R[9])
+{
+    /* R = Ry(pitch) Rx(roll): the IMU's Z-Y-X angles without the yaw */
+    const double cp = cos(pitch), sp = sin(pitch), cr = cos(roll), sr = sin(roll);
+    R[0] = cp; R[1] = sp * sr; R[2] = sp * cr;
+    R[3] = 0;  R[4] = cr;      R[5] = -sr;
+    R[6] = -sp; R[7] = cp * sr; R[8] = cp * cr;
+}
+
+static void mv(const double R[9], const double v[3], double o[3])
+{
+    int i;
+    for (i = 0; i < 3; ++i) o[i] = R[3 * i] * v[0] + R[3 * i + 1] * v[1] + R[3 * i + 2] * v[2];
+}
+
+static void mtv(const double R[9], const double v[3], double o[3])
+{
+    int i;
+    for (i = 0; i < 3; ++i) o[i] = R[i] * v[0] + R[3 + i] * v[1] + R[6 + i] * v[2];
+}
+
+static double clampd(double x, double lo, double hi) { return x < lo ? lo : (x > hi ? hi : x); }
+
+static double hip_offset_y(const ahc_stepper *c, int side) { return side == AHC_LEFT ? c->hip_y : -c->hip_y; }
+
+/* ---- the lumped model's CoM ----------------------------------------------------------------- */
+
+/* The CoM for the pelvis centre P, trunk attitude R, both ankles (world) and feet at Rfw (world). */
+static void com_of(const ahc_stepper *c, const double P[3], const double R[9], double ankle[2][3],
+                   double Rfw[2][9], double com[3])
+{
+    const double k1 = c->lg1 / c->l1;
+    double sum[3] = {0, 0, 0}, v[3], w[3];
+    int s, i;
+    /* link 2: its CoM lg2 up the trunk, link2_com_x ahead */
+    v[0] = c->link2_com_x; v[1] = 0.0; v[2] = c->lg2;
+    mv(R, v, w);
+    for (i = 0; i < 3; ++i) sum[i] += c->m2 * (P[i] + w[i]);
+    for (s = 0; s < 2; ++s) {
+        double hip[3];
+        v[0] = 0.0; v[1] = hip_offset_y(c, s); v[2] = 0.0;
+        mv(R, v, w);
+        for (i = 0; i < 3; ++i) hip[i] = P[i] + w[i];
+        /* each leg's link-1 part: lg1 up the ankle-hip line */
+        for (i = 0; i < 3; ++i) sum[i] += 0.5 * c->m1 * (ankle[s][i] + k1 * (hip[i] - ankle[s][i]));
+        /* each foot */
+        v[0] = c->feet_com_x; v[1] = 0.0; v[2] = c->feet_com_z - c->ankle_height;
+        mv(Rfw[s], v, w);
+        for (i = 0; i < 3; ++i) sum[i] += 0.5 * c->feet_mass * (ankle[s][i] + w[i]);
+    }
+    for (i = 0; i < 3; ++i) com[i] = sum[i] / c->mass;
+}
+
+/* The measured configuration: both ankles and the pelvis relative to the anchor's ankle at `at`
+ * (world), the feet's attitudes, from the joint angles and the trunk's attitude R. */
+static void measured_configuration(const ahc_stepper *c, const double q[2][AHC_LEG_JOINTS], const double R[9],
+                                   int anchor, const double at[3], double P[3], double ankle[2][3],
+                                   double Rfw[2][9])
+{
+    double rel[2][3];
+    int s, i;
+    for (s = 0; s < 2; ++s) {
+        double a[3], Rf[9], v[3];
+        ahc_leg_fk_pose(&c->legs, q[s], a, Rf);
+        a[1] += hip_offset_y(c, s); /* the ankle from the pelvis centre, trunk axes */
+        mv(R, a, rel[s]);
+        (void)v;
+        /* the foot's attitude in the world: R Rf */
+        {
+            int r, k;
+            for (r = 0; r < 3; ++r)
+                for (k = 0; k < 3; ++k)
+                    Rfw[s][3 * r + k] = R[3 * r] * Rf[k] + R[3 * r + 1] * Rf[3 + k] + R[3 * r + 2] * Rf[6 + k];
+        }
+    }
+    for (i = 0; i < 3; ++i) P[i] = at[i] - rel[anchor][i];
+    for (s = 0; s < 2; ++s)
+        for (i = 0; i < 3; ++i) ankle[s][i] = P[i] + rel[s][i];
+}
+
+void ahc_step_com(const ahc_stepper *c, const double q[2][AHC_LEG_JOINTS], double roll, double pitch, int anchor,
+                  double com[3], double pelvis[3])
+{
+    double R[9], ankle[2][3], Rfw[2][9];
+    const double at[3] = {0, 0, 0};
+    rot_trunk(roll, pitch, R);
+    measured_configuration(c, q, R, anchor, at, pelvis, ankle, Rfw);
+    com_of(c, pelvis, R, ankle, Rfw, com);
+}
+
+/* ---- init ------------------------------------------------------------------------------------ */
+
+int ahc_step_init(ahc_stepper *c, const ahc_step_params *p, const ahc_params *sp, const ahc_frontal_params *fp)
+{
+    int rc;
+    if (!c) return AHC_ERR_NULL;
+    memset(c, 0, sizeof *c);
+    rc = ahc_step_params_validate(p, sp, fp, NULL, 0);
+    if (p) c->p = *p;
+    if (rc != AHC_OK) return rc;
+    c->g = sp->g;
+    c->m1 = sp->m1;
+    c->m2 = sp->m2;
+    c->l1 = sp->l1;
+    c->lg1 = sp->lg1;
+    c->lg2 = sp->lg2;
+    c->link2_com_x = sp->link2_com_x;
+    c->feet_mass = sp->feet_mass;
+    c->feet_com_x = sp->feet_com_x;
+    c->feet_com_z = sp->feet_com_z;
+    c->ankle_height = sp->ankle_height;
+    c->mass = sp->m1 + sp->m2 + sp->feet_mass;
+    c->toe_x = sp->toe_x;
+    c->heel_x = sp->heel_x;
+    c->sole_width = fp->sole_width;
+    c->hip_y = fp->hip_y;
+    c->ankle_y = fp->ankle_y;
+    c->legs.thigh = fp->thigh;
+    c->legs.shank = fp->shank;
+    c->legs.hip_y = fp->hip_y;
+    c->legs.ankle_y = fp->ankle_y;
+    c->dt = sp->sample_period;
+    /* the pendulum's height: the erect CoM above the ground */
+    c->z_com = (sp->m1 * sp->lg1 + sp->m2 * (sp->l1 + sp->lg2)) / (sp->m1 + sp->m2) + sp->ankle_height;
+    c->omega = sqrt(c->g / c->z_com);
+    {
+        double e1, e2;
+        ahc_erect_posture(sp, &e1, &e2);
+        c->pitch_erect = e1 + e2;
+    }
+    c->valid = 1;
+    ahc_step_reset(c);
+    return AHC_OK;
+}
+
+void ahc_step_reset(ahc_stepper *c)
+{
+    if (!c) return;
+    {
+        const double pitch_erect = c->pitch_erect;
+        memset(&c->tick, 0, sizeof *c - offsetof(ahc_stepper, tick));
+        c->pitch_erect = pitch_erect;
+    }
+    c->phase = AHC_STEP_STAND;
+    c->swing_side = -1;
+    c->feet[AHC_LEFT][1] = c->ankle_y;
+    c->feet[AHC_RIGHT][1] = -c->ankle_y;
+}
+
+/* ---- the estimate ----------------------------------------------------------------------------- */
+
+static int stance_of(const ahc_stepper *c) { return c->swing_side == AHC_LEFT ? AHC_RIGHT : AHC_LEFT; }
+static int one_foot(int phase) { return phase == AHC_STEP_SWING || phase == AHC_STEP_CLOSE; }
+
+/* The measured configuration in the step's frame: the anchor foot (the stance foot, or the more
+ * loaded one on both feet) at its place, turned about the sole edge it rocks on when the trunk's
+ * attitude and the joints say it is tilted. */
+static void estimate_on(const ahc_stepper *c, const ahc_step_sensors *s, int anchor, double P[3], double ankle[2][3],
+                        double Rfw[2][9], double com[3])
+{
+    double R[9], at[3], cf[3], Fc[3];
+    const double *F;
+    int i, k;
+    rot_trunk(s->imu_roll, s->imu_pitch, R);
+    at[0] = c->feet[anchor][0];
+    at[1] = c->feet[anchor][1];
+    at[2] = c->ankle_height;
+    measured_configuration(c, s->q, R, anchor, at, P, ankle, Rfw);
+    /* the contact edge of the anchor foot, in its frame: the toe when it pitches toes down, the heel
+     * otherwise; the left edge when it rolls left edge down */
+    F = Rfw[anchor];
+    cf[0] = F[6] < 0.0 ? c->toe_x : c->heel_x;
+    cf[1] = F[7] < 0.0 ? 0.5 * c->sole_width : -0.5 * c->sole_width;
+    cf[2] = -c->ankle_height;
+    mv(F, cf, Fc);
+    for (i = 0; i < 3; ++i) {
+        const double shift = cf[i] - Fc[i]; /* the edge stays where the flat foot has it */
+        P[i] += shift;
+        for (k = 0; k < 2; ++k) ankle[k][i] += shift;
+    }
+    com_of(c, P, R, ankle, Rfw, com);
+}
+
+/* The measured configuration in the step's frame, anchored on the feet where they were put: on the
+ * stance foot while one foot swings; on both feet otherwise, each anchor weighted by its sole's load
+ * (so that the estimate moves continuously as the load moves between the feet). */
+static void estimate(const ahc_stepper *c, const ahc_step_sensors *s, double P[3], double ankle[2][3],
+                     double Rfw[2][9], double com[3])
+{
+    double w_left, sum;
+    if (one_foot(c->phase)) {
+        estimate_on(c, s, stance_of(c), P, ankle, Rfw, com);
+        return;
+    }
+    sum = s->fz_left + s->fz_right;
+    w_left = (isfinite(sum) && sum > 1e-6) ? clampd(s->fz_left / sum, 0.0, 1.0) : 0.5;
+    estimate_on(c, s, AHC_LEFT, P, ankle, Rfw, com);
+    if (w_left < 1.0) {
+        double P2[3], ankle2[2][3], Rfw2[2][9], com2[3];
+        int i, k;
+        estimate_on(c, s, AHC_RIGHT, P2, ankle2, Rfw2, com2);
+        for (i = 0; i < 3; ++i) {
+            P[i] = w_left * P[i] + (1.0 - w_left) * P2[i];
+            com[i] = w_left * com[i] + (1.0 - w_left) * com2[i];
+            for (k = 0; k < 2; ++k) ankle[k][i] = w_left * ankle[k][i] + (1.0 - w_left) * ankle2[k][i];
+        }
+    }
+}
+
+/* ---- the plan --------------------------------------------------------------------------------- */
+
+static double smooth01(double s)
+{
+    s = clampd(s, 0.0, 1.0);
+    return s * s * s * (10.0 + s * (-15.0 + 6.0 * s));
+}
+
+/* The sole box of foot `side` shrunk by the ZMP margin: [x lo, x hi, y lo, y hi]. */
+static void sole_box(const ahc_stepper *c, int side, double b[4])
+{
+    const double m = c->p.step_zmp_margin;
+    b[0] = c->feet[side][0] + c->heel_x + m;
+    b[1] = c->feet[side][0] + c->toe_x - m;
+    b[2] = c->feet[side][1] - 0.5 * c->sole_width + m;
+    b[3] = c->feet[side][1] + 0.5 * c->sole_width - m;
+}
+
+/* The CoM reference's state at time t of this phase (the pendulum under the phase's ZMP, or
+ * SETTLE's quintic). */
+static void reference(const ahc_stepper *c, double t, double r[2], double v[2], double a[2])
+{
+    int i;
+    for (i = 0; i < 2; ++i) {
+        if (c->phase == AHC_STEP_SETTLE) {
+            ahc_quintic_eval(&c->settle[i], t, &r[i], &v[i], &a[i]);
+        } else {
+            const double w = c->omega, ch = cosh(w * t), sh = sinh(w * t), d = c->c0[i] - c->zmp[i];
+            r[i] = c->zmp[i] + d * ch + c->v0[i] / w * sh;
+            v[i] = d * w * sh + c->v0[i] * ch;
+            a[i] = w * w * (r[i] - c->zmp[i]);
+        }
+    }
+}
+
+static void begin_phase(ahc_stepper *c, int phase, double duration)
+{
+    double r[2], v[2], a[2];
+    int i;
+    reference(c, c->phase_time, r, v, a);
+    for (i = 0; i < 2; ++i) {
+        c->c0[i] = r[i];
+        c->v0[i] = v[i];
+    }
+    c->phase = phase;
+    c->phase_time = 0.0;
+    c->phase_duration = duration;
+    (void)a;
+}
+
+/* The capture point of the reference at the phase's start. */
+static double xi0(const ahc_stepper *c, int i) { return c->c0[i] + c->v0[i] / c->omega; }
+
+/* A phase on one foot: the ZMP holds the capture point over the stance sole, or at the sole's edge. */
+static void plan_one_foot(ahc_stepper *c)
+{
+    double b[4];
+    sole_box(c, stance_of(c), b);
+    c->zmp[0] = clampd(xi0(c, 0), b[0], b[1]);
+    c->zmp[1] = clampd(xi0(c, 1), b[2], b[3]);
+}
+
+/* The shortest time T >= T_min (to 1 s, in 5 ms steps) in which a ZMP inside [lo, hi] moves the
+ * capture point from x0 to target: p = (target - x0 E) / (1 - E), E = e^(omega T). */
+static double pendulum_transfer(const ahc_stepper *c, double x0, double target, double lo, double hi, double T_min,
+                                double *p)
+{
+    double T;
+    if (fabs(target - x0) < 1e-9) {
+        *p = clampd(target, lo, hi);
+        return T_min;
+    }
+    for (T = T_min > 0.005 ? T_min : 0.005; T < 1.0; T += 0.005) {
+        const double E = exp(c->omega * T), z = (target - x0 * E) / (1.0 - E);
+        if (z >= lo && z <= hi) {
+            *p = z;
+            return T;
+        }
+    }
+    *p = clampd(x0, lo, hi);
+    return 1.0;
+}
+
+/* The landing point for the swing foot from the capture point xi predicted at touch-down, within
+ * the reach and clear of the stance foot. */
+static void landing_point(const ahc_stepper *c, const double xi[2], double L[2])
+{
+    const int a = stance_of(c);
+    const double sigma = c->swing_side == AHC_LEFT ? 1.0 : -1.0; /* the swing foot's side */
+    const double dx = clampd(xi[0] - c->feet[a][0], -c->p.step_length_max, c->p.step_length_max);
+    const double dy = clampd(sigma * (xi[1] - c->feet[a][1]), 2.0 * c->ankle_y, c->p.step_width_max);
+    L[0] = c->feet[a][0] + dx;
+    L[1] = c->feet[a][1] + sigma * dy;
+}
+
+static void plan_swing_xy(ahc_stepper *c, const double target[2], double T_left)
+{
+    int i;
+    for (i = 0; i < 2; ++i) {
+        c->landing[i] = target[i];
+        ahc_quintic_init(&c->swing[i], c->swing_pos[i], c->swing_vel[i], c->swing_acc[i], target[i], 0.0, 0.0,
+                         T_left > c->dt ? T_left : c->dt);
+    }
+}
+
+/* Blend out the jump of the references at this switch, from the step's last set points. */
+static void blend_from_last(ahc_stepper *c)
+{
+    int side, j;
+    c->blend_time = 0.0;
+    c->blend_from_flat = 0;
+    for (side = 0; side < 2; ++side)
+        for (j = 0; j < AHC_LEG_JOINTS; ++j) c->blend_from[side][j] = NAN;
+}
+
+static void start_swing(ahc_stepper *c, int phase, const double target[2])
+{
+    int i;
+    begin_phase(c, phase, c->p.step_swing_time);
+    plan_one_foot(c);
+    for (i = 0; i < 2; ++i) {
+        c->swing_from[i] = c->feet[c->swing_side][i];
+        c->swing_pos[i] = c->swing_from[i];
+        c->swing_vel[i] = c->swing_acc[i] = 0.0;
+    }
+    plan_swing_xy(c, target, c->p.step_swing_time);
+    /* the swing foot is placed in the world from now on, through the stance foot's measured tilt
+     * (plan_joints): the references' jump is blended out */
+    c->tilt_valid = 0;
+    blend_from_last(c);
+}
+
+static void start_transfer(ahc_stepper *c)
+{
+    double b[2][4], lo[2], hi[2], p[2], T[2];
+    const int landed = c->swing_side;
+    int i;
+    begin_phase(c, AHC_STEP_TRANSFER, 0.0);
+    sole_box(c, AHC_LEFT, b[0]);
+    sole_box(c, AHC_RIGHT, b[1]);
+    lo[0] = fmin(b[0][0], b[1][0]); hi[0] = fmax(b[0][1], b[1][1]);
+    lo[1] = fmin(b[0][2], b[1][2]); hi[1] = fmax(b[0][3], b[1][3]);
+    for (i = 0; i < 2; ++i)
+        T[i] = pendulum_transfer(c, xi0(c, i), c->feet[landed][i], lo[i], hi[i], c->p.step_transfer_time_min, &p[i]);
+    /* both axes in the longer time */
+    c->phase_duration = fmax(T[0], T[1]);
+    for (i = 0; i < 2; ++i) {
+        const double E = exp(c->omega * c->phase_duration);
+        c->zmp[i] = fabs(c->feet[landed][i] - xi0(c, i)) < 1e-9 ? clampd(c->feet[landed][i], lo[i], hi[i])
+                                                                : clampd((c->feet[landed][i] - xi0(c, i) * E) / (1.0 - E), lo[i], hi[i]);
+    }
+    (void)p;
+}
+
+static void start_settle(ahc_stepper *c)
+{
+    double r[2], v[2], a[2];
+    int i;
+    reference(c, c->phase_time, r, v, a);
+    begin_phase(c, AHC_STEP_SETTLE, c->p.step_settle_time);
+    for (i = 0; i < 2; ++i) {
+        const double mid = 0.5 * (c->feet[AHC_LEFT][i] + c->feet[AHC_RIGHT][i]);
+        ahc_quintic_init(&c->settle[i], r[i], v[i], a[i], mid, 0.0, 0.0, c->p.step_settle_time);
+    }
+}
+
+/* ---- the joints ------------------------------------------------------------------------------- */
+
+/* The planned joint angles: the pelvis that carries the CoM reference r over the feet (the stance
+ * sole flat), the trunk at roll and pitch. The plan's frame is the stance foot's; when the stance
+ * foot turns on a sole edge (c->tilt, measured) the world turns with it in that frame, and the swing
+ * foot's place in the world, flat, swing_z above the ground, is put into the plan's frame: it lands
+ * where the ground is. */
+static void plan_joints(ahc_stepper *c, const double r[2], double leg, double roll, double pitch,
+                        double swing_z, double q[2][AHC_LEG_JOINTS])
+{
+    double R[9], Rt[9], ankle[2][3], Rfw[2][9], P[3], com[3];
+    const double kfac = (c->m2 + c->m1 * c->lg1 / c->l1) / c->mass; /* d com / d pelvis */
+    int s, i, j;
+    rot_trunk(roll, pitch, R);
+    for (s = 0; s < 2; ++s) {
+        const int swinging = one_foot(c->phase) && s == c->swing_side;
+        ankle[s][0] = swinging ? c->swing_pos[0] : c->feet[s][0];
+        ankle[s][1] = swinging ? c->swing_pos[1] : c->feet[s][1];
+        ankle[s][2] = swinging ? swing_z : c->ankle_height;
+        for (i = 0; i < 9; ++i) Rfw[s][i] = (i % 4 == 0) ? 1.0 : 0.0;
+    }
+    /* the CoM is affine in the pelvis position: one correction from a first guess is exact (a vertical
+     * move of the pelvis leaves the CoM's x and y where they are) */
+    P[0] = r[0];
+    P[1] = r[1];
+    P[2] = c->ankle_height + leg;
+    com_of(c, P, R, ankle, Rfw, com);
+    P[0] += (r[0] - com[0]) / kfac;
+    P[1] += (r[1] - com[1]) / kfac;
+    /* the height: the supporting legs' hips `leg` from their ankles (the lowest of them on two feet) */
+    {
+        double z = 1e9;
+        for (s = 0; s < 2; ++s) {
+            double v[3], hip[3], h2;
+            if (one_foot(c->phase) && s == c->swing_side) continue;
+            v[0] = 0.0; v[1] = hip_offset_y(c, s); v[2] = 0.0;
+            mv(R, v, hip);
+            h2 = (P[0] + hip[0] - ankle[s][0]) * (P[0] + hip[0] - ankle[s][0]) +
+                 (P[1] + hip[1] - ankle[s][1]) * (P[1] + hip[1] - ankle[s][1]);
+            z = fmin(z, ankle[s][2] + sqrt(fmax(leg * leg - h2, 0.25 * leg * leg)) - hip[2]);
+        }
+        /* continuous: the height moves at most step_pelvis_rate (a foot leaving or joining the support
+         * changes the constraint at once) */
+        if (c->pelvis_z_valid) {
+            const double dz = c->p.step_pelvis_rate * c->dt;
+            z = clampd(z, c->pelvis_z - dz, c->pelvis_z + dz);
+        }
+        c->pelvis_z = z;
+        c->pelvis_z_valid = 1;
+        P[2] = z;
+    }
+    for (i = 0; i < 3; ++i)
+        for (j = 0; j < 3; ++j) Rt[3 * i + j] = R[3 * j + i]; /* the flat foot relative to the trunk */
+    for (s = 0; s < 2; ++s) {
+        double hip[3], d[3], rel[3], v[3], Rf[9];
+        const int swinging = one_foot(c->phase) && s == c->swing_side;
+        if (swinging) {
+            /* the world in the plan's frame: turned by the stance foot's tilt about its contact edge */
+            double Rtilt[9], e[3], w[3], tmp[3];
+            const int a = stance_of(c);
+            rot_trunk(c->tilt[1], c->tilt[0], Rtilt);
+            e[0] = c->feet[a][0] + (c->tilt[0] > 0.0 ? c->toe_x : c->heel_x);
+            e[1] = c->feet[a][1] + (c->tilt[1] < 0.0 ? 0.5 : -0.5) * c->sole_width;
+            e[2] = 0.0;
+            for (i = 0; i < 3; ++i) w[i] = ankle[s][i] - e[i];
+            mtv(Rtilt, w, tmp);
+            for (i = 0; i < 3; ++i) ankle[s][i] = e[i] + tmp[i];
+            /* the foot flat in the world: Rtilt^T in the plan's frame, R^T Rtilt^T from the trunk */
+            for (i = 0; i < 3; ++i)
+                for (j = 0; j < 3; ++j)
+                    Rf[3 * i + j] = R[i] * Rtilt[3 * j] + R[3 + i] * Rtilt[3 * j + 1] + R[6 + i] * Rtilt[3 * j + 2];
+        } else {
+            for (i = 0; i < 9; ++i) Rf[i] = Rt[i];
+        }
+        v[0] = 0.0; v[1] = hip_offset_y(c, s); v[2] = 0.0;
+        mv(R, v, hip);
+        for (i = 0; i < 3; ++i) d[i] = ankle[s][i] - (P[i] + hip[i]);
+        if (swinging) {
+            /* the swing leg stays bent by at least 0.2 rad at the knee: the foot comes short of a
+             * place the leg cannot reach (a straight leg's knee rate is unbounded) */
+            const double reach = c->l1 * cos(0.1 * smooth01(c->phase_time / (0.3 * c->p.step_swing_time))),
+                         hor = hypot(d[0], d[1]);
+            if (hypot(hor, d[2]) > reach && hor > 0.0) {
+                const double k = sqrt(fmax(reach * reach - d[2] * d[2], 0.0)) / hor;
+                d[0] *= k;
+                d[1] *= k;
+            }
+        }
+        mtv(R, d, rel);
+        ahc_leg_ik_pose(&c->legs, NULL, rel, Rf, q[s]);
+    }
+}
+
+/* ---- one tick --------------------------------------------------------------------------------- */
+
+/* The set points plus the blended-out jump of the last switch. */
+static void blend(ahc_stepper *c, ahc_step_outputs *out)
+{
+    const double w = 1.0 - smooth01(c->blend_time / c->p.step_blend_time);
+    int side, j;
+    for (side = 0; side < 2; ++side)
+        for (j = 0; j < AHC_LEG_JOINTS; ++j) {
+            out->q_ref[side][j] += w * c->blend_from[side][j];
+            c->q_out[side][j] = out->q_ref[side][j];
+        }
+    c->blend_time += c->dt;
+}
+
+static void start_step(ahc_stepper *c, const double com[3], const double xi[2])
+{
+    const double w2 = 0.5 * c->sole_width;
+    int sigma_swing, i;
+    double target[2];
+    /* which foot: outward toward a capture point beyond the outer edges; otherwise the stance foot
+     * is the one on the capture point's side */
+    if (xi[1] > c->feet[AHC_LEFT][1] + w2 + c->p.step_trigger_y) c->swing_side = AHC_LEFT;
+    else if (xi[1] < c->feet[AHC_RIGHT][1] - w2 - c->p.step_trigger_y) c->swing_side = AHC_RIGHT;
+    else c->swing_side = xi[1] >= 0.5 * (c->feet[AHC_LEFT][1] + c->feet[AHC_RIGHT][1]) ? AHC_RIGHT : AHC_LEFT;
+    sigma_swing = c->swing_side == AHC_LEFT ? 1 : -1;
+    for (i = 0; i < 2; ++i) {
+        c->c0[i] = com[i];
+        c->v0[i] = c->com_rate[i];
+    }
+    c->phase_time = 0.0;
+    c->step_clock = 0.0;
+    /* SHIFT: the ZMP toward the swing foot's outer edge moves the capture point over the stance ankle */
+    {
+        const int a = stance_of(c);
+        double b[4], T = 0.0;
+        const double p_y = c->feet[c->swing_side][1] + sigma_swing * (w2 - c->p.step_zmp_margin);
+        const double ratio = (c->feet[a][1] - p_y) / (xi[1] - p_y);
+        if (ratio > 1.0) T = fmin(log(ratio) / c->omega, c->p.step_shift_time_max);
+        sole_box(c, a, b);
+        c->zmp[0] = clampd(xi[0], b[0], b[1]);
+        c->zmp[1] = p_y;
+        c->phase = AHC_STEP_SHIFT;
+        c->phase_duration = T;
+    }
+    (void)target;
+}
+
+static void next_phase_after_shift(ahc_stepper *c, const double xi_meas[2])
+{
+    double L[2], xi_T[2], b[4];
+    int i;
+    /* the landing point from the measured capture point, predicted at touch-down under the stance
+     * ZMP the swing will hold */
+    sole_box(c, stance_of(c), b);
+    for (i = 0; i < 2; ++i) {
+        const double p = clampd(xi_meas[i], b[2 * i], b[2 * i + 1]);
+        xi_T[i] = p + (xi_meas[i] - p) * exp(c->omega * c->p.step_swing_time);
+    }
+    landing_point(c, xi_T, L);
+    start_swing(c, AHC_STEP_SWING, L);
+}
+
+void ahc_step_step(ahc_stepper *c, const ahc_step_sensors *s, const double flat_q[2][AHC_LEG_JOINTS],
+                   ahc_step_outputs *out)
+{
+    double P[3], ankle[2][3], Rfw[2][9], com[3], xi[2];
+    int i, side, j;
+    memset(out, 0, sizeof *out);
+    out->swing_side = -1;
+    if (!c || !c->valid) return;
+    /* the estimate: the CoM and its low-passed rate, the capture point */
+    estimate(c, s, P, ankle, Rfw, com);
+    if (!isfinite(com[0]) || !isfinite(com[1])) {
+        /* a non-finite reading: the estimate holds (the step, if one runs, goes on as planned) */
+    } else if (!c->est_valid) {
+        for (i = 0; i < 2; ++i) {
+            c->com_prev[i] = com[i];
+            c->com_rate[i] = 0.0;
+        }
+        c->pitch_prev = s->imu_pitch;
+        c->pitch_rate = 0.0;
+        c->est_valid = 1;
+    } else {
+        const double a = c->p.step_velocity_tau > 0.0 ? 1.0 - exp(-c->dt / c->p.step_velocity_tau) : 1.0;
+        for (i = 0; i < 2; ++i) {
+            c->com_rate[i] += a * ((com[i] - c->com_prev[i]) / c->dt - c->com_rate[i]);
+            c->com_prev[i] = com[i];
+        }
+        c->pitch_rate += a * ((s->imu_pitch - c->pitch_prev) / c->dt - c->pitch_rate);
+        c->pitch_prev = s->imu_pitch;
+    }
+    for (i = 0; i < 2; ++i) xi[i] = c->com_prev[i] + c->com_rate[i] / c->omega;
+    c->tick++;
+
+    if (c->phase == AHC_STEP_STAND) {
+        const double w2 = 0.5 * c->sole_width;
+        const double x_front = fmax(c->feet[0][0], c->feet[1][0]) + c->toe_x;
+        const double x_back = fmin(c->feet[0][0], c->feet[1][0]) + c->heel_x;
+        const int trigger = c->p.stepping_enabled && c->est_valid && c->tick > 20 && flat_q &&
+                            (xi[0] > x_front + c->p.step_trigger_x || xi[0] < x_back - c->p.step_trigger_x ||
+                             xi[1] > c->feet[AHC_LEFT][1] + w2 + c->p.step_trigger_y ||
+                             xi[1] < c->feet[AHC_RIGHT][1] - w2 - c->p.step_trigger_y);
+        if (trigger) {
+            ahc_quintic_init(&c->pitch_plan, c->pitch_prev, c->pitch_rate, 0.0, c->pitch_erect, 0.0, 0.0,
+                             c->p.step_pitch_time);
+            c->pitch_time = 0.0;
+            start_step(c, com, xi);
+            c->q_prev_valid = 0;
+            c->pelvis_z_valid = 0;
+            c->blend_from_flat = 1;
+            c->blend_time = 0.0;
+            /* the jump from the flat-footed layers' set points is blended out */
+            for (side = 0; side < 2; ++side)
+                for (j = 0; j < AHC_LEG_JOINTS; ++j) c->blend_from[side][j] = NAN; /* set below */
+        }
+    } else {
+        /* advance the step's clock and phases */
+        const double T = c->dt;
+        c->phase_time += T;
+        c->step_clock += T;
+        switch (c->phase) {
+        case AHC_STEP_SHIFT:
+            if (c->phase_time >= c->phase_duration) next_phase_after_shift(c, xi);
+            break;
+        case AHC_STEP_SWING:
+        case AHC_STEP_CLOSE: {
+            const double fz_swing = c->swing_side == AHC_LEFT ? s->fz_left : s->fz_right;
+            const double Tsw = c->p.step_swing_time;
+            for (i = 0; i < 2; ++i)
+                ahc_quintic_eval(&c->swing[i], c->phase_time - (Tsw - c->swing[i].T), &c->swing_pos[i],
+                                 &c->swing_vel[i], &c->swing_acc[i]);
+            /* the landing point follows the measured capture point through the swing's first 60 % */
+            if (c->phase == AHC_STEP_SWING && c->phase_time < 0.6 * Tsw) {
+                double b[4], xi_T[2], L[2];
+                sole_box(c, stance_of(c), b);
+                for (i = 0; i < 2; ++i) {
+                    const double p = c->zmp[i];
+                    xi_T[i] = p + (xi[i] - p) * exp(c->omega * (Tsw - c->phase_time));
+                }
+                landing_point(c, xi_T, L);
+                if (fabs(L[0] - c->landing[0]) > 1e-4 || fabs(L[1] - c->landing[1]) > 1e-4)
+                    plan_swing_xy(c, L, Tsw - c->phase_time);
+            }
+            /* landed: the swing sole carries step_touchdown_fz late enough in the swing, within
+             * step_touchdown_tol of where it was sent (a foot that touches early and short is still
+             * swinging); or the swing is over by 0.15 s */
+            const double miss = hypot(ankle[c->swing_side][0] - c->landing[0], ankle[c->swing_side][1] - c->landing[1]);
+            if ((fz_swing > c->p.step_touchdown_fz && c->phase_time > c->p.step_touchdown_after * Tsw &&
+                 miss <= c->p.step_touchdown_tol) ||
+                c->phase_time > Tsw + 0.15) {
+                /* touch-down: the foot is where the measurement puts it */
+                const int landed = c->swing_side;
+                if (isfinite(ankle[landed][0]) && isfinite(ankle[landed][1])) {
+                    c->landing[0] = ankle[landed][0];
+                    c->landing[1] = ankle[landed][1];
+                } /* else (a non-finite reading): where it was sent */
+                c->feet[landed][0] = c->landing[0];
+                c->feet[landed][1] = c->landing[1];
+                c->steps++;
+                /* the landed foot's place is measured, not planned: the legs' references move with
+                 * it, and that jump is blended out */
+                blend_from_last(c);
+                if (c->phase == AHC_STEP_SWING) {
+                    /* both feet down: the reference goes on from where it is (starting it again from the
+                     * measured state, with the jump blended out, fell in every trial: docs §12.4) */
+                    start_transfer(c);
+                } else {
+                    start_settle(c);
+                    c->knee_settle = 2.0 * acos(1.0 - c->p.step_pelvis_drop / c->l1) *
+                                 smooth01(c->step_clock / c->p.step_drop_time);
+                }
+            }
+            break;
+        }
+        case AHC_STEP_TRANSFER:
+            if (c->phase_time >= c->phase_duration) {
+                const int landed = c->swing_side;
+                if (c->p.step_close) {
+                    double target[2];
+                    const double sigma = landed == AHC_LEFT ? -1.0 : 1.0; /* the other foot's side */
+                    c->swing_side = stance_of(c);                         /* the other foot swings */
+                    target[0] = c->feet[landed][0];
+                    target[1] = c->feet[landed][1] + sigma * 2.0 * c->ankle_y;
+                    start_swing(c, AHC_STEP_CLOSE, target);
+                } else {
+                    start_settle(c);
+                    c->knee_settle = 2.0 * acos(1.0 - c->p.step_pelvis_drop / c->l1) *
+                                 smooth01(c->step_clock / c->p.step_drop_time);
+                }
+            }
+            break;
+        case AHC_STEP_SETTLE:
+            if (c->phase_time >= c->phase_duration) {
+                /* done: the flat-footed layers take over (ahc3d restarts them); the step's frame
+                 * becomes the feet's new one */
+                const double mx = 0.5 * (c->feet[0][0] + c->feet[1][0]), my = 0.5 * (c->feet[0][1] + c->feet[1][1]);
+                for (side = 0; side < 2; ++side) {
+                    c->feet[side][0] -= mx;
+                    c->feet[side][1] -= my;
+                }
+                c->com_prev[0] -= mx;
+                c->com_prev[1] -= my;
+                c->phase = AHC_STEP_STAND;
+                c->swing_side = -1;
+                c->blend_time = 0.0;
+            }
+            break;
+        default:
+            break;
+        }
+    }
+
+    /* outputs */
+    out->phase = c->phase;
+    out->swing_side = c->swing_side;
+    out->steps = c->steps;
+    for (i = 0; i < 2; ++i) {
+        out->com[i] = c->com_prev[i];
+        out->com_rate[i] = c->com_rate[i];
+        out->capture[i] = xi[i];
+        out->landing[i] = c->landing[i];
+    }
+    if (c->phase != AHC_STEP_STAND) {
+        double r[2], v[2], a[2], q[2][AHC_LEG_JOINTS], z, pitch, roll = 0.0, swing_z = c->ankle_height, lead_alpha;
+        /* the supporting legs shorten by step_pelvis_drop as two equal leg segments would by a knee
+         * flexing along a quintic (the knee's rate stays bounded at the straight leg, where the
+         * length's would not); the hips' height follows from the legs' lean */
+        const double knee_max = 2.0 * acos(1.0 - c->p.step_pelvis_drop / c->l1);
+        double knee = knee_max * smooth01(c->step_clock / c->p.step_drop_time);
+        reference(c, c->phase_time, r, v, a);
+        ahc_quintic_eval(&c->pitch_plan, c->pitch_time, &pitch, NULL, NULL);
+        c->pitch_time += c->dt;
+        if (c->phase == AHC_STEP_SETTLE) knee = c->knee_settle * (1.0 - smooth01(c->phase_time / c->phase_duration));
+        z = c->l1 * cos(0.5 * knee);
+        if (one_foot(c->phase)) {
+            const double Tsw = c->p.step_swing_time, u = c->phase_time / Tsw;
+            if (u <= 1.0) {
+                const double b = u * (1.0 - u);
+                /* up early, down late: u^2 (1-u)^3, its peak (at u = 0.4) step_height */
+                swing_z = c->ankle_height + c->p.step_height * u * b * b * (1.0 - u) / 0.03456;
+                /* the hip hike: the pelvis rolls the swing hip up, which lifts a straight swing leg
+                 * (the knee's servo is slow at the straight leg) */
+                roll = (c->swing_side == AHC_LEFT ? 1.0 : -1.0) * c->p.step_hip_hike * 16.0 * b * b;
+            } else {
+                swing_z = c->ankle_height - 0.1 * (c->phase_time - Tsw); /* reach for the ground */
+            }
+        }
+        if (one_foot(c->phase)) {
+            /* the stance foot's tilt (pitch toes down +, roll left edge up +), low-passed */
+            const double *F = Rfw[stance_of(c)];
+            const double tp = asin(clampd(-F[6], -1.0, 1.0)), tr = atan2(F[7], F[8]);
+            const double al = c->p.step_velocity_tau > 0.0 ? 1.0 - exp(-c->dt / c->p.step_velocity_tau) : 1.0;
+            if (isfinite(tp) && isfinite(tr)) {
+                const double w = c->tilt_valid ? al : 1.0;
+                c->tilt[0] += w * (clampd(tp, -0.3, 0.3) - c->tilt[0]);
+                c->tilt[1] += w * (clampd(tr, -0.3, 0.3) - c->tilt[1]);
+                c->tilt_valid = 1;
+            }
+        } else {
+            c->tilt[0] = c->tilt[1] = 0.0;
+        }
+        plan_joints(c, r, z, roll, pitch, swing_z, q);
+        lead_alpha = c->p.step_lead_tau > 0.0 ? 1.0 - exp(-c->dt / c->p.step_lead_tau) : 1.0;
+        for (side = 0; side < 2; ++side)
+            for (j = 0; j < AHC_LEG_JOINTS; ++j) {
+                const double lead = j == AHC_LEG_HIP_PITCH ? c->p.step_servo_lead_hip : c->p.step_servo_lead;
+                /* the plan's rate, low-passed over step_lead_tau so that the lead moves smoothly when
+                 * the plan's rate changes at once (a switch, a landing) */
+                const double rate = c->q_prev_valid ? (q[side][j] - c->q_prev[side][j]) / c->dt : 0.0;
+                double cmd;
+                if (!c->q_prev_valid) c->q_rate[side][j] = 0.0;
+                c->q_rate[side][j] += lead_alpha * (rate - c->q_rate[side][j]);
+                cmd = q[side][j] + clampd(lead * c->q_rate[side][j], -c->p.step_lead_max, c->p.step_lead_max);
+                if (isnan(c->blend_from[side][j]))
+                    c->blend_from[side][j] = (c->blend_from_flat && flat_q ? flat_q[side][j] : c->q_out[side][j]) - cmd;
+                out->q_ref[side][j] = cmd;
+                c->q_prev[side][j] = q[side][j];
+            }
+        c->q_prev_valid = 1;
+        for (i = 0; i < 2; ++i) {
+            out->com_ref[i] = r[i];
+            out->zmp_plan[i] = c->phase == AHC_STEP_SETTLE ? r[i] - a[i] / (c->omega * c->omega) : c->zmp[i];
+        }
+        out->active = 1;
+        blend(c, out);
+    } else {
+        ahc_step_handover(c, flat_q, out);
+    }
+}
+
+void ahc_step_handover(ahc_stepper *c, const double flat_q[2][AHC_LEG_JOINTS], ahc_step_outputs *out)
+{
+    int side, j;
+    if (!c || !c->valid || c->phase != AHC_STEP_STAND || !flat_q || c->steps == 0 ||
+        c->blend_time >= c->p.step_blend_time)
+        return;
+    /* after a step: from the step's last set points to the flat-footed layers' */
+    if (c->blend_time == 0.0)
+        for (side = 0; side < 2; ++side)
+            for (j = 0; j < AHC_LEG_JOINTS; ++j) c->blend_from[side][j] = c->q_out[side][j] - flat_q[side][j];
+    for (side = 0; side < 2; ++side)
+        for (j = 0; j < AHC_LEG_JOINTS; ++j) out->q_ref[side][j] = flat_q[side][j];
+    out->active = 1;
+    blend(c, out);
+}
+
+int ahc_step_state_validate(const ahc_stepper *c, char *msg, size_t msg_size)
+{
+    int side, j, i;
+    if (msg && msg_size > 0) msg[0] = '\0';
+    if (!c) return fail(msg, msg_size, AHC_ERR_NULL, "state pointer is NULL");
+    if (!c->valid) return AHC_OK;
+    if (c->phase < 0 || c->phase >= AHC_STEP_PHASES)
+        return fail(msg, msg_size, AHC_ERR_INCONSISTENT, "stepping phase %d outside 0..%d", c->phase, AHC_STEP_PHASES - 1);
+    if (c->swing_side < -1 || c->swing_side > 1 || (c->phase != AHC_STEP_STAND && c->swing_side < 0))
+        return fail(msg, msg_size, AHC_ERR_INCONSISTENT, "stepping swing side %d invalid", c->swing_side);
+    if (c->steps < 0 || c->est_valid < 0 || c->est_valid > 1 || c->q_prev_valid < 0 || c->q_prev_valid > 1 ||
+        c->tilt_valid < 0 || c->tilt_valid > 1 || c->pelvis_z_valid < 0 || c->pelvis_z_valid > 1 ||
+        c->blend_from_flat < 0 || c->blend_from_flat > 1)
+        return fail(msg, msg_size, AHC_ERR_INCONSISTENT, "stepping counters or flags corrupt");
+    {
+        const double v[] = {c->phase_time, c->phase_duration, c->step_clock, c->blend_time, c->pitch_time,
+                            c->pitch_prev, c->pitch_rate,
+                            c->knee_settle, c->com_prev[0], c->com_prev[1], c->com_rate[0], c->com_rate[1], c->c0[0],
+                            c->c0[1], c->v0[0], c->v0[1], c->zmp[0], c->zmp[1], c->feet[0][0], c->feet[0][1],
+                            c->feet[1][0], c->feet[1][1], c->landing[0], c->landing[1], c->swing_pos[0],
+                            c->swing_pos[1]};
+        for (i = 0; i < (int)(sizeof v / sizeof v[0]); ++i)
+            if (!isfinite(v[i])) return fail(msg, msg_size, AHC_ERR_NONFINITE, "stepping state value %d not finite", i);
+    }
+    for (side = 0; side < 2; ++side)
+        for (j = 0; j < AHC_LEG_JOINTS; ++j)
+            if (!isfinite(c->q_out[side][j]) || !isfinite(c->q_prev[side][j]) || isinf(c->blend_from[side][j]))
+                return fail(msg, msg_size, AHC_ERR_NONFINITE, "stepping joint reference not finite");
+    return AHC_OK;
+}

@@ -1,0 +1,318 @@
+/*
+ * test_stepping.c — the stepping layer (stepping.h, docs/controller.md §12) on a kinematic robot
+ * that follows its joint references exactly: the estimate and the plan agree, the swing foot lands
+ * where it was sent, the phases run in order, and the references are continuous across every switch.
+ */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "ahc/controller3d.h"
+#include "ahc/stepping.h"
+#include "ahc_test.h"
+#include "hoap2/nominal.h"
+
+/* The trunk's attitude of a robot standing flat on leg `side` with joint angles q: the IMU's
+ * roll and pitch (R_trunk = Rf^T, Rf the foot's attitude relative to the trunk). */
+static void imu_of(const ahc_leg_geometry *g, const double q[AHC_LEG_JOINTS], double *roll, double *pitch)
+{
+    double a[3], Rf[9];
+    ahc_leg_fk_pose(g, q, a, Rf);
+    /* R = Rf^T: R[6] = Rf[2], R[7] = Rf[5], R[8] = Rf[8] */
+    *pitch = asin(-Rf[2]);
+    *roll = atan2(Rf[5], Rf[8]);
+}
+
+static void defaults(ahc_params *sp, ahc_frontal_params *fp, ahc_step_params *st)
+{
+    ahc_params_default(sp);
+    ahc_frontal_params_default(fp);
+    ahc_step_params_default(st);
+    st->stepping_enabled = 1;
+    st->step_servo_lead = st->step_servo_lead_hip = 0.0; /* the kinematic robot has no servo lag */
+}
+
+/* A robot falling forward about its ankles (both legs pitched by th, all else 0) until the step
+ * starts; then its joints are the step's references of the tick before. */
+static void test_kinematic_step(void)
+{
+    ahc_params sp;
+    ahc_frontal_params fp;
+    ahc_step_params st;
+    ahc_stepper c;
+    ahc_step_outputs out;
+    ahc_step_sensors s;
+    const ahc_leg_geometry g = ahc_test_hoap2_legs();
+    double flat[2][AHC_LEG_JOINTS], prev[2][AHC_LEG_JOINTS];
+    double th = 0.0, dth = 0.0, max_jump = 0.0, max_com_err = 0.0, max_rate[AHC_LEG_JOINTS] = {0};
+    const double weight = HOAP2_TOTAL_MASS * HOAP2_G;
+    int k, side, j, last_phase = AHC_STEP_STAND, phases_seen = 0, started = 0, ended = 0;
+    double landing[2] = {0, 0};
+    defaults(&sp, &fp, &st);
+    CHECK(ahc_step_init(&c, &st, &sp, &fp) == AHC_OK, "init");
+    memset(&s, 0, sizeof s);
+    memset(prev, 0, sizeof prev);
+    for (k = 0; k < 4000; ++k) {
+        if (!started) {
+            /* an inverted pendulum falling forward from rest */
+            const double omega2 = HOAP2_G / 0.26;
+            if (k > 100) {
+                dth += omega2 * sin(th + 0.002) * sp.sample_period;
+                th += dth * sp.sample_period;
+            }
+            memset(flat, 0, sizeof flat);
+            for (side = 0; side < 2; ++side) flat[side][AHC_LEG_ANKLE_PITCH] = th;
+            memcpy(s.q, flat, sizeof flat);
+            s.imu_pitch = th;
+            s.imu_roll = 0.0;
+            s.fz_left = s.fz_right = 0.5 * weight;
+        } else {
+            memset(flat, 0, sizeof flat); /* the flat-footed layers would hold the erect posture */
+            /* exact tracking: the references of the tick before */
+            memcpy(s.q, prev, sizeof prev);
+            {
+                const int stance = out.phase == AHC_STEP_SWING || out.phase == AHC_STEP_CLOSE
+                                       ? (out.swing_side == AHC_LEFT ? AHC_RIGHT : AHC_LEFT)
+                                       : AHC_LEFT;
+                imu_of(&g, s.q[stance], &s.imu_roll, &s.imu_pitch);
+                if (out.phase == AHC_STEP_SWING || out.phase == AHC_STEP_CLOSE) {
+                    /* the swing sole carries the weight once its plan has brought it down */
+                    const int down = c.phase_time >= st.step_swing_time;
+                    s.fz_left = out.swing_side == AHC_LEFT ? (down ? weight : 0.0) : weight;
+                    s.fz_right = out.swing_side == AHC_RIGHT ? (down ? weight : 0.0) : weight;
+                } else {
+                    s.fz_left = s.fz_right = 0.5 * weight;
+                }
+            }
+        }
+        ahc_step_step(&c, &s, (const double(*)[AHC_LEG_JOINTS])flat, &out);
+        if (out.active) {
+            double jump = 0.0;
+            if (started)
+                for (side = 0; side < 2; ++side)
+                    for (j = 0; j < AHC_LEG_JOINTS; ++j) jump = fmax(jump, fabs(out.q_ref[side][j] - prev[side][j]));
+            else
+                for (side = 0; side < 2; ++side)
+                    for (j = 0; j < AHC_LEG_JOINTS; ++j) jump = fmax(jump, fabs(out.q_ref[side][j] - flat[side][j]));
+            if (getenv("STEP_DEBUG") && started)
+                for (side = 0; side < 2; ++side)
+                    for (j = 0; j < AHC_LEG_JOINTS; ++j)
+                        if (fabs(out.q_ref[side][j] - prev[side][j]) > 0.005)
+                            fprintf(stderr, "rate tick %d phase %d t %.4f side %d joint %d: %.1f rad/s\n", k, out.phase,
+                                    c.phase_time, side, j, (out.q_ref[side][j] - prev[side][j]) / sp.sample_period);
+            if (jump > 0.02 && getenv("STEP_DEBUG"))
+                for (side = 0; side < 2; ++side)
+                    for (j = 0; j < AHC_LEG_JOINTS; ++j)
+                        if (fabs(out.q_ref[side][j] - prev[side][j]) > 0.02)
+                            fprintf(stderr, "tick %d phase %d t %.4f side %d joint %d: %.4f -> %.4f\n", k, out.phase,
+                                    c.phase_time, side, j, prev[side][j], out.q_ref[side][j]);
+            max_jump = fmax(max_jump, jump);
+            if (started)
+                for (side = 0; side < 2; ++side)
+                    for (j = 0; j < AHC_LEG_JOINTS; ++j)
+                        max_rate[j] = fmax(max_rate[j], fabs(out.q_ref[side][j] - prev[side][j]) / sp.sample_period);
+            memcpy(prev, out.q_ref, sizeof prev);
+            started = 1;
+            if (out.phase != AHC_STEP_STAND && c.phase_time > 0.05)
+                max_com_err = fmax(max_com_err, hypot(out.com[0] - out.com_ref[0], out.com[1] - out.com_ref[1]));
+        } else if (started) {
+            ended = 1;
+            break;
+        }
+        if (out.phase != last_phase) {
+            phases_seen |= 1 << out.phase;
+            if (last_phase == AHC_STEP_SWING) {
+                landing[0] = out.landing[0];
+                landing[1] = out.landing[1];
+            }
+            last_phase = out.phase;
+        }
+    }
+    CHECK(started, "a step started (capture point %.4f)", out.capture[0]);
+    CHECK(ended, "the step ended within 4 s (phase %d)", out.phase);
+    CHECK(phases_seen == ((1 << AHC_STEP_SHIFT) | (1 << AHC_STEP_SWING) | (1 << AHC_STEP_TRANSFER) |
+                          (1 << AHC_STEP_CLOSE) | (1 << AHC_STEP_SETTLE) | (1 << AHC_STEP_STAND)),
+          "every phase ran (mask 0x%x)", phases_seen);
+    CHECK(out.steps == 2, "two steps landed (%d)", out.steps);
+    CHECK(landing[0] > 0.02, "the first step went forward (landing x %.4f)", landing[0]);
+    CHECK(max_jump < 0.02, "the references move at most 0.02 rad per tick (%.4f)", max_jump);
+    CHECK(max_com_err < 2e-3, "the estimate follows the plan's CoM within 2 mm (%.5f)", max_com_err);
+    printf("kinematic step: landing (%.4f, %.4f), largest step of a reference %.5f rad/tick, CoM estimate - plan %.2e m\n",
+           landing[0], landing[1], max_jump, max_com_err);
+    /* what the plan asks of the servos (Hoap2Plant3D's vel_max: 5 rad/s; docs/controller.md §12.4) */
+    printf("kinematic step: fastest planned joint rates [rad/s]: hip yaw %.1f, hip pitch %.1f, hip roll %.1f, knee %.1f, "
+           "ankle pitch %.1f, ankle roll %.1f\n",
+           max_rate[0], max_rate[1], max_rate[2], max_rate[3], max_rate[4], max_rate[5]);
+}
+
+/* Validation names the parameter and its value. */
+static void test_params(void)
+{
+    ahc_params sp;
+    ahc_frontal_params fp;
+    ahc_step_params st;
+    char msg[256];
+    size_t n = 0, i;
+    const ahc_param_info *t = ahc_step_param_table(&n);
+    defaults(&sp, &fp, &st);
+    CHECK(ahc_step_params_validate(&st, &sp, &fp, msg, sizeof msg) == AHC_OK, "defaults valid: %s", msg);
+    st.step_swing_time = 0.0;
+    CHECK(ahc_step_params_validate(&st, &sp, &fp, msg, sizeof msg) == AHC_ERR_RANGE && strstr(msg, "step_swing_time"),
+          "a zero swing time is refused naming it: %s", msg);
+    defaults(&sp, &fp, &st);
+    st.step_width_max = 0.05;
+    CHECK(ahc_step_params_validate(&st, &sp, &fp, msg, sizeof msg) == AHC_ERR_INCONSISTENT && strstr(msg, "step_width_max"),
+          "a width below the stance is refused: %s", msg);
+    defaults(&sp, &fp, &st);
+    st.step_height = NAN;
+    CHECK(ahc_step_params_validate(&st, &sp, &fp, msg, sizeof msg) == AHC_ERR_NONFINITE, "NaN refused: %s", msg);
+    for (i = 0; i < n; ++i) CHECK(ahc_step_param_find(t[i].name) == &t[i], "find %s", t[i].name);
+    CHECK(ahc_step_param_find("no_such") == NULL, "unknown name");
+}
+
+/* With stepping off the 3D controller is the flat-footed layers alone: the outputs of an instance
+ * with other stepping parameters equal those of ahc3d_init's, bit for bit, and the layer never acts. */
+static void test_off_is_flat_footed(void)
+{
+    ahc_params sp;
+    ahc_frontal_params fp;
+    ahc_step_params st;
+    static ahc3d a, b;
+    ahc3d_sensors s;
+    ahc3d_outputs oa, ob;
+    int k, differ = 0, active = 0;
+    defaults(&sp, &fp, &st);
+    st.stepping_enabled = 0;
+    st.step_trigger_x = -0.05; /* would step at once if it were on */
+    st.step_height = 0.03;
+    CHECK(ahc3d_init(&a, &sp, &fp) == AHC_OK, "init a");
+    CHECK(ahc3d_init_stepping(&b, &sp, &fp, &st) == AHC_OK, "init b");
+    memset(&s, 0, sizeof s);
+    s.sag.fz = s.fz_left + s.fz_right;
+    for (k = 0; k < 3000; ++k) {
+        const double t = k * sp.sample_period;
+        s.sag.theta_ankle = 0.02 * sin(3.0 * t);
+        s.sag.theta_hip = -0.01 * sin(2.0 * t);
+        s.sag.zmp_x = 0.03 * sin(5.0 * t);
+        s.zmp_y = 0.02 * sin(4.0 * t);
+        s.fz_left = s.fz_right = 35.0;
+        s.sag.fz = 70.0;
+        s.q[0][AHC_LEG_ANKLE_PITCH] = s.q[1][AHC_LEG_ANKLE_PITCH] = s.sag.theta_ankle;
+        s.q[0][AHC_LEG_HIP_PITCH] = s.q[1][AHC_LEG_HIP_PITCH] = s.sag.theta_hip;
+        s.imu_pitch = s.sag.theta_ankle + s.sag.theta_hip;
+        ahc3d_step(&a, &s, &oa);
+        ahc3d_step(&b, &s, &ob);
+        differ |= memcmp(&oa, &ob, sizeof oa) != 0;
+        active |= ob.step.active || ob.step.phase != AHC_STEP_STAND;
+    }
+    CHECK(!differ, "stepping off: the outputs do not depend on the stepping parameters");
+    CHECK(!active, "stepping off: the layer never acts");
+}
+
+/* A capture point beyond the left sole's outer edge steps out with the left foot; one ahead of the
+ * toes steps with the foot away from its lateral side. */
+static void test_foot_choice(void)
+{
+    ahc_params sp;
+    ahc_frontal_params fp;
+    ahc_step_params st;
+    static ahc_stepper c;
+    ahc_step_sensors s;
+    ahc_step_outputs out;
+    const double flat[2][AHC_LEG_JOINTS] = {{0}};
+    int k, side;
+    const double weight = HOAP2_TOTAL_MASS * HOAP2_G;
+    struct { double roll, pitch; int swing; const char *what; } cases[] = {
+        {-0.3, 0.0, AHC_LEFT, "falling to the left: the left foot steps out"},
+        {0.3, 0.0, AHC_RIGHT, "falling to the right: the right foot steps out"},
+    };
+    for (side = 0; side < 2; ++side) {
+        defaults(&sp, &fp, &st);
+        CHECK(ahc_step_init(&c, &st, &sp, &fp) == AHC_OK, "init");
+        memset(&s, 0, sizeof s);
+        s.fz_left = s.fz_right = 0.5 * weight;
+        for (k = 0; k < 400; ++k) {
+            /* the whole robot turns about the feet's outer edge, faster and faster */
+            const double a = cases[side].roll * (k > 50 ? (k - 50) * (k - 50) / 350.0 / 350.0 : 0.0);
+            s.imu_roll = a;
+            s.q[0][AHC_LEG_ANKLE_ROLL] = s.q[1][AHC_LEG_ANKLE_ROLL] = 0.0;
+            ahc_step_step(&c, &s, flat, &out);
+            if (out.phase != AHC_STEP_STAND) break;
+        }
+        CHECK(out.phase != AHC_STEP_STAND && out.swing_side == cases[side].swing, "%s (phase %d, swing %d, capture y %.4f)",
+              cases[side].what, out.phase, out.swing_side, out.capture[1]);
+    }
+}
+
+/* A forged state is refused. */
+static void test_state_validate(void)
+{
+    ahc_params sp;
+    ahc_frontal_params fp;
+    ahc_step_params st;
+    static ahc_stepper c, f;
+    char msg[200];
+    defaults(&sp, &fp, &st);
+    CHECK(ahc_step_init(&c, &st, &sp, &fp) == AHC_OK, "init");
+    CHECK(ahc_step_state_validate(&c, msg, sizeof msg) == AHC_OK, "fresh state valid: %s", msg);
+    f = c;
+    f.phase = 9;
+    CHECK(ahc_step_state_validate(&f, msg, sizeof msg) != AHC_OK, "phase 9 refused");
+    f = c;
+    f.phase = AHC_STEP_SWING;
+    f.swing_side = -1;
+    CHECK(ahc_step_state_validate(&f, msg, sizeof msg) != AHC_OK, "a swing without a swing foot refused");
+    f = c;
+    f.c0[0] = INFINITY;
+    CHECK(ahc_step_state_validate(&f, msg, sizeof msg) != AHC_OK, "a non-finite reference refused");
+}
+
+/* Non-finite readings in the middle of a step: the step goes on as planned and every output stays
+ * finite. */
+static void test_nonfinite_inputs(void)
+{
+    ahc_params sp;
+    ahc_frontal_params fp;
+    ahc_step_params st;
+    static ahc_stepper c;
+    ahc_step_sensors s;
+    ahc_step_outputs out;
+    const double flat[2][AHC_LEG_JOINTS] = {{0}};
+    int k, side, j, finite = 1, stepped = 0;
+    defaults(&sp, &fp, &st);
+    st.step_trigger_x = -0.05; /* steps at once */
+    CHECK(ahc_step_init(&c, &st, &sp, &fp) == AHC_OK, "init");
+    memset(&s, 0, sizeof s);
+    s.fz_left = s.fz_right = 35.0;
+    for (k = 0; k < 2000; ++k) {
+        if (k % 7 == 3 && k > 100) {
+            s.imu_pitch = NAN;
+            s.q[k % 2][k % AHC_LEG_JOINTS] = NAN;
+            s.fz_left = INFINITY;
+        } else {
+            memset(&s, 0, sizeof s);
+            s.fz_left = s.fz_right = 35.0;
+        }
+        ahc_step_step(&c, &s, flat, &out);
+        stepped |= out.phase != AHC_STEP_STAND;
+        for (side = 0; side < 2; ++side)
+            for (j = 0; j < AHC_LEG_JOINTS; ++j) finite = finite && isfinite(out.q_ref[side][j]);
+        finite = finite && isfinite(out.capture[0]) && isfinite(out.capture[1]) && isfinite(out.landing[0]) &&
+                 isfinite(out.com_ref[0]) && isfinite(out.zmp_plan[1]);
+    }
+    CHECK(stepped, "a step ran");
+    CHECK(finite, "every output finite through non-finite readings");
+    CHECK(ahc_step_state_validate(&c, NULL, 0) == AHC_OK, "the state stays valid");
+}
+
+int main(void)
+{
+    test_nonfinite_inputs();
+    test_params();
+    test_off_is_flat_footed();
+    test_foot_choice();
+    test_state_validate();
+    test_kinematic_step();
+    TEST_MAIN_END();
+}

@@ -1,0 +1,116 @@
+#!/usr/bin/env python3
+"""The stepping layer on the 3D plant, measured (docs/controller.md §12.4).
+
+Back pushes (0.2 s and 1 s pulses, 50 ms ramps, at the trunk's push point, from 1 s) on
+paper_five_pushes_3d's base, run with the 3D controller:
+
+1. flat-footed (stepping on, its thresholds out of reach, so that the layer only estimates): the
+   range of the capture point's x that each push produced and whether the robot stood. The pushes
+   that stand keep the capture point inside the soles: the evidence for the decision's thresholds;
+2. stepping on, the layer's defaults (or --set NAME=VALUE ...): the outcome, the steps landed, where
+   the first step landed against where it was sent, and the fastest joint set point rate asked of
+   the servos during the swing (Hoap2Plant3D's vel_max is 5 rad/s).
+
+    .venv/bin/python scripts/stepping_trials.py [--set NAME=VALUE ...]
+
+Runs on the native engine in well under a minute.
+"""
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import sys
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+from anklehip.files.paths import find_scenario  # noqa: E402
+from anklehip.files.scenario import PushProfile, PushSegment, load_scenario  # noqa: E402
+from anklehip.running import native  # noqa: E402
+from anklehip.running.master import Models, simulate  # noqa: E402
+
+FLAT = [(14, 0.2), (17, 0.2), (19, 0.2), (20, 0.2), (21, 0.2), (22, 0.2), (-10, 0.2), (-13, 0.2), (-14, 0.2),
+        (8, 1.0), (9, 1.0), (10, 1.0), (-6, 1.0), (-7, 1.0)]
+STEPPING = [(21, 0.2), (22, 0.2), (24, 0.2), (26, 0.2), (10, 1.0), (12, 1.0)]
+JOINTS = ("hip_yaw", "hip", "hip_roll", "knee", "ankle", "ankle_roll")
+
+
+def run(scenario, models, engine, force, duration, overrides):
+    push = PushProfile.from_segments([PushSegment("pulse", t=1.0, force=float(force), duration=duration, rise=0.05)])
+    sc = dataclasses.replace(scenario, controller_model="3d", push=push, stop_time=4.0)
+    return simulate(sc, models, controller_overrides=overrides, progress=False, engine=engine)
+
+
+def col(d, name):
+    for n in (name, "controller." + name):
+        if n in d.dtype.names:
+            return d[n]
+    raise KeyError(name)
+
+
+def set_point(d, side, joint):
+    """The joint's set point: the both-legs output plus the per-leg one (Hoap2Plant3D's rule)."""
+    per_leg = col(d, f"q_{side}_{joint}_ref")
+    both = {"hip": "theta_hip_ref", "ankle": "theta_ankle_ref"}.get(joint)
+    return per_leg + col(d, both) if both else per_leg
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
+                    help="a stepping (or any controller) parameter for part 2")
+    args = ap.parse_args(argv)
+    extra = {}
+    for kv in args.set:
+        k, _, v = kv.partition("=")
+        extra[k] = float(v)
+    scenario = load_scenario(find_scenario("paper_five_pushes_3d"))
+    models = Models.load(None, plant_model="3d", controller_model="3d")
+    engine = native.default_engine()
+
+    print("1. flat-footed: the capture point of the stepping layer's estimate (thresholds out of reach)")
+    print("| push [N] | duration [s] | stood | capture point x, min .. max [mm] |")
+    print("|---|---|---|---|")
+    watch = {"stepping_enabled": 1, "step_trigger_x": 1.0, "step_trigger_y": 1.0}
+    for force, duration in FLAT:
+        r = run(scenario, models, engine, force, duration, watch)
+        xi = col(r.data, "capture_point_x")
+        print(f"| {force:+d} | {duration:g} | {'yes' if r.outcome == 'completed' else 'no, at %.2f s' % r.end_time} | "
+              f"{1e3 * xi.min():+.1f} .. {1e3 * xi.max():+.1f} |")
+
+    print("\n2. stepping on" + (f" ({', '.join(args.set)})" if args.set else " (the layer's defaults)"))
+    print("| push [N] | duration [s] | outcome | steps | first landing x, sent -> landed [mm] | "
+          "fastest set point rate in the swing [rad/s] (joint) |")
+    print("|---|---|---|---|---|---|")
+    for force, duration in STEPPING:
+        r = run(scenario, models, engine, force, duration, {"stepping_enabled": 1, **extra})
+        d = r.data
+        phase = col(d, "step_phase")
+        land = col(d, "landing_x")
+        sent = landed = float("nan")
+        swing = np.flatnonzero(phase == 2)
+        if swing.size:
+            sent = land[swing[-1]]
+            after = np.flatnonzero((phase == 3) & (np.arange(len(phase)) > swing[0]))
+            if after.size:
+                landed = land[after[0]]
+        dt = float(d["time"][1] - d["time"][0])
+        stepping = phase == 2  # the swing
+        fastest, which = 0.0, "-"
+        for side in ("left", "right"):
+            for joint in JOINTS:
+                q = set_point(d, side, joint)
+                rate = np.abs(np.diff(q)) / dt
+                rate = rate[stepping[1:] & stepping[:-1]]
+                if rate.size and rate.max() > fastest:
+                    fastest, which = float(rate.max()), f"{side} {joint}"
+        outcome = "stood" if r.outcome == "completed" else f"fell at {r.end_time:.2f} s"
+        print(f"| {force:+d} | {duration:g} | {outcome} | {int(col(d, 'steps')[-1])} | "
+              f"{1e3 * sent:.0f} -> {1e3 * landed:.0f} | {fastest:.1f} ({which}) |")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
