@@ -31,6 +31,7 @@ void ahc_step_params_default(ahc_step_params *p)
     p->step_pelvis_rate = 0.1;
     p->step_touchdown_tol = 0.015;
     p->step_lead_tau = 0.03;
+    p->step_dcm_gain = 0.0;
     p->step_zmp_margin = 0.01;
     p->step_touchdown_fz = 0.2 * HOAP2_TOTAL_MASS * HOAP2_G;
     p->step_transfer_time_min = 0.05;
@@ -74,6 +75,7 @@ static const ahc_param_info k_stable[] = {
     SD(step_pelvis_rate, "m/s", 0.001, 10.0, "The hips' planned height moves at most this fast"),
     SD(step_touchdown_tol, "m", 0.0, 1.0, "A loaded swing sole counts as landed only this close to its landing point"),
     SD(step_lead_tau, "s", 0.0, 1.0, "Low-pass time constant of the reference rate the servo lead multiplies"),
+    SD(step_dcm_gain, "1/s", 0.0, 100.0, "Capture-point feedback gain: the planned ZMP moves by (1 + gain / omega) times the capture point's error"),
     SD(step_pitch_time, "s", 0.05, 5.0, "The trunk's pitch returns to erect over this (a quintic from the measured pitch and rate at the decision and at the landing)"),
 };
 #define STABLE_LEN (sizeof k_stable / sizeof k_stable[0])
@@ -393,10 +395,10 @@ static void reference(const ahc_stepper *c, double t, double r[2], double v[2], 
         if (c->phase == AHC_STEP_SETTLE) {
             ahc_quintic_eval(&c->settle[i], t, &r[i], &v[i], &a[i]);
         } else {
-            const double w = c->omega, ch = cosh(w * t), sh = sinh(w * t), d = c->c0[i] - c->zmp[i];
-            r[i] = c->zmp[i] + d * ch + c->v0[i] / w * sh;
-            v[i] = d * w * sh + c->v0[i] * ch;
-            a[i] = w * w * (r[i] - c->zmp[i]);
+            /* the pendulum's state, integrated tick by tick (pendulum_tick) */
+            r[i] = c->cref[i];
+            v[i] = c->vref[i];
+            a[i] = c->omega * c->omega * (r[i] - c->zmp[i]);
         }
     }
 }
@@ -532,6 +534,34 @@ static void start_settle(ahc_stepper *c)
     }
 }
 
+/* One tick of the pendulum reference in a phase that has one (all but SETTLE): its ZMP is the
+ * phase's planned one moved by the capture point's error, p = zmp + (1 + step_dcm_gain / omega)
+ * (xi_measured - xi_reference) (the capture-point tracking law of Englsberger et al. 2015), inside
+ * the support (the stance sole, or both soles' bounding box, step_zmp_margin inside); the reference
+ * then moves as the pendulum over p. Returns p. */
+static void pendulum_tick(ahc_stepper *c, const double xi_meas[2], double p_out[2])
+{
+    double b[4], lo[2], hi[2];
+    int i;
+    if (one_foot(c->phase)) {
+        sole_box(c, stance_of(c), b);
+        lo[0] = b[0]; hi[0] = b[1]; lo[1] = b[2]; hi[1] = b[3];
+    } else {
+        double b2[4];
+        sole_box(c, AHC_LEFT, b);
+        sole_box(c, AHC_RIGHT, b2);
+        lo[0] = fmin(b[0], b2[0]); hi[0] = fmax(b[1], b2[1]);
+        lo[1] = fmin(b[2], b2[2]); hi[1] = fmax(b[3], b2[3]);
+    }
+    for (i = 0; i < 2; ++i) {
+        const double xi_ref = c->cref[i] + c->vref[i] / c->omega;
+        const double p = clampd(c->zmp[i] + (1.0 + c->p.step_dcm_gain / c->omega) * (xi_meas[i] - xi_ref), lo[i], hi[i]);
+        c->vref[i] += c->omega * c->omega * (c->cref[i] - p) * c->dt;
+        c->cref[i] += c->vref[i] * c->dt;
+        p_out[i] = p;
+    }
+}
+
 /* ---- the joints ------------------------------------------------------------------------------- */
 
 /* The planned joint angles: the pelvis that carries the CoM reference r over the feet (the stance
@@ -652,8 +682,8 @@ static void start_step(ahc_stepper *c, const double com[3], const double xi[2])
     else c->swing_side = xi[1] >= 0.5 * (c->feet[AHC_LEFT][1] + c->feet[AHC_RIGHT][1]) ? AHC_RIGHT : AHC_LEFT;
     sigma_swing = c->swing_side == AHC_LEFT ? 1 : -1;
     for (i = 0; i < 2; ++i) {
-        c->c0[i] = com[i];
-        c->v0[i] = c->com_rate[i];
+        c->c0[i] = c->cref[i] = com[i];
+        c->v0[i] = c->vref[i] = c->com_rate[i];
     }
     c->phase_time = 0.0;
     c->step_clock = 0.0;
@@ -855,7 +885,18 @@ void ahc_step_step(ahc_stepper *c, const ahc_step_sensors *s, const double flat_
          * length's would not); the hips' height follows from the legs' lean */
         const double knee_max = 2.0 * acos(1.0 - c->p.step_pelvis_drop / c->l1);
         double knee = knee_max * smooth01(c->step_clock / c->p.step_drop_time);
-        reference(c, c->phase_time, r, v, a);
+        double p_cmd[2];
+        if (c->phase == AHC_STEP_SETTLE) {
+            reference(c, c->phase_time, r, v, a);
+            for (i = 0; i < 2; ++i) {
+                c->cref[i] = r[i];
+                c->vref[i] = v[i];
+                p_cmd[i] = r[i] - a[i] / (c->omega * c->omega);
+            }
+        } else {
+            pendulum_tick(c, xi, p_cmd);
+            reference(c, c->phase_time, r, v, a);
+        }
         ahc_quintic_eval(&c->pitch_plan, c->pitch_time, &pitch, NULL, NULL);
         c->pitch_time += c->dt;
         if (c->phase == AHC_STEP_SETTLE) knee = c->knee_settle * (1.0 - smooth01(c->phase_time / c->phase_duration));
@@ -907,7 +948,7 @@ void ahc_step_step(ahc_stepper *c, const ahc_step_sensors *s, const double flat_
         c->q_prev_valid = 1;
         for (i = 0; i < 2; ++i) {
             out->com_ref[i] = r[i];
-            out->zmp_plan[i] = c->phase == AHC_STEP_SETTLE ? r[i] - a[i] / (c->omega * c->omega) : c->zmp[i];
+            out->zmp_plan[i] = p_cmd[i];
         }
         out->active = 1;
         blend(c, out);
@@ -950,7 +991,7 @@ int ahc_step_state_validate(const ahc_stepper *c, char *msg, size_t msg_size)
         const double v[] = {c->phase_time, c->phase_duration, c->step_clock, c->blend_time, c->pitch_time,
                             c->pitch_prev, c->pitch_rate,
                             c->knee_settle, c->com_prev[0], c->com_prev[1], c->com_rate[0], c->com_rate[1], c->c0[0],
-                            c->c0[1], c->v0[0], c->v0[1], c->zmp[0], c->zmp[1], c->feet[0][0], c->feet[0][1],
+                            c->c0[1], c->v0[0], c->v0[1], c->cref[0], c->cref[1], c->vref[0], c->vref[1], c->zmp[0], c->zmp[1], c->feet[0][0], c->feet[0][1],
                             c->feet[1][0], c->feet[1][1], c->landing[0], c->landing[1], c->swing_pos[0],
                             c->swing_pos[1]};
         for (i = 0; i < (int)(sizeof v / sizeof v[0]); ++i)
