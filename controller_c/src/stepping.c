@@ -32,6 +32,8 @@ void ahc_step_params_default(ahc_step_params *p)
     p->step_touchdown_tol = 0.015;
     p->step_lead_tau = 0.03;
     p->step_dcm_gain = 0.0;
+    p->step_shift_inset = 0.03;
+    p->step_dcm_feedback = 0;
     p->step_zmp_margin = 0.01;
     p->step_touchdown_fz = 0.2 * HOAP2_TOTAL_MASS * HOAP2_G;
     p->step_transfer_time_min = 0.05;
@@ -75,6 +77,8 @@ static const ahc_param_info k_stable[] = {
     SD(step_pelvis_rate, "m/s", 0.001, 10.0, "The hips' planned height moves at most this fast"),
     SD(step_touchdown_tol, "m", 0.0, 1.0, "A loaded swing sole counts as landed only this close to its landing point"),
     SD(step_lead_tau, "s", 0.0, 1.0, "Low-pass time constant of the reference rate the servo lead multiplies"),
+    SD(step_shift_inset, "m", 0.0, 0.05, "The weight shift moves the capture point to this far inside of the stance ankle (toward the other foot)"),
+    SI(step_dcm_feedback, 0.0, 1.0, "1: the pendulum reference's ZMP tracks the measured capture point (Englsberger et al. 2015); 0: the open-loop pendulum"),
     SD(step_dcm_gain, "1/s", 0.0, 100.0, "Capture-point feedback gain: the planned ZMP moves by (1 + gain / omega) times the capture point's error"),
     SD(step_pitch_time, "s", 0.05, 5.0, "The trunk's pitch returns to erect over this (a quintic from the measured pitch and rate at the decision and at the landing)"),
 };
@@ -386,20 +390,16 @@ static void sole_box(const ahc_stepper *c, int side, double b[4])
     b[3] = c->feet[side][1] + 0.5 * c->sole_width - m;
 }
 
-/* The CoM reference's state at time t of this phase (the pendulum under the phase's ZMP, or
- * SETTLE's quintic). */
+/* The CoM reference's state now: the pendulum over the phase's planned ZMP, integrated tick by
+ * tick (pendulum_tick). */
 static void reference(const ahc_stepper *c, double t, double r[2], double v[2], double a[2])
 {
     int i;
+    (void)t;
     for (i = 0; i < 2; ++i) {
-        if (c->phase == AHC_STEP_SETTLE) {
-            ahc_quintic_eval(&c->settle[i], t, &r[i], &v[i], &a[i]);
-        } else {
-            /* the pendulum's state, integrated tick by tick (pendulum_tick) */
-            r[i] = c->cref[i];
-            v[i] = c->vref[i];
-            a[i] = c->omega * c->omega * (r[i] - c->zmp[i]);
-        }
+        r[i] = c->cref[i];
+        v[i] = c->vref[i];
+        a[i] = c->omega * c->omega * (r[i] - c->zmp[i]);
     }
 }
 
@@ -522,19 +522,32 @@ static void start_transfer(ahc_stepper *c)
     (void)p;
 }
 
+/* SETTLE: the pendulum's ZMP, inside both soles, brings the capture point over the feet's mid-point
+ * in the shortest time (as TRANSFER's), then stays there: the CoM converges to it. */
 static void start_settle(ahc_stepper *c)
 {
-    double r[2], v[2], a[2];
+    double b[2][4], lo[2], hi[2], T[2], p[2];
     int i;
-    reference(c, c->phase_time, r, v, a);
-    begin_phase(c, AHC_STEP_SETTLE, c->p.step_settle_time);
+    begin_phase(c, AHC_STEP_SETTLE, 0.0);
+    sole_box(c, AHC_LEFT, b[0]);
+    sole_box(c, AHC_RIGHT, b[1]);
+    lo[0] = fmin(b[0][0], b[1][0]); hi[0] = fmax(b[0][1], b[1][1]);
+    lo[1] = fmin(b[0][2], b[1][2]); hi[1] = fmax(b[0][3], b[1][3]);
     for (i = 0; i < 2; ++i) {
-        const double mid = 0.5 * (c->feet[AHC_LEFT][i] + c->feet[AHC_RIGHT][i]);
-        ahc_quintic_init(&c->settle[i], r[i], v[i], a[i], mid, 0.0, 0.0, c->p.step_settle_time);
+        c->settle_mid[i] = 0.5 * (c->feet[AHC_LEFT][i] + c->feet[AHC_RIGHT][i]);
+        T[i] = pendulum_transfer(c, xi0(c, i), c->settle_mid[i], lo[i], hi[i], 0.0, &p[i]);
     }
+    c->settle_capture_time = fmax(T[0], T[1]);
+    for (i = 0; i < 2; ++i) {
+        const double E = exp(c->omega * c->settle_capture_time);
+        c->zmp[i] = fabs(c->settle_mid[i] - xi0(c, i)) < 1e-9
+                        ? c->settle_mid[i]
+                        : clampd((c->settle_mid[i] - xi0(c, i) * E) / (1.0 - E), lo[i], hi[i]);
+    }
+    c->phase_duration = c->settle_capture_time + c->p.step_settle_time;
 }
 
-/* One tick of the pendulum reference in a phase that has one (all but SETTLE): its ZMP is the
+/* One tick of the pendulum reference: its ZMP is the
  * phase's planned one moved by the capture point's error, p = zmp + (1 + step_dcm_gain / omega)
  * (xi_measured - xi_reference) (the capture-point tracking law of Englsberger et al. 2015), inside
  * the support (the stance sole, or both soles' bounding box, step_zmp_margin inside); the reference
@@ -553,9 +566,14 @@ static void pendulum_tick(ahc_stepper *c, const double xi_meas[2], double p_out[
         lo[0] = fmin(b[0], b2[0]); hi[0] = fmax(b[1], b2[1]);
         lo[1] = fmin(b[2], b2[2]); hi[1] = fmax(b[3], b2[3]);
     }
+    if (c->phase == AHC_STEP_SETTLE && c->phase_time >= c->settle_capture_time) {
+        c->zmp[0] = c->settle_mid[0];
+        c->zmp[1] = c->settle_mid[1];
+    }
     for (i = 0; i < 2; ++i) {
         const double xi_ref = c->cref[i] + c->vref[i] / c->omega;
-        const double p = clampd(c->zmp[i] + (1.0 + c->p.step_dcm_gain / c->omega) * (xi_meas[i] - xi_ref), lo[i], hi[i]);
+        const double fb = c->p.step_dcm_feedback ? (1.0 + c->p.step_dcm_gain / c->omega) * (xi_meas[i] - xi_ref) : 0.0;
+        const double p = clampd(c->zmp[i] + fb, lo[i], hi[i]);
         c->vref[i] += c->omega * c->omega * (c->cref[i] - p) * c->dt;
         c->cref[i] += c->vref[i] * c->dt;
         p_out[i] = p;
@@ -692,7 +710,9 @@ static void start_step(ahc_stepper *c, const double com[3], const double xi[2])
         const int a = stance_of(c);
         double b[4], T = 0.0;
         const double p_y = c->feet[c->swing_side][1] + sigma_swing * (w2 - c->p.step_zmp_margin);
-        const double ratio = (c->feet[a][1] - p_y) / (xi[1] - p_y);
+        /* the target: the stance ankle, step_shift_inset toward the other foot */
+        const double aim = c->feet[a][1] + sigma_swing * c->p.step_shift_inset;
+        const double ratio = (aim - p_y) / (xi[1] - p_y);
         if (ratio > 1.0) T = fmin(log(ratio) / c->omega, c->p.step_shift_time_max);
         sole_box(c, a, b);
         c->zmp[0] = clampd(xi[0], b[0], b[1]);
@@ -886,17 +906,8 @@ void ahc_step_step(ahc_stepper *c, const ahc_step_sensors *s, const double flat_
         const double knee_max = 2.0 * acos(1.0 - c->p.step_pelvis_drop / c->l1);
         double knee = knee_max * smooth01(c->step_clock / c->p.step_drop_time);
         double p_cmd[2];
-        if (c->phase == AHC_STEP_SETTLE) {
-            reference(c, c->phase_time, r, v, a);
-            for (i = 0; i < 2; ++i) {
-                c->cref[i] = r[i];
-                c->vref[i] = v[i];
-                p_cmd[i] = r[i] - a[i] / (c->omega * c->omega);
-            }
-        } else {
-            pendulum_tick(c, xi, p_cmd);
-            reference(c, c->phase_time, r, v, a);
-        }
+        pendulum_tick(c, xi, p_cmd);
+        reference(c, c->phase_time, r, v, a);
         ahc_quintic_eval(&c->pitch_plan, c->pitch_time, &pitch, NULL, NULL);
         c->pitch_time += c->dt;
         if (c->phase == AHC_STEP_SETTLE) knee = c->knee_settle * (1.0 - smooth01(c->phase_time / c->phase_duration));

@@ -88,6 +88,8 @@ typedef struct {
     double step_pelvis_rate;   /* the hips' planned height moves at most this fast [m/s]          */
     double step_touchdown_tol; /* a loaded swing sole has landed only this close to its target [m] */
     double step_lead_tau;      /* low-pass of the reference rate the servo lead multiplies [s]    */
+    double step_shift_inset;   /* SHIFT moves the capture point this far inside of the stance ankle [m] */
+    int step_dcm_feedback;     /* 1: the reference's ZMP tracks the measured capture point           */
     double step_dcm_gain;      /* capture-point feedback: the planned ZMP moves by (1 + gain/omega)
                                   times the measured minus the reference capture point [1/s]     */
 } ahc_step_params;
@@ -144,7 +146,8 @@ typedef struct {
     double phase_duration;
     double c0[2], v0[2];        /* the CoM reference at the phase's start                          */
     double cref[2], vref[2];    /* the CoM reference and its rate now                              */
-    ahc_quintic settle[2];      /* SETTLE: the CoM reference                                       */
+    double settle_mid[2];       /* SETTLE: the feet's mid-point                                     */
+    double settle_capture_time; /* SETTLE: when the capture point reaches it [s]                    */
     double swing_from[2], landing[2];
     ahc_quintic swing[2];       /* the swing foot's x, y                                           */
     double swing_pos[2], swing_vel[2], swing_acc[2];
