@@ -1002,7 +1002,9 @@ int ahc_step_state_validate(const ahc_stepper *c, char *msg, size_t msg_size)
         const double v[] = {c->phase_time, c->phase_duration, c->step_clock, c->blend_time, c->pitch_time,
                             c->pitch_prev, c->pitch_rate,
                             c->knee_settle, c->com_prev[0], c->com_prev[1], c->com_rate[0], c->com_rate[1], c->c0[0],
-                            c->c0[1], c->v0[0], c->v0[1], c->cref[0], c->cref[1], c->vref[0], c->vref[1], c->zmp[0], c->zmp[1], c->feet[0][0], c->feet[0][1],
+                            c->c0[1], c->v0[0], c->v0[1], c->cref[0], c->cref[1], c->vref[0], c->vref[1], c->zmp[0], c->zmp[1],
+                            c->settle_mid[0], c->settle_mid[1], c->settle_capture_time, c->tilt[0], c->tilt[1],
+                            c->pelvis_z, c->knee_settle, c->feet[0][0], c->feet[0][1],
                             c->feet[1][0], c->feet[1][1], c->landing[0], c->landing[1], c->swing_pos[0],
                             c->swing_pos[1]};
         for (i = 0; i < (int)(sizeof v / sizeof v[0]); ++i)
