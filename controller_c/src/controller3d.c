@@ -168,7 +168,8 @@ int ahc3d_state_validate(const ahc3d *c, char *msg, size_t msg_size)
     if (rc != AHC_OK) return rc;
     rc = ahc_frontal_state_validate(&c->frontal, msg, msg_size);
     if (rc != AHC_OK) return rc;
-    rc = ahc_step_state_validate(&c->step, msg, msg_size);
+    rc = c->frontal.valid ? ahc_step_state_consistent(&c->step, &c->sag.p, &c->frontal.f, msg, msg_size)
+                          : ahc_step_state_validate(&c->step, msg, msg_size);
     if (rc != AHC_OK) return rc;
     if (c->legs.thigh != c->frontal.f.thigh || c->legs.shank != c->frontal.f.shank ||
         c->legs.hip_y != c->frontal.f.hip_y || c->legs.ankle_y != c->frontal.f.ankle_y)

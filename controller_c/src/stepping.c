@@ -984,6 +984,43 @@ void ahc_step_handover(ahc_stepper *c, const double flat_q[2][AHC_LEG_JOINTS], a
     blend(c, out);
 }
 
+int ahc_step_state_consistent(const ahc_stepper *c, const ahc_params *sp, const ahc_frontal_params *fp, char *msg,
+                              size_t msg_size)
+{
+    ahc_stepper fresh;
+    int rc;
+    if (msg && msg_size > 0) msg[0] = '\0';
+    if (!c || !sp || !fp) return fail(msg, msg_size, AHC_ERR_NULL, "state pointer is NULL");
+    if (!c->valid) return AHC_OK;
+    rc = ahc_step_init(&fresh, &c->p, sp, fp);
+    if (rc != AHC_OK) {
+        ahc_step_params_validate(&c->p, sp, fp, msg, msg_size);
+        return rc;
+    }
+    {
+        /* the robot's numbers the layer copied at init must be the parameters' */
+        const struct { const char *name; double a, b; } v[] = {
+            {"g", c->g, fresh.g}, {"mass", c->mass, fresh.mass}, {"m1", c->m1, fresh.m1}, {"m2", c->m2, fresh.m2},
+            {"lg1", c->lg1, fresh.lg1}, {"l1", c->l1, fresh.l1}, {"lg2", c->lg2, fresh.lg2},
+            {"link2_com_x", c->link2_com_x, fresh.link2_com_x}, {"feet_mass", c->feet_mass, fresh.feet_mass},
+            {"feet_com_x", c->feet_com_x, fresh.feet_com_x}, {"feet_com_z", c->feet_com_z, fresh.feet_com_z},
+            {"ankle_height", c->ankle_height, fresh.ankle_height}, {"toe_x", c->toe_x, fresh.toe_x},
+            {"heel_x", c->heel_x, fresh.heel_x}, {"sole_width", c->sole_width, fresh.sole_width},
+            {"hip_y", c->hip_y, fresh.hip_y}, {"ankle_y", c->ankle_y, fresh.ankle_y}, {"omega", c->omega, fresh.omega},
+            {"z_com", c->z_com, fresh.z_com}, {"thigh", c->legs.thigh, fresh.legs.thigh},
+            {"shank", c->legs.shank, fresh.legs.shank}, {"legs.hip_y", c->legs.hip_y, fresh.legs.hip_y},
+            {"legs.ankle_y", c->legs.ankle_y, fresh.legs.ankle_y}, {"sample_period", c->dt, fresh.dt},
+            {"pitch_erect", c->pitch_erect, fresh.pitch_erect}};
+        size_t i;
+        for (i = 0; i < sizeof v / sizeof v[0]; ++i)
+            if (memcmp(&v[i].a, &v[i].b, sizeof(double)) != 0)
+                return fail(msg, msg_size, AHC_ERR_INCONSISTENT,
+                            "%s = %.17g in the stepping layer's copy, %.17g from the robot's parameters", v[i].name,
+                            v[i].a, v[i].b);
+    }
+    return ahc_step_state_validate(c, msg, msg_size);
+}
+
 int ahc_step_state_validate(const ahc_stepper *c, char *msg, size_t msg_size)
 {
     int side, j, i;

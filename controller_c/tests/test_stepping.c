@@ -266,6 +266,15 @@ static void test_state_validate(void)
     f = c;
     f.c0[0] = INFINITY;
     CHECK(ahc_step_state_validate(&f, msg, sizeof msg) != AHC_OK, "a non-finite reference refused");
+    CHECK(ahc_step_state_consistent(&c, &sp, &fp, msg, sizeof msg) == AHC_OK, "consistent with its parameters: %s", msg);
+    f = c;
+    f.g = 9.0;
+    CHECK(ahc_step_state_consistent(&f, &sp, &fp, msg, sizeof msg) == AHC_ERR_INCONSISTENT && strstr(msg, "g = "),
+          "a copy of g that is not the parameters' refused: %s", msg);
+    f = c;
+    f.p.step_swing_time = -1.0;
+    CHECK(ahc_step_state_consistent(&f, &sp, &fp, msg, sizeof msg) == AHC_ERR_RANGE && strstr(msg, "step_swing_time"),
+          "an invalid stepping parameter refused: %s", msg);
 }
 
 /* Non-finite readings in the middle of a step: the step goes on as planned and every output stays

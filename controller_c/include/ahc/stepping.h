@@ -182,6 +182,10 @@ void ahc_step_step(ahc_stepper *c, const ahc_step_sensors *s, const double flat_
  * otherwise. */
 void ahc_step_handover(ahc_stepper *c, const double flat_q[2][AHC_LEG_JOINTS], ahc_step_outputs *out);
 int ahc_step_state_validate(const ahc_stepper *c, char *msg, size_t msg_size);
+/* ahc_step_state_validate, and the robot's numbers the layer copied equal to those of sp and fp
+ * (a restored state must not carry other ones). */
+int ahc_step_state_consistent(const ahc_stepper *c, const ahc_params *sp, const ahc_frontal_params *fp, char *msg,
+                              size_t msg_size);
 
 /* The CoM of the lumped model (both legs' link-1 parts, link 2, the feet) for joint angles q and the
  * trunk's attitude, relative to the ankle of `anchor` (AHC_LEFT, AHC_RIGHT) flat on the ground, in
