@@ -101,12 +101,10 @@ def main(argv: list[str] | None = None) -> int:
     a = ap.parse_args(argv)
     try:
         sf = load_sweep_file(find_sweep_file("polar_3d"))
-        over = {}
-        for s in a.set:
-            k, eq, v = s.partition("=")
-            if not eq:
-                raise InputError(f"--set {s}: expected NAME=VALUE")
-            over[k] = float(v)
+        bad = [s for s in a.set if "=" not in s]
+        if bad:
+            raise InputError(f"--set {bad[0]}: expected NAME=VALUE")
+        over = {k: float(v) for k, v in (s.split("=", 1) for s in a.set)}
     except (InputError, ValueError) as e:
         print(f"polar_limits.py: error: {e}", file=sys.stderr)
         return 2
@@ -118,7 +116,15 @@ def main(argv: list[str] | None = None) -> int:
         configs = [(f"{a.model} controller, {label}", a.config, over)]
     else:
         configs = CONFIGURATIONS
-    static = static_bounds(sf, Variant("bounds", {}, {}, None, a.model), angles)
+    try:
+        static = static_bounds(sf, Variant("bounds", {}, {}, None, a.model), angles)
+        return _table(sf, configs, angles, durations, static, a, engine)
+    except InputError as e:   # an unknown configuration or parameter, a value out of range
+        print(f"polar_limits.py: error: {e}", file=sys.stderr)
+        return 2
+
+
+def _table(sf, configs, angles, durations, static, a, engine) -> int:
     print("largest peak force that stood [N] (fraction of the static tipping force), polar_3d's pulses")
     print(f"  {'angle [deg]':<52}" + "".join(f"{x:>13g}" for x in angles))
     print(f"  {'static tipping force [N]':<52}" + "".join(f"{x:>13.1f}" for x in static))
