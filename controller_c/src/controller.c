@@ -85,8 +85,16 @@ int ahc_update_params(ahc_controller *c, const ahc_params *p)
     rc = ahc_params_validate(p, NULL, 0);
     if (rc != AHC_OK) return rc;
     if (!c->valid) return ahc_init(c, p);
-    c->p = *p;
-    compute_derived(c);
+    {
+        const int was_pendulum = pendulum_lean(&c->p);
+        c->p = *p;
+        compute_derived(c);
+        if (pendulum_lean(p) && !was_pendulum) {
+            /* the pendulum lean switched on: its plan starts at rest where the lean is (bumpless) */
+            c->lean_rate = c->dth1_plan = 0.0;
+            c->th1_plan = c->th1_erect + c->lean / (c->rz_erect > 1e-9 ? c->rz_erect : 1e-9);
+        }
+    }
     return AHC_OK;
 }
 
@@ -102,6 +110,7 @@ void ahc_reset(ahc_controller *c)
     c->valid = valid;
     if (!valid) return;
     compute_derived(c);
+    c->th1_plan = c->th1_erect; /* the pendulum lean's plan at rest: eq. 11 about the erect posture */
     c->phase = AHC_PHASE_ANKLE;
     c->push_sign = 1;
     ahc_quintic_init(&c->kw_spline, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, p.T_ah);

@@ -170,6 +170,34 @@ int main(void)
     CHECK(fabs(rec[3900].com_x - (p.heel_x + p.lean_margin)) < 1e-3,
           "from behind the lean stops lean_margin inside the heel: %g", rec[3900].com_x);
 
+    /* bumpless start and switch-on, with the link CoM offsets of the 3D plant (an erect posture
+     * off zero): the first tick's ankle reference moves from the measured angle only by eq. 11's
+     * one step, not by the erect angle */
+    {
+        ahc_controller c;
+        ahc_sensors sn;
+        ahc_outputs o1, o2;
+        ahc_params r = p, s0;
+        r.link1_com_x = 0.0044;
+        r.link2_com_x = 0.0024;
+        s0 = r;
+        s0.lean_enabled = 0;
+        CHECK(ahc_init(&c, &r) == AHC_OK, "init");
+        sn.theta_ankle = -0.008;
+        sn.theta_hip = -0.017;
+        sn.zmp_x = 0.0;
+        sn.fz = (r.m1 + r.m2 + r.feet_mass) * r.g;
+        ahc_step(&c, &sn, &o1);
+        CHECK(fabs(o1.theta_ankle_ref - sn.theta_ankle) < 1e-5, "bumpless start: %g from %g", o1.theta_ankle_ref,
+              sn.theta_ankle);
+        CHECK(ahc_init(&c, &s0) == AHC_OK, "init, lean off");
+        for (i = 0; i < 500; ++i) ahc_step(&c, &sn, &o1);
+        CHECK(ahc_update_params(&c, &r) == AHC_OK, "switch the pendulum lean on");
+        ahc_step(&c, &sn, &o2);
+        CHECK(fabs(o2.theta_ankle_ref - o1.theta_ankle_ref) < 1e-5, "bumpless switch-on: %g -> %g",
+              o1.theta_ankle_ref, o2.theta_ankle_ref);
+    }
+
     /* I: a 9 N push on the chest (target beyond the toe margin) */
     N = run_qs(&p, -9.0, 4.0, 8.0, rec);
     for (i = 0; i < N; ++i)
