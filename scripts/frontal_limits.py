@@ -8,9 +8,10 @@ the last force that stood is printed per configuration: the sagittal controller 
 hold the legs still), the 3D controller with its defaults, and the defaults with one setting
 changed at a time. Runs on the native engine (about 25 minutes for the whole table).
 
-    .venv/bin/python scripts/frontal_limits.py [--from 6] [--shape 0.2s|1s|slow ...] [--set NAME=VALUE ...]
+    .venv/bin/python scripts/frontal_limits.py [--from 6] [--shape 0.2s|1s|slow ...] [--config NAME] [--set NAME=VALUE ...]
 
-With --set only that configuration of the 3D controller is measured.
+With --set or --config only that configuration of the 3D controller is measured (--config: a named
+configuration, e.g. omnidirectional, with the --set parameters on top).
 """
 from __future__ import annotations
 
@@ -86,9 +87,12 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--shape", action="append", choices=list(SHAPES), help="push shapes (default: all three)")
     ap.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
                     help="measure only the 3D controller with these parameters")
+    ap.add_argument("--config", default=None, help="measure only the 3D controller in this named configuration")
     a = ap.parse_args(argv)
     try:
         sc = load_scenario(find_scenario("side_push_3d"))
+        if a.config:
+            sc = dataclasses.replace(sc, controller_config=a.config)
         over = {}
         for s in a.set:
             k, eq, v = s.partition("=")
@@ -99,7 +103,8 @@ def main(argv: list[str] | None = None) -> int:
         print(f"frontal_limits.py: error: {e}", file=sys.stderr)
         return 2
     shapes = a.shape or list(SHAPES)
-    configs = [("3D controller, " + ", ".join(a.set), "3d", over)] if a.set else CONFIGURATIONS
+    label = ", ".join([f"configuration {a.config}"] * bool(a.config) + a.set)
+    configs = [("3D controller, " + label, "3d", over)] if label else CONFIGURATIONS
     print(f"largest peak side force that stands [N], 1 N steps from {a.start:g} N, toward +y / toward -y")
     print(f"  {'configuration':<72}" + "".join(f"{s:>9}" for s in shapes))
     for label, model, o in configs:

@@ -160,3 +160,18 @@ def test_cli_exports_both_artefacts(fmu_dir, tmp_path):
     assert "linux64" in platforms and platforms <= nested, (platforms, nested)
     assert zipfile.ZipFile(ssp).testzip() is None
     assert main(["--fmu-dir", str(fmu_dir), "export", "ssp", "no_such_scenario"]) != 0
+
+
+def test_frontal_scenario_ssp_carries_its_pushes_and_parameters(fmu_dir, tmp_path, capsys):
+    """A frontal scenario's SSP: both push inputs are system inputs (the CLI names both), and the
+    scenario's frontal parameters are in its parameter set."""
+    from anklehip.cli import main
+
+    ssp = tmp_path / "d.ssp"
+    assert main(["--fmu-dir", str(fmu_dir), "export", "ssp", "diagonal_push_frontal_hip", "--out", str(ssp)]) == 0
+    assert "drive push_force and push_force_y (N)" in capsys.readouterr().out
+    with zipfile.ZipFile(ssp) as z:
+        ssd, ssv = z.read("SystemStructure.ssd").decode(), z.read("resources/parameters.ssv").decode()
+    assert '<ssd:Connection startConnector="push_force_y" endElement="plant" endConnector="push_force_y"/>' in ssd
+    assert '<ssv:Parameter name="controller.hip_strategy_enabled_y"><ssv:Integer value="1"/>' in ssv
+    assert '<ssv:Parameter name="controller.zmp_limit_y"><ssv:Real value="0.03"/>' in ssv

@@ -474,8 +474,10 @@ def cmd_export(a) -> int:
         out = write_ssp(dest, sc, models, system_input=not a.libcosim)
     else:
         out = write_container_fmu(dest, sc, models)
+    from ..files.export import system_inputs
+    pushes = " and ".join(v.name for v in system_inputs(models))
     print(f"wrote {out}: {models.controller.name} + {models.plant.name}, parameters of {sc.name}; "
-          f"drive push_force (N) at the scenario's step {sc.step:g} s (docs/integration.md)")
+          f"drive {pushes} (N) at the scenario's step {sc.step:g} s (docs/integration.md)")
     if a.kind == "ssp":
         from ..files.export import SSP_FMI3, SSP_VARIANTS
         print(f"  this SSP is {SSP_VARIANTS[not a.libcosim]}")

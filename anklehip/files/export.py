@@ -34,11 +34,12 @@ SSC_TYPE = {"Real": "ssc:Real", "Integer": "ssc:Integer", "Boolean": "ssc:Boolea
 # expresses "the system's input push_force feeds the plant" as a connection from a system-level
 # connector, which libcosim rejects; the other variant leaves the plant's push inputs unconnected.
 SSP_VARIANTS = {
-    True: "for fmpy.ssp and SSP tools that drive system inputs (OMSimulator, Silver): drive the system input "
-          "push_force; libcosim rejects this variant: export the libcosim variant for it",
+    True: "for fmpy.ssp and SSP tools that drive system inputs (OMSimulator, Silver): drive the system inputs "
+          "push_force (and push_force_y with the 3D plant); libcosim rejects this variant: export the libcosim variant "
+          "for it",
     False: "for libcosim (and any SSP tool): no system input and no Enumeration connectors (libcosim stops at "
-           "both; the controller's phase output is then not a connector); drive the plant's push_force input "
-           "directly (a libcosim override manipulator or scenario)",
+           "both; the controller's phase output is then not a connector); drive the plant's push inputs (push_force, "
+           "push_force_y with the 3D plant) directly (a libcosim override manipulator or scenario)",
 }
 COMPONENTS = ("controller", "plant")
 

@@ -108,6 +108,7 @@ RULES = [
     Rule("controller", "fz_lifted", "weight"), Rule("controller", "fz_max", "weight"),
     Rule("controller", "zmp_fault_margin", "sole"), Rule("controller", "angle_fault_margin", "angle"),
     Rule("controller", "lean_tau", "time"), Rule("controller", "lean_margin", "sole"),
+    Rule("controller", "lean_zmp_margin", "sole"),
     Rule("plant", "kp_ankle", "ankle stiffness"), Rule("plant", "kd_ankle", "ankle damping"),
     Rule("plant", "kp_hip", "hip stiffness"), Rule("plant", "kd_hip", "hip damping"),
     Rule("plant", "damping_ankle", "ankle damping"), Rule("plant", "damping_hip", "hip damping"),

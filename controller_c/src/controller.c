@@ -27,6 +27,8 @@ static double clampd(double v, double lo, double hi) { return v < lo ? lo : (v >
 /* The lean holds its estimate while the ZMP is this close to the toe or heel [m]. */
 #define LEAN_EDGE 0.002
 
+static int pendulum_lean(const ahc_params *p);
+
 /* Context of one tick: measured/derived quantities shared by the laws. */
 typedef struct {
     double h;
@@ -73,6 +75,7 @@ static void compute_derived(ahc_controller *c)
     c->zmp_alpha = p->zmp_filter_tau > 0.0 ? 1.0 - exp(-p->sample_period / p->zmp_filter_tau) : 1.0;
     c->d_alpha = p->zmp_filter_tau > 0.0 ? 1.0 - exp(-2.0 * p->sample_period / p->zmp_filter_tau) : 1.0;
     c->lean_alpha = 1.0 - exp(-2.0 * p->sample_period / p->lean_tau);
+    c->omega_x = sqrt(p->g / (c->rz_erect + p->ankle_height));
 }
 
 int ahc_update_params(ahc_controller *c, const ahc_params *p)
@@ -82,8 +85,16 @@ int ahc_update_params(ahc_controller *c, const ahc_params *p)
     rc = ahc_params_validate(p, NULL, 0);
     if (rc != AHC_OK) return rc;
     if (!c->valid) return ahc_init(c, p);
-    c->p = *p;
-    compute_derived(c);
+    {
+        const int was_pendulum = pendulum_lean(&c->p);
+        c->p = *p;
+        compute_derived(c);
+        if (pendulum_lean(p) && !was_pendulum) {
+            /* the pendulum lean switched on: its plan starts at rest where the lean is (bumpless) */
+            c->lean_rate = c->dth1_plan = 0.0;
+            c->th1_plan = c->th1_erect + c->lean / (c->rz_erect > 1e-9 ? c->rz_erect : 1e-9);
+        }
+    }
     return AHC_OK;
 }
 
@@ -99,6 +110,7 @@ void ahc_reset(ahc_controller *c)
     c->valid = valid;
     if (!valid) return;
     compute_derived(c);
+    c->th1_plan = c->th1_erect; /* the pendulum lean's plan at rest: eq. 11 about the erect posture */
     c->phase = AHC_PHASE_ANKLE;
     c->push_sign = 1;
     ahc_quintic_init(&c->kw_spline, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, p.T_ah);
@@ -210,9 +222,9 @@ static void phase_transitions(ahc_controller *c, const tick_ctx *k)
             c->push_sign = sign;
             enter_hip(c);
         } else if (fabs(k->e2) <= p->return_hip_angle_tol && fabs(c->dth2) <= p->return_hip_rate_tol &&
-                   fabs(c->lean) <= LEAN_RETURN_TOL) {
-            /* 3 -> 0: hip back at erect (and, with lean_enabled, the lean released: eq. 11 would
-             * otherwise give way to a push that is still on). */
+                   (fabs(c->lean) <= LEAN_RETURN_TOL || pendulum_lean(p))) {
+            /* 3 -> 0: hip back at erect (and, with the low-pass lean, the lean released: eq. 11 would
+             * otherwise give way to a push that is still on; the pendulum lean goes on in phase 0). */
             enter_ankle(c);
         }
         break;
@@ -271,6 +283,21 @@ static void law_ankle_reactionless(ahc_controller *c, const tick_ctx *k)
  * first-order stages of lean_tau/2, so that only a sustained push moves the CoM, bounded to
  * lean_margin inside the sole: the sustained-push limit rises from m g (x_toe - r_x)/h towards
  * m g (x_toe - x_heel)/h (docs/capability.md). Phases 1-3 add it to r_x_d; phase 0 ignores it. */
+static void lean_estimate(ahc_controller *c, double ext)
+{
+    const ahc_params *p = &c->p;
+    /* The moment balance assumes the sole flat on the ground. With the ZMP at an edge the foot may
+     * be rocking about it and the estimate means nothing: at the edge the push drives the ZMP to
+     * (the toe for a push from behind, D > 0) the lean holds; at the opposite edge the push is
+     * gone and the robot rebounds, and the lean is released (its filter runs towards 0). */
+    const int at_toe = c->zmp_f >= p->toe_x - LEAN_EDGE, at_heel = c->zmp_f <= p->heel_x + LEAN_EDGE;
+    if (!((at_toe && c->lean_f > 0.0) || (at_heel && c->lean_f < 0.0))) {
+        const double in = (at_toe || at_heel) ? 0.0 : ext;
+        c->lean_f1 += c->lean_alpha * (in - c->lean_f1);
+        c->lean_f += c->lean_alpha * (c->lean_f1 - c->lean_f);
+    }
+}
+
 static void update_lean(ahc_controller *c, tick_ctx *k, double ext)
 {
     const ahc_params *p = &c->p;
@@ -281,21 +308,65 @@ static void update_lean(ahc_controller *c, tick_ctx *k, double ext)
         c->lean_f1 = c->lean_f = c->lean = 0.0;
         return;
     }
-    /* The moment balance assumes the sole flat on the ground. With the ZMP at an edge the foot may
-     * be rocking about it and the estimate means nothing: at the edge the push drives the ZMP to
-     * (the toe for a push from behind, D > 0) the lean holds; at the opposite edge the push is
-     * gone and the robot rebounds, and the lean is released (its filter runs towards 0). */
-    {
-        const int at_toe = c->zmp_f >= p->toe_x - LEAN_EDGE, at_heel = c->zmp_f <= p->heel_x + LEAN_EDGE;
-        if (!((at_toe && c->lean_f > 0.0) || (at_heel && c->lean_f < 0.0))) {
-            const double in = (at_toe || at_heel) ? 0.0 : ext;
-            c->lean_f1 += c->lean_alpha * (in - c->lean_f1);
-            c->lean_f += c->lean_alpha * (c->lean_f1 - c->lean_f);
-        }
-    }
+    lean_estimate(c, ext);
     next = clampd(-c->lean_f / (c->m * p->g), p->heel_x + p->lean_margin, p->toe_x - p->lean_margin);
     k->dlean = (next - c->lean) / k->h;
     c->lean = next;
+}
+
+/* ------------------------------------------------------------------------------------------- */
+/* Beyond the paper: the sagittal pendulum lean (lean_law = AHC_LEAN_PENDULUM; our extension,
+ * docs/controller.md section 4.7; the frontal lean's F26-F29 of section 11.2 on the sole's length).
+ * With lean_enabled and this law the lean runs in every phase: the CoM reference is the linear
+ * inverted pendulum's CoM c under the estimated moment D, c'' = w^2 (c - p + D/(m g)), its ZMP p
+ * planned by capture-point feedback toward the target -D/(m g) and kept lean_zmp_margin inside toe
+ * and heel, its capture point xi = c + c'/w kept lean_margin inside them; in phase 0 eq. 11 acts on
+ * the ankle's deviation from the angle that carries the planned CoM. With lean_law = 0 none of this
+ * runs: the paper's law (and section 4.6's lean) bit for bit. */
+
+static int pendulum_lean(const ahc_params *p) { return p->lean_enabled && p->lean_law == AHC_LEAN_PENDULUM; }
+
+static void update_lean_pendulum(ahc_controller *c, tick_ctx *k, double ext)
+{
+    const ahc_params *p = &c->p;
+    const double h = k->h, w = c->omega_x, lo = p->heel_x + p->lean_margin, hi = p->toe_x - p->lean_margin;
+    double off, target, xi, plo, phi, next;
+    lean_estimate(c, ext);
+    off = c->lean_f / (c->m * p->g);
+    target = clampd(-off, lo, hi);
+    xi = c->lean + c->lean_rate / w;
+    /* the planned ZMP keeps its margin but where holding the target, or bringing the capture point
+     * back from beyond it, needs the ZMP closer to the edge (F28's yield) */
+    plo = (target + off < p->heel_x + p->lean_zmp_margin || xi < p->heel_x + p->lean_zmp_margin)
+              ? p->heel_x : p->heel_x + p->lean_zmp_margin;
+    phi = (target + off > p->toe_x - p->lean_zmp_margin || xi > p->toe_x - p->lean_zmp_margin)
+               ? p->toe_x : p->toe_x - p->lean_zmp_margin;
+    c->lean_p = clampd(xi + p->lean_capture_gain * (xi - target) + off, plo, phi);
+    c->lean_rate += h * w * w * (c->lean - c->lean_p + off);
+    /* F29: the capture point stays within the sole less lean_margin (capturable if the push ends now) */
+    c->lean_rate = clampd(c->lean_rate, w * (lo - c->lean), w * (hi - c->lean));
+    next = c->lean + h * c->lean_rate;
+    if (next < lo || next > hi) {
+        next = clampd(next, lo, hi);
+        c->lean_rate = 0.0;
+    }
+    k->dlean = (next - c->lean) / h;
+    c->lean = next;
+}
+
+/* Eq. 11 about the plan (phase 0): the ankle follows the angle that carries the planned CoM,
+ * th1_plan = th1_erect + lean / r_z (d r_x / d th1 = r_z, eq. 20), and eq. 11's spring-damper acts
+ * on the deviation from it, driven by the part of d the plan does not expect, d - m g (p_plan - lean). */
+static void law_ankle_strategy_planned(ahc_controller *c, const tick_ctx *k)
+{
+    const double rz = k->rz > 1e-9 ? k->rz : 1e-9;
+    const double plan = c->th1_erect + c->lean / rz, dplan = k->dlean / rz;
+    const double dd = k->d - c->m * c->p.g * (c->lean_p - c->lean);
+    double dev = c->th1 - c->th1_plan, ddev = c->dth1 - c->dth1_plan;
+    ddev += k->h * (dd - c->p.Ca * ddev - c->p.Ka * dev) / k->Ja;
+    dev += k->h * ddev;
+    c->th1 = plan + dev;
+    c->dth1 = dplan + ddev;
 }
 
 /* ------------------------------------------------------------------------------------------- */
@@ -544,7 +615,9 @@ void ahc_step(ahc_controller *c, const ahc_sensors *s, ahc_outputs *out)
     k.d = p->reaction_compensation ? disturbance_moment_balance(c, ext)
                                    : disturbance_paper(c, &k);
 
-    if (p->lean_enabled)
+    if (pendulum_lean(p))
+        update_lean_pendulum(c, &k, ext);
+    else if (p->lean_enabled)
         update_lean(c, &k, ext);
     else
         c->lean = 0.0; /* switched off by ahc_update_params: no lean left behind */
@@ -555,7 +628,10 @@ void ahc_step(ahc_controller *c, const ahc_sensors *s, ahc_outputs *out)
         switch (c->phase) {
         case AHC_PHASE_ANKLE:
             law_hip_regulator(c, &k);
-            law_ankle_strategy(c, &k);
+            if (pendulum_lean(p))
+                law_ankle_strategy_planned(c, &k);
+            else
+                law_ankle_strategy(c, &k);
             break;
         case AHC_PHASE_ANKLE_TO_HIP: {
             double dkw;
@@ -583,6 +659,11 @@ void ahc_step(ahc_controller *c, const ahc_sensors *s, ahc_outputs *out)
             law_hip_regulator(c, &k);
             law_ankle_reactionless(c, &k);
             break;
+        }
+        if (pendulum_lean(p)) { /* the angle that carries the planned CoM, for eq. 11 in phase 0 */
+            const double rz = k.rz > 1e-9 ? k.rz : 1e-9;
+            c->th1_plan = c->th1_erect + c->lean / rz;
+            c->dth1_plan = k.dlean / rz;
         }
         c->phase_time += k.h;
 
@@ -650,7 +731,8 @@ int ahc_state_validate(const ahc_controller *c, char *msg, size_t msg_size)
     compute_derived(&ref);
     if (ref.m != c->m || ref.km != c->km || ref.J2 != c->J2 || ref.rz_erect != c->rz_erect ||
         ref.th1_erect != c->th1_erect || ref.th2_erect != c->th2_erect ||
-        ref.zmp_alpha != c->zmp_alpha || ref.d_alpha != c->d_alpha || ref.lean_alpha != c->lean_alpha)
+        ref.zmp_alpha != c->zmp_alpha || ref.d_alpha != c->d_alpha || ref.lean_alpha != c->lean_alpha ||
+        ref.omega_x != c->omega_x)
         return STATE_FAIL("derived constants do not match the parameters");
 
     {
@@ -692,7 +774,8 @@ int ahc_state_validate(const ahc_controller *c, char *msg, size_t msg_size)
         const struct { const char *name; double v; } bounded[] = {
             {"dth1", c->dth1}, {"dth2", c->dth2}, {"hip_bump", c->hip_bump}, {"rxd", c->rxd}, {"drxd", c->drxd},
             {"calib_sum", c->calib_sum}, {"calib_bias", c->calib_bias}, {"d_f1", c->d_f1}, {"d_f", c->d_f},
-            {"lean_f1", c->lean_f1}, {"lean_f", c->lean_f},
+            {"lean_f1", c->lean_f1}, {"lean_f", c->lean_f}, {"lean_rate", c->lean_rate}, {"lean_p", c->lean_p},
+            {"th1_plan", c->th1_plan}, {"dth1_plan", c->dth1_plan},
             {"last_out.theta_ankle_ref", c->last_out.theta_ankle_ref},
             {"last_out.theta_hip_ref", c->last_out.theta_hip_ref},
             {"last_out.dtheta_ankle_ref", c->last_out.dtheta_ankle_ref},

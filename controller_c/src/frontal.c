@@ -97,6 +97,11 @@ int ahc_frontal_params_named(ahc_frontal_params *f, const char *name)
         ahc_frontal_params_paper(f);
         return AHC_OK;
     }
+    if (name && strcmp(name, "omnidirectional") == 0) {
+        /* the frontal defaults (docs/controller.md section 4.7) */
+        ahc_frontal_params_default(f);
+        return AHC_OK;
+    }
     ahc_frontal_params_default(f);
     return AHC_ERR_UNKNOWN_NAME;
 }

@@ -85,6 +85,10 @@ void ahc_params_default(ahc_params *p)
     p->lean_enabled = 0;
     p->lean_tau = 0.3;
     p->lean_margin = 0.015;
+    /* its pendulum law, off (section 4.7): the frontal lean's numbers (docs/controller.md 11.2) */
+    p->lean_law = AHC_LEAN_LOWPASS;
+    p->lean_zmp_margin = 0.015;
+    p->lean_capture_gain = 32.0;
 }
 
 void ahc_params_paper(ahc_params *p)
@@ -93,6 +97,19 @@ void ahc_params_paper(ahc_params *p)
     p->zmp_limit_front = 0.045;  /* paper: p_lim = 45 mm (12.5 mm from the toe) */
     p->zmp_limit_back = -0.025;  /* same 12.5 mm margin at the heel (our symmetric extension) */
     p->T_ah = 1.0;               /* paper: 1 s */
+}
+
+/* Pushes from every direction on the 3D plant (docs/controller.md section 4.7, docs/capability.md
+ * section 7.7): the default with the sagittal pendulum lean, chosen by polar limit searches one
+ * setting at a time (scripts/polar_limits.py). Its frontal part is ahc_frontal_params_named's. */
+static void params_omnidirectional(ahc_params *p)
+{
+    ahc_params_default(p);
+    p->lean_enabled = 1;
+    p->lean_law = AHC_LEAN_PENDULUM;
+    p->lean_tau = 0.03;      /* the frontal lean's estimate */
+    p->lean_margin = 0.0325; /* the plan's CoM and capture point 32.5 mm inside toe and heel */
+    p->T_ah = 1.0;           /* the paper's transition time */
 }
 
 static const struct {
@@ -105,6 +122,10 @@ static const struct {
      ahc_params_default},
     {"paper", "Nenchev & Nishio (ICRA 2010) as published: p_lim = 45 mm, T_ah = 1 s (docs/controller.md section 4.5)",
      ahc_params_paper},
+    {"omnidirectional", "Pushes from every direction on the 3D robot: the default with our sagittal pendulum lean "
+                        "(lean_law = 1, lean_tau = 30 ms, lean_margin = 32.5 mm) and T_ah = 1 s; at least 80 % of the "
+                        "static tipping force for 1 s pulses in every direction (docs/controller.md section 4.7)",
+     params_omnidirectional},
 };
 #define N_CONFIGS (sizeof k_configs / sizeof k_configs[0])
 
@@ -209,6 +230,10 @@ static const ahc_param_info k_table[] = {
          "Link 1 (legs): CoM forward of the ankle-hip line, perpendicular to it (0 = on the line, paper)"),
     PI_D(link2_com_x, "m", -1.0, 1.0,
          "Link 2 (upper body): CoM forward of its line through the hip, perpendicular to it (0 = on the line, paper)"),
+    PI_I(lean_law, 0.0, 1.0,
+         "Sagittal lean law (with lean_enabled; our extension): 0 the low-passed disturbance in phases 1-3; 1 the inverted pendulum's CoM, its ZMP planned by capture-point feedback, in every phase"),
+    PI_D(lean_zmp_margin, "m", 0.0, 1.0, "Lean law 1: the planned ZMP stays this far inside the toe and heel edges"),
+    PI_D(lean_capture_gain, "1", 0.01, 100.0, "Lean law 1: the capture point converges at this multiple of the pendulum's rate"),
 };
 
 #define TABLE_LEN (sizeof k_table / sizeof k_table[0])
@@ -311,6 +336,10 @@ int ahc_params_validate(const ahc_params *p, char *msg, size_t msg_size)
         return fail(msg, msg_size, AHC_ERR_INCONSISTENT,
                     "lean_margin = %.6g must be < toe_x = %.6g and < -heel_x = %.6g (the lean range must hold 0)",
                     p->lean_margin, p->toe_x, -p->heel_x);
+    if (!(p->lean_zmp_margin < p->toe_x && p->lean_zmp_margin < -p->heel_x))
+        return fail(msg, msg_size, AHC_ERR_INCONSISTENT,
+                    "lean_zmp_margin = %.6g must be < toe_x = %.6g and < -heel_x = %.6g", p->lean_zmp_margin,
+                    p->toe_x, -p->heel_x);
     if (!(p->rz_band_low < p->rz_band_high))
         return fail(msg, msg_size, AHC_ERR_INCONSISTENT,
                     "rz_band_low = %.6g must be < rz_band_high = %.6g", p->rz_band_low, p->rz_band_high);
@@ -336,6 +365,19 @@ int ahc_params_validate(const ahc_params *p, char *msg, size_t msg_size)
             return fail(msg, msg_size, AHC_ERR_INCONSISTENT,
                         "sample_period = %.6g too large for the hip law (Kh = %.6g, Ch = %.6g): "
                         "semi-implicit Euler unstable", h, p->Kh, p->Ch);
+    }
+    if (p->lean_enabled && p->lean_law == AHC_LEAN_PENDULUM) {
+        /* section 4.7's pendulum unclamped: c'' = -k w^2 (c - target) - (1 + k) w c' */
+        double th1, th2, rz;
+        ahc_erect_posture(p, &th1, &th2);
+        ahc_com(p, th1, th2, NULL, &rz);
+        {
+            const double w = sqrt(p->g / (rz + p->ankle_height)), k = p->lean_capture_gain;
+            if (!symplectic_stable(h, k * w * w, (1.0 + k) * w))
+                return fail(msg, msg_size, AHC_ERR_INCONSISTENT,
+                            "sample_period = %.6g too large for the pendulum lean (lean_capture_gain = %.6g): "
+                            "semi-implicit Euler unstable", h, k);
+        }
     }
     if (!(h * p->Kp_theta < 1.0))
         return fail(msg, msg_size, AHC_ERR_INCONSISTENT,

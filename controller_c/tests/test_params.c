@@ -12,6 +12,7 @@
 #include <stdlib.h>
 
 #include "ahc_test.h"
+#include "ahc/frontal.h"
 
 static int contains(const char *hay, const char *needle) { return strstr(hay, needle) != NULL; }
 
@@ -88,6 +89,25 @@ int main(void)
               "default = ahc_params_default");
         CHECK(ahc_params_named(&named, "paper") == AHC_OK && memcmp(&named, &paper, sizeof p) == 0,
               "paper = ahc_params_paper");
+        /* omnidirectional: the default with the sagittal pendulum lean and T_ah 1 s, nothing else
+         * (docs/controller.md section 4.7); its frontal part is the frontal defaults */
+        CHECK(ahc_params_named(&named, "omnidirectional") == AHC_OK, "omnidirectional found");
+        CHECK(named.lean_enabled == 1 && named.lean_law == AHC_LEAN_PENDULUM && named.lean_tau == 0.03 &&
+                  named.lean_margin == 0.0325 && named.T_ah == 1.0,
+              "omnidirectional: pendulum lean, lean_tau 30 ms, lean_margin 32.5 mm, T_ah 1 s");
+        q = named;
+        q.lean_enabled = p.lean_enabled;
+        q.lean_law = p.lean_law;
+        q.lean_tau = p.lean_tau;
+        q.lean_margin = p.lean_margin;
+        q.T_ah = p.T_ah;
+        CHECK(memcmp(&q, &p, sizeof p) == 0, "omnidirectional differs from the default only there");
+        {
+            ahc_frontal_params fo, fd;
+            ahc_frontal_params_default(&fd);
+            CHECK(ahc_frontal_params_named(&fo, "omnidirectional") == AHC_OK && memcmp(&fo, &fd, sizeof fd) == 0,
+                  "omnidirectional's frontal part is the frontal defaults");
+        }
         memset(&named, 0xff, sizeof named);
         CHECK(ahc_params_named(&named, "Paper") == AHC_ERR_UNKNOWN_NAME && memcmp(&named, &p, sizeof p) == 0,
               "unknown name (case matters) -> error, defaults filled");

@@ -172,7 +172,21 @@ typedef struct {
      * (docs/controller.md section 2.1) */
     double link1_com_x;         /* link 1's CoM forward of the ankle-hip line [m]                 */
     double link2_com_x;         /* link 2's CoM forward of its line through the hip [m]           */
+
+    /* the sagittal pendulum lean, appended: our extension, not the paper's (docs/controller.md
+     * section 4.7; used only with lean_enabled) */
+    int lean_law;               /* AHC_LEAN_LOWPASS (default): section 4.6's lean, in phases 1-3;
+                                   AHC_LEAN_PENDULUM: the linear inverted pendulum's CoM under the
+                                   estimated moment, its ZMP planned by capture-point feedback, in
+                                   every phase (eq. 11 follows the plan in phase 0)               */
+    double lean_zmp_margin;     /* AHC_LEAN_PENDULUM: the planned ZMP stays this far inside toe and
+                                   heel [m]                                                      */
+    double lean_capture_gain;   /* AHC_LEAN_PENDULUM: the capture point converges at this multiple
+                                   of the pendulum's rate [1]                                    */
 } ahc_params;
+
+/* lean_law (and the frontal lean_law_y) */
+enum { AHC_LEAN_LOWPASS = 0, AHC_LEAN_PENDULUM = 1 };
 
 /* Fill with the HOAP-2 defaults (hoap2/nominal.h) and the SI gains. */
 void ahc_params_default(ahc_params *p);
@@ -182,7 +196,7 @@ void ahc_params_default(ahc_params *p);
 void ahc_params_paper(ahc_params *p);
 
 /* Named configurations, selectable by name: index 0 is "default" (ahc_params_default), then
- * "paper". ahc_config_name / ahc_config_description return NULL past the end. The controller
+ * "paper", then "omnidirectional" (the default with the sagittal pendulum lean, section 4.7). ahc_config_name / ahc_config_description return NULL past the end. The controller
  * FMU lists them, with the parameter values that differ from the defaults, in
  * resources/configurations.toml (generated from these functions). */
 size_t ahc_config_count(void);
@@ -295,6 +309,9 @@ typedef struct {
     double lean_f1, lean_f;   /* two-stage low-pass of the external moment [N m]: 1st, output  */
     double lean_alpha;        /* coefficient of each stage, 1 - exp(-2 h/lean_tau)             */
     double lean;              /* CoM offset -lean_f/(m g) clamped to the sole [m]              */
+    /* the pendulum lean (lean_law = AHC_LEAN_PENDULUM): the pendulum's rate, its CoM's rate [m/s],
+     * its planned ZMP [m], and the ankle angle and rate that carry the planned CoM */
+    double omega_x, lean_rate, lean_p, th1_plan, dth1_plan;
     /* faults */
     unsigned fault;           /* bits of the last tick                                       */
     int holding;              /* 1 while a hold fault is active                              */

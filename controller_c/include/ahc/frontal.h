@@ -106,8 +106,7 @@ typedef struct {
     double rocking_dwell_y;     /* ... and holds until the feet have lain flat this long [s]     */
 } ahc_frontal_params;
 
-/* lean_law_y */
-enum { AHC_LEAN_LOWPASS = 0, AHC_LEAN_PENDULUM = 1 };
+/* lean_law_y: AHC_LEAN_LOWPASS, AHC_LEAN_PENDULUM (controller.h) */
 
 /* HOAP-2 defaults (hoap2/nominal.h) and the frontal gains (docs/controller.md §11). */
 void ahc_frontal_params_default(ahc_frontal_params *f);
@@ -116,7 +115,7 @@ void ahc_frontal_params_default(ahc_frontal_params *f);
  * sagittal gains carried over (Ka_y 19, Ca_y 4.75), the lateral hip strategy on, no lateral lean.
  * The frontal part of the named configuration "paper". */
 void ahc_frontal_params_paper(ahc_frontal_params *f);
-/* The frontal part of the named configurations of ahc_params_named ("default", "paper"):
+/* The frontal part of the named configurations of ahc_params_named ("default", "paper", "omnidirectional"):
  * AHC_OK, or AHC_ERR_UNKNOWN_NAME (f then the defaults). */
 int ahc_frontal_params_named(ahc_frontal_params *f, const char *name);
 
