@@ -2,12 +2,12 @@
  * stepping.c — the recovery step (stepping.h, docs/controller.md §12).
  */
 #include <math.h>
-#include <stdarg.h>
-#include <stdio.h>
 #include <string.h>
 
 #include "ahc/stepping.h"
 #include "hoap2/nominal.h"
+#include "param_rows.h"
+
 
 /* ---- parameters ---------------------------------------------------------------------------- */
 
@@ -90,14 +90,7 @@ const ahc_param_info *ahc_step_param_table(size_t *count)
     return k_stable;
 }
 
-const ahc_param_info *ahc_step_param_find(const char *name)
-{
-    size_t i;
-    if (!name) return NULL;
-    for (i = 0; i < STABLE_LEN; ++i)
-        if (strcmp(k_stable[i].name, name) == 0) return &k_stable[i];
-    return NULL;
-}
+const ahc_param_info *ahc_step_param_find(const char *name) { return ahc_rows_find(k_stable, STABLE_LEN, name); }
 
 const char *ahc_step_phase_name(int phase)
 {
@@ -105,57 +98,26 @@ const char *ahc_step_phase_name(int phase)
     return phase >= 0 && phase < AHC_STEP_PHASES ? names[phase] : "?";
 }
 
-static int fail(char *msg, size_t n, int code, const char *fmt, ...)
-{
-    if (msg && n > 0) {
-        va_list ap;
-        va_start(ap, fmt);
-        vsnprintf(msg, n, fmt, ap);
-        va_end(ap);
-    }
-    return code;
-}
-
-static double field_value(const ahc_step_params *p, const ahc_param_info *e)
-{
-    const char *base = (const char *)p + e->offset;
-    if (e->is_int) {
-        int v;
-        memcpy(&v, base, sizeof v);
-        return (double)v;
-    } else {
-        double v;
-        memcpy(&v, base, sizeof v);
-        return v;
-    }
-}
-
 int ahc_step_params_validate(const ahc_step_params *p, const ahc_params *sp, const ahc_frontal_params *fp, char *msg,
                              size_t msg_size)
 {
-    size_t i;
     int rc;
     if (msg && msg_size > 0) msg[0] = '\0';
-    if (!p || !sp || !fp) return fail(msg, msg_size, AHC_ERR_NULL, "params pointer is NULL");
+    if (!p || !sp || !fp) return ahc_rows_fail(msg, msg_size, AHC_ERR_NULL, "params pointer is NULL");
     rc = ahc_frontal_params_validate(fp, sp, msg, msg_size);
     if (rc != AHC_OK) return rc;
-    for (i = 0; i < STABLE_LEN; ++i) {
-        const ahc_param_info *e = &k_stable[i];
-        const double v = field_value(p, e);
-        if (!isfinite(v)) return fail(msg, msg_size, AHC_ERR_NONFINITE, "%s = %g must be finite", e->name, v);
-        if (v < e->min) return fail(msg, msg_size, AHC_ERR_RANGE, "%s = %.6g must be >= %.6g", e->name, v, e->min);
-        if (v > e->max) return fail(msg, msg_size, AHC_ERR_RANGE, "%s = %.6g must be <= %.6g", e->name, v, e->max);
-    }
+    rc = ahc_rows_check(k_stable, STABLE_LEN, p, msg, msg_size);
+    if (rc != AHC_OK) return rc;
     if (!(2.0 * p->step_zmp_margin < fp->sole_width) || !(2.0 * p->step_zmp_margin < sp->toe_x - sp->heel_x))
-        return fail(msg, msg_size, AHC_ERR_INCONSISTENT,
+        return ahc_rows_fail(msg, msg_size, AHC_ERR_INCONSISTENT,
                     "step_zmp_margin = %.6g leaves no room on a sole (%.6g x %.6g m)", p->step_zmp_margin,
                     sp->toe_x - sp->heel_x, fp->sole_width);
     if (!(p->step_width_max >= 2.0 * fp->ankle_y))
-        return fail(msg, msg_size, AHC_ERR_INCONSISTENT,
+        return ahc_rows_fail(msg, msg_size, AHC_ERR_INCONSISTENT,
                     "step_width_max = %.6g must be >= the stance width 2 ankle_y = %.6g", p->step_width_max,
                     2.0 * fp->ankle_y);
     if (!(p->step_pelvis_drop + p->step_height < 0.5 * sp->l1))
-        return fail(msg, msg_size, AHC_ERR_INCONSISTENT,
+        return ahc_rows_fail(msg, msg_size, AHC_ERR_INCONSISTENT,
                     "step_pelvis_drop + step_height = %.6g must be < l1 / 2 = %.6g",
                     p->step_pelvis_drop + p->step_height, 0.5 * sp->l1);
     return AHC_OK;
@@ -990,7 +952,7 @@ int ahc_step_state_consistent(const ahc_stepper *c, const ahc_params *sp, const 
     ahc_stepper fresh;
     int rc;
     if (msg && msg_size > 0) msg[0] = '\0';
-    if (!c || !sp || !fp) return fail(msg, msg_size, AHC_ERR_NULL, "state pointer is NULL");
+    if (!c || !sp || !fp) return ahc_rows_fail(msg, msg_size, AHC_ERR_NULL, "state pointer is NULL");
     if (!c->valid) return AHC_OK;
     rc = ahc_step_init(&fresh, &c->p, sp, fp);
     if (rc != AHC_OK) {
@@ -1014,7 +976,7 @@ int ahc_step_state_consistent(const ahc_stepper *c, const ahc_params *sp, const 
         size_t i;
         for (i = 0; i < sizeof v / sizeof v[0]; ++i)
             if (memcmp(&v[i].a, &v[i].b, sizeof(double)) != 0)
-                return fail(msg, msg_size, AHC_ERR_INCONSISTENT,
+                return ahc_rows_fail(msg, msg_size, AHC_ERR_INCONSISTENT,
                             "%s = %.17g in the stepping layer's copy, %.17g from the robot's parameters", v[i].name,
                             v[i].a, v[i].b);
     }
@@ -1025,16 +987,16 @@ int ahc_step_state_validate(const ahc_stepper *c, char *msg, size_t msg_size)
 {
     int side, j, i;
     if (msg && msg_size > 0) msg[0] = '\0';
-    if (!c) return fail(msg, msg_size, AHC_ERR_NULL, "state pointer is NULL");
+    if (!c) return ahc_rows_fail(msg, msg_size, AHC_ERR_NULL, "state pointer is NULL");
     if (!c->valid) return AHC_OK;
     if (c->phase < 0 || c->phase >= AHC_STEP_PHASES)
-        return fail(msg, msg_size, AHC_ERR_INCONSISTENT, "stepping phase %d outside 0..%d", c->phase, AHC_STEP_PHASES - 1);
+        return ahc_rows_fail(msg, msg_size, AHC_ERR_INCONSISTENT, "stepping phase %d outside 0..%d", c->phase, AHC_STEP_PHASES - 1);
     if (c->swing_side < -1 || c->swing_side > 1 || (c->phase != AHC_STEP_STAND && c->swing_side < 0))
-        return fail(msg, msg_size, AHC_ERR_INCONSISTENT, "stepping swing side %d invalid", c->swing_side);
+        return ahc_rows_fail(msg, msg_size, AHC_ERR_INCONSISTENT, "stepping swing side %d invalid", c->swing_side);
     if (c->steps < 0 || c->est_valid < 0 || c->est_valid > 1 || c->q_prev_valid < 0 || c->q_prev_valid > 1 ||
         c->tilt_valid < 0 || c->tilt_valid > 1 || c->pelvis_z_valid < 0 || c->pelvis_z_valid > 1 ||
         c->blend_from_flat < 0 || c->blend_from_flat > 1)
-        return fail(msg, msg_size, AHC_ERR_INCONSISTENT, "stepping counters or flags corrupt");
+        return ahc_rows_fail(msg, msg_size, AHC_ERR_INCONSISTENT, "stepping counters or flags corrupt");
     {
         const double v[] = {c->phase_time, c->phase_duration, c->step_clock, c->blend_time, c->pitch_time,
                             c->pitch_prev, c->pitch_rate,
@@ -1045,11 +1007,11 @@ int ahc_step_state_validate(const ahc_stepper *c, char *msg, size_t msg_size)
                             c->feet[1][0], c->feet[1][1], c->landing[0], c->landing[1], c->swing_pos[0],
                             c->swing_pos[1]};
         for (i = 0; i < (int)(sizeof v / sizeof v[0]); ++i)
-            if (!isfinite(v[i])) return fail(msg, msg_size, AHC_ERR_NONFINITE, "stepping state value %d not finite", i);
+            if (!isfinite(v[i])) return ahc_rows_fail(msg, msg_size, AHC_ERR_NONFINITE, "stepping state value %d not finite", i);
     }
     for (side = 0; side < 2; ++side)
         for (j = 0; j < AHC_LEG_JOINTS; ++j)
             if (!isfinite(c->q_out[side][j]) || !isfinite(c->q_prev[side][j]) || isinf(c->blend_from[side][j]))
-                return fail(msg, msg_size, AHC_ERR_NONFINITE, "stepping joint reference not finite");
+                return ahc_rows_fail(msg, msg_size, AHC_ERR_NONFINITE, "stepping joint reference not finite");
     return AHC_OK;
 }
