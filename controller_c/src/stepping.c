@@ -484,6 +484,15 @@ static void start_transfer(ahc_stepper *c)
     (void)p;
 }
 
+/* The supporting legs' planned knee bend at this point of the step: they shorten by
+ * step_pelvis_drop as two equal leg segments would by a knee flexing along a quintic over
+ * step_drop_time (the knee's rate stays bounded at the straight leg, where the length's would not). */
+static double drop_knee(const ahc_stepper *c)
+{
+    const double knee_max = 2.0 * acos(1.0 - c->p.step_pelvis_drop / c->l1);
+    return knee_max * smooth01(c->step_clock / c->p.step_drop_time);
+}
+
 /* SETTLE: the pendulum's ZMP, inside both soles, brings the capture point over the feet's mid-point
  * in the shortest time (as TRANSFER's), then stays there: the CoM converges to it. */
 static void start_settle(ahc_stepper *c)
@@ -507,6 +516,7 @@ static void start_settle(ahc_stepper *c)
                         : clampd((c->settle_mid[i] - xi0(c, i) * E) / (1.0 - E), lo[i], hi[i]);
     }
     c->phase_duration = c->settle_capture_time + c->p.step_settle_time;
+    c->knee_settle = drop_knee(c); /* the legs stretch back from here over SETTLE */
 }
 
 /* One tick of the pendulum reference: its ZMP is the
@@ -654,7 +664,6 @@ static void start_step(ahc_stepper *c, const double com[3], const double xi[2])
 {
     const double w2 = 0.5 * c->sole_width;
     int sigma_swing, i;
-    double target[2];
     /* which foot: outward toward a capture point beyond the outer edges; otherwise the stance foot
      * is the one on the capture point's side */
     if (xi[1] > c->feet[AHC_LEFT][1] + w2 + c->p.step_trigger_y) c->swing_side = AHC_LEFT;
@@ -682,7 +691,6 @@ static void start_step(ahc_stepper *c, const double com[3], const double xi[2])
         c->phase = AHC_STEP_SHIFT;
         c->phase_duration = T;
     }
-    (void)target;
 }
 
 static void next_phase_after_shift(ahc_stepper *c, const double xi_meas[2])
@@ -806,8 +814,6 @@ void ahc_step_step(ahc_stepper *c, const ahc_step_sensors *s, const double flat_
                     start_transfer(c);
                 } else {
                     start_settle(c);
-                    c->knee_settle = 2.0 * acos(1.0 - c->p.step_pelvis_drop / c->l1) *
-                                 smooth01(c->step_clock / c->p.step_drop_time);
                 }
             }
             break;
@@ -824,8 +830,6 @@ void ahc_step_step(ahc_stepper *c, const ahc_step_sensors *s, const double flat_
                     start_swing(c, AHC_STEP_CLOSE, target);
                 } else {
                     start_settle(c);
-                    c->knee_settle = 2.0 * acos(1.0 - c->p.step_pelvis_drop / c->l1) *
-                                 smooth01(c->step_clock / c->p.step_drop_time);
                 }
             }
             break;
@@ -862,11 +866,8 @@ void ahc_step_step(ahc_stepper *c, const ahc_step_sensors *s, const double flat_
     }
     if (c->phase != AHC_STEP_STAND) {
         double r[2], v[2], a[2], q[2][AHC_LEG_JOINTS], z, pitch, roll = 0.0, swing_z = c->ankle_height, lead_alpha;
-        /* the supporting legs shorten by step_pelvis_drop as two equal leg segments would by a knee
-         * flexing along a quintic (the knee's rate stays bounded at the straight leg, where the
-         * length's would not); the hips' height follows from the legs' lean */
-        const double knee_max = 2.0 * acos(1.0 - c->p.step_pelvis_drop / c->l1);
-        double knee = knee_max * smooth01(c->step_clock / c->p.step_drop_time);
+        /* the supporting legs' length (drop_knee); the hips' height follows from the legs' lean */
+        double knee = drop_knee(c);
         double p_cmd[2];
         pendulum_tick(c, xi, p_cmd);
         reference(c, c->phase_time, r, v, a);
