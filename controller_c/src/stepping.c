@@ -43,6 +43,8 @@ void ahc_step_params_default(ahc_step_params *p)
     p->step_servo_lead = 0.05;      /* Hoap2Plant3D's ankle, knee, roll and yaw servos: kd/kp = 20/400 */
     p->step_servo_lead_hip = 5.0 / 150.0; /* its hip pitch servo: 5/150                           */
     p->step_close = 1;
+    p->step_close_shift_time = 0.4;
+    p->step_close_swing_time = 0.4;
 }
 
 #define SD(field, unit, lo, hi, desc) \
@@ -81,6 +83,8 @@ static const ahc_param_info k_stable[] = {
     SI(step_dcm_feedback, 0.0, 1.0, "1: the pendulum reference's ZMP tracks the measured capture point (Englsberger et al. 2015); 0: the open-loop pendulum"),
     SD(step_dcm_gain, "1/s", 0.0, 100.0, "Capture-point feedback gain: the planned ZMP moves by (1 + gain / omega) times the capture point's error"),
     SD(step_pitch_time, "s", 0.05, 5.0, "The trunk's pitch returns to erect over this (a quintic from the measured pitch and rate at the decision and at the landing)"),
+    SD(step_close_shift_time, "s", 0.05, 2.0, "The closing step (at rest after the recovery step): the weight shift onto the landed foot takes this"),
+    SD(step_close_swing_time, "s", 0.05, 2.0, "The closing step's swing takes this"),
 };
 #define STABLE_LEN (sizeof k_stable / sizeof k_stable[0])
 
@@ -445,43 +449,54 @@ static void blend_from_last(ahc_stepper *c)
         for (j = 0; j < AHC_LEG_JOINTS; ++j) c->blend_from[side][j] = NAN;
 }
 
-static void start_swing(ahc_stepper *c, int phase, const double target[2])
+static void start_swing(ahc_stepper *c, int phase, const double target[2], double swing_time)
 {
     int i;
-    begin_phase(c, phase, c->p.step_swing_time);
+    begin_phase(c, phase, swing_time);
+    c->swing_time = swing_time;
     plan_one_foot(c);
     for (i = 0; i < 2; ++i) {
         c->swing_from[i] = c->feet[c->swing_side][i];
         c->swing_pos[i] = c->swing_from[i];
         c->swing_vel[i] = c->swing_acc[i] = 0.0;
     }
-    plan_swing_xy(c, target, c->p.step_swing_time);
+    plan_swing_xy(c, target, swing_time);
     /* the swing foot is placed in the world from now on, through the stance foot's measured tilt
      * (plan_joints): the references' jump is blended out */
     c->tilt_valid = 0;
     blend_from_last(c);
 }
 
-static void start_transfer(ahc_stepper *c)
+/* Both soles' bounding box, step_zmp_margin inside: where a ZMP on both feet can be. */
+static void support_box(const ahc_stepper *c, double lo[2], double hi[2])
 {
-    double b[2][4], lo[2], hi[2], p[2], T[2];
-    const int landed = c->swing_side;
-    int i;
-    begin_phase(c, AHC_STEP_TRANSFER, 0.0);
+    double b[2][4];
     sole_box(c, AHC_LEFT, b[0]);
     sole_box(c, AHC_RIGHT, b[1]);
     lo[0] = fmin(b[0][0], b[1][0]); hi[0] = fmax(b[0][1], b[1][1]);
     lo[1] = fmin(b[0][2], b[1][2]); hi[1] = fmax(b[0][3], b[1][3]);
+}
+
+/* On both feet: the planned ZMP (c->zmp) that brings the reference's capture point to target in the
+ * shortest time >= T_min, both axes in the longer of their times; returns that time. */
+static double plan_transfer(ahc_stepper *c, const double target[2], double T_min)
+{
+    double lo[2], hi[2], p[2], T[2], E;
+    int i;
+    support_box(c, lo, hi);
+    for (i = 0; i < 2; ++i) T[i] = pendulum_transfer(c, xi0(c, i), target[i], lo[i], hi[i], T_min, &p[i]);
+    T[0] = fmax(T[0], T[1]);
+    E = exp(c->omega * T[0]);
     for (i = 0; i < 2; ++i)
-        T[i] = pendulum_transfer(c, xi0(c, i), c->feet[landed][i], lo[i], hi[i], c->p.step_transfer_time_min, &p[i]);
-    /* both axes in the longer time */
-    c->phase_duration = fmax(T[0], T[1]);
-    for (i = 0; i < 2; ++i) {
-        const double E = exp(c->omega * c->phase_duration);
-        c->zmp[i] = fabs(c->feet[landed][i] - xi0(c, i)) < 1e-9 ? clampd(c->feet[landed][i], lo[i], hi[i])
-                                                                : clampd((c->feet[landed][i] - xi0(c, i) * E) / (1.0 - E), lo[i], hi[i]);
-    }
-    (void)p;
+        c->zmp[i] = fabs(target[i] - xi0(c, i)) < 1e-9 ? clampd(target[i], lo[i], hi[i])
+                                                       : clampd((target[i] - xi0(c, i) * E) / (1.0 - E), lo[i], hi[i]);
+    return T[0];
+}
+
+static void start_transfer(ahc_stepper *c)
+{
+    begin_phase(c, AHC_STEP_TRANSFER, 0.0);
+    c->phase_duration = plan_transfer(c, c->feet[c->swing_side], c->p.step_transfer_time_min);
 }
 
 /* The supporting legs' planned knee bend at this point of the step: they shorten by
@@ -493,30 +508,54 @@ static double drop_knee(const ahc_stepper *c)
     return knee_max * smooth01(c->step_clock / c->p.step_drop_time);
 }
 
+/* Where the closing step puts the other foot: beside the landed one (c->swing_side), the stance
+ * width across. */
+static void beside_landed(const ahc_stepper *c, double target[2])
+{
+    const int landed = c->swing_side;
+    target[0] = c->feet[landed][0];
+    target[1] = c->feet[landed][1] + (landed == AHC_LEFT ? -2.0 : 2.0) * c->ankle_y;
+}
+
+/* The feet more than 5 mm from side by side at the stance width. */
+static int feet_apart(const ahc_stepper *c)
+{
+    double t[2];
+    const int other = c->swing_side == AHC_LEFT ? AHC_RIGHT : AHC_LEFT;
+    beside_landed(c, t);
+    return hypot(c->feet[other][0] - t[0], c->feet[other][1] - t[1]) > 0.005;
+}
+
 /* SETTLE: the pendulum's ZMP, inside both soles, brings the capture point over the feet's mid-point
- * in the shortest time (as TRANSFER's), then stays there: the CoM converges to it. */
+ * in the shortest time (as TRANSFER's), then holds it there: the CoM comes to rest over it. After
+ * the recovery step with the feet apart and step_close, the legs stay bent for the closing step
+ * that follows; otherwise they stretch back over SETTLE. */
 static void start_settle(ahc_stepper *c)
 {
-    double b[2][4], lo[2], hi[2], T[2], p[2];
     int i;
     begin_phase(c, AHC_STEP_SETTLE, 0.0);
-    sole_box(c, AHC_LEFT, b[0]);
-    sole_box(c, AHC_RIGHT, b[1]);
-    lo[0] = fmin(b[0][0], b[1][0]); hi[0] = fmax(b[0][1], b[1][1]);
-    lo[1] = fmin(b[0][2], b[1][2]); hi[1] = fmax(b[0][3], b[1][3]);
-    for (i = 0; i < 2; ++i) {
-        c->settle_mid[i] = 0.5 * (c->feet[AHC_LEFT][i] + c->feet[AHC_RIGHT][i]);
-        T[i] = pendulum_transfer(c, xi0(c, i), c->settle_mid[i], lo[i], hi[i], 0.0, &p[i]);
-    }
-    c->settle_capture_time = fmax(T[0], T[1]);
-    for (i = 0; i < 2; ++i) {
-        const double E = exp(c->omega * c->settle_capture_time);
-        c->zmp[i] = fabs(c->settle_mid[i] - xi0(c, i)) < 1e-9
-                        ? c->settle_mid[i]
-                        : clampd((c->settle_mid[i] - xi0(c, i) * E) / (1.0 - E), lo[i], hi[i]);
-    }
+    for (i = 0; i < 2; ++i) c->settle_mid[i] = 0.5 * (c->feet[AHC_LEFT][i] + c->feet[AHC_RIGHT][i]);
+    c->settle_capture_time = plan_transfer(c, c->settle_mid, 0.0);
     c->phase_duration = c->settle_capture_time + c->p.step_settle_time;
-    c->knee_settle = drop_knee(c); /* the legs stretch back from here over SETTLE */
+    if (c->close_stage == 0) {
+        c->knee_settle = drop_knee(c);
+        c->close_stage = c->p.step_close && feet_apart(c) ? 1 : 0;
+    } else {
+        c->close_stage = 3; /* after the closing step */
+    }
+}
+
+/* The closing step's weight shift, from rest: the capture point to step_shift_inset inside of the
+ * landed ankle, in step_close_shift_time at least. */
+static void start_close_shift(ahc_stepper *c)
+{
+    double aim[2];
+    const int landed = c->swing_side;
+    begin_phase(c, AHC_STEP_SHIFT, 0.0);
+    aim[0] = c->feet[landed][0];
+    aim[1] = c->feet[landed][1] + (landed == AHC_LEFT ? -1.0 : 1.0) * c->p.step_shift_inset;
+    c->phase_duration = plan_transfer(c, aim, c->p.step_close_shift_time);
+    c->close_stage = 2;
 }
 
 /* One tick of the pendulum reference: its ZMP is the
@@ -538,14 +577,18 @@ static void pendulum_tick(ahc_stepper *c, const double xi_meas[2], double p_out[
         lo[0] = fmin(b[0], b2[0]); hi[0] = fmax(b[1], b2[1]);
         lo[1] = fmin(b[2], b2[2]); hi[1] = fmax(b[3], b2[3]);
     }
-    if (c->phase == AHC_STEP_SETTLE && c->phase_time >= c->settle_capture_time) {
-        c->zmp[0] = c->settle_mid[0];
-        c->zmp[1] = c->settle_mid[1];
-    }
     for (i = 0; i < 2; ++i) {
         const double xi_ref = c->cref[i] + c->vref[i] / c->omega;
         const double fb = c->p.step_dcm_feedback ? (1.0 + c->p.step_dcm_gain / c->omega) * (xi_meas[i] - xi_ref) : 0.0;
-        const double p = clampd(c->zmp[i] + fb, lo[i], hi[i]);
+        double plan = c->zmp[i];
+        /* a capture point held at rest (SETTLE's mid-point once reached, the closing swing's point
+         * over the stance foot) is held by the reference's own feedback, d xi / dt = -omega (xi -
+         * hold): the open-loop pendulum would diverge from any rounding at e^(omega t) */
+        if (c->phase == AHC_STEP_SETTLE && c->phase_time >= c->settle_capture_time)
+            plan = c->settle_mid[i] + 2.0 * (xi_ref - c->settle_mid[i]);
+        else if (c->phase == AHC_STEP_CLOSE)
+            plan = c->zmp[i] + 2.0 * (xi_ref - c->zmp[i]);
+        const double p = clampd(plan + fb, lo[i], hi[i]);
         c->vref[i] += c->omega * c->omega * (c->cref[i] - p) * c->dt;
         c->cref[i] += c->vref[i] * c->dt;
         p_out[i] = p;
@@ -632,7 +675,7 @@ static void plan_joints(ahc_stepper *c, const double r[2], double leg, double ro
         if (swinging) {
             /* the swing leg stays bent by at least 0.2 rad at the knee: the foot comes short of a
              * place the leg cannot reach (a straight leg's knee rate is unbounded) */
-            const double reach = c->l1 * cos(0.1 * smooth01(c->phase_time / (0.3 * c->p.step_swing_time))),
+            const double reach = c->l1 * cos(0.1 * smooth01(c->phase_time / (0.3 * c->swing_time))),
                          hor = hypot(d[0], d[1]);
             if (hypot(hor, d[2]) > reach && hor > 0.0) {
                 const double k = sqrt(fmax(reach * reach - d[2] * d[2], 0.0)) / hor;
@@ -660,7 +703,7 @@ static void blend(ahc_stepper *c, ahc_step_outputs *out)
     c->blend_time += c->dt;
 }
 
-static void start_step(ahc_stepper *c, const double com[3], const double xi[2])
+static void start_step(ahc_stepper *c, const double com[2], const double xi[2])
 {
     const double w2 = 0.5 * c->sole_width;
     int sigma_swing, i;
@@ -705,7 +748,7 @@ static void next_phase_after_shift(ahc_stepper *c, const double xi_meas[2])
         xi_T[i] = p + (xi_meas[i] - p) * exp(c->omega * c->p.step_swing_time);
     }
     landing_point(c, xi_T, L);
-    start_swing(c, AHC_STEP_SWING, L);
+    start_swing(c, AHC_STEP_SWING, L, c->p.step_swing_time);
 }
 
 void ahc_step_step(ahc_stepper *c, const ahc_step_sensors *s, const double flat_q[2][AHC_LEG_JOINTS],
@@ -752,7 +795,7 @@ void ahc_step_step(ahc_stepper *c, const ahc_step_sensors *s, const double flat_
             ahc_quintic_init(&c->pitch_plan, c->pitch_prev, c->pitch_rate, 0.0, c->pitch_erect, 0.0, 0.0,
                              c->p.step_pitch_time);
             c->pitch_time = 0.0;
-            start_step(c, com, xi);
+            start_step(c, c->com_prev, xi); /* the estimate (held through a non-finite reading) */
             c->q_prev_valid = 0;
             c->pelvis_z_valid = 0;
             c->blend_from_flat = 1;
@@ -768,12 +811,21 @@ void ahc_step_step(ahc_stepper *c, const ahc_step_sensors *s, const double flat_
         c->step_clock += T;
         switch (c->phase) {
         case AHC_STEP_SHIFT:
-            if (c->phase_time >= c->phase_duration) next_phase_after_shift(c, xi);
+            if (c->phase_time >= c->phase_duration) {
+                if (c->close_stage == 2) {
+                    double target[2];
+                    beside_landed(c, target);
+                    c->swing_side = stance_of(c); /* the other foot swings */
+                    start_swing(c, AHC_STEP_CLOSE, target, c->p.step_close_swing_time);
+                } else {
+                    next_phase_after_shift(c, xi);
+                }
+            }
             break;
         case AHC_STEP_SWING:
         case AHC_STEP_CLOSE: {
             const double fz_swing = c->swing_side == AHC_LEFT ? s->fz_left : s->fz_right;
-            const double Tsw = c->p.step_swing_time;
+            const double Tsw = c->swing_time;
             for (i = 0; i < 2; ++i)
                 ahc_quintic_eval(&c->swing[i], c->phase_time - (Tsw - c->swing[i].T), &c->swing_pos[i],
                                  &c->swing_vel[i], &c->swing_acc[i]);
@@ -819,22 +871,13 @@ void ahc_step_step(ahc_stepper *c, const ahc_step_sensors *s, const double flat_
             break;
         }
         case AHC_STEP_TRANSFER:
-            if (c->phase_time >= c->phase_duration) {
-                const int landed = c->swing_side;
-                if (c->p.step_close) {
-                    double target[2];
-                    const double sigma = landed == AHC_LEFT ? -1.0 : 1.0; /* the other foot's side */
-                    c->swing_side = stance_of(c);                         /* the other foot swings */
-                    target[0] = c->feet[landed][0];
-                    target[1] = c->feet[landed][1] + sigma * 2.0 * c->ankle_y;
-                    start_swing(c, AHC_STEP_CLOSE, target);
-                } else {
-                    start_settle(c);
-                }
-            }
+            if (c->phase_time >= c->phase_duration) start_settle(c);
             break;
         case AHC_STEP_SETTLE:
-            if (c->phase_time >= c->phase_duration) {
+            if (c->phase_time < c->phase_duration) break;
+            if (c->close_stage == 1) {
+                start_close_shift(c); /* at rest on the feet apart: the closing step */
+            } else if (c->close_stage == 3 || !feet_apart(c)) {
                 /* done: the flat-footed layers take over (ahc3d restarts them); the step's frame
                  * becomes the feet's new one */
                 const double mx = 0.5 * (c->feet[0][0] + c->feet[1][0]), my = 0.5 * (c->feet[0][1] + c->feet[1][1]);
@@ -846,8 +889,10 @@ void ahc_step_step(ahc_stepper *c, const ahc_step_sensors *s, const double flat_
                 c->com_prev[1] -= my;
                 c->phase = AHC_STEP_STAND;
                 c->swing_side = -1;
+                c->close_stage = 0;
                 c->blend_time = 0.0;
-            }
+            } /* else (step_close 0, the feet apart): the robot stays at rest on them, in SETTLE (the
+               * flat-footed layers stand on the feet side by side) */
             break;
         default:
             break;
@@ -873,10 +918,11 @@ void ahc_step_step(ahc_stepper *c, const ahc_step_sensors *s, const double flat_
         reference(c, c->phase_time, r, v, a);
         ahc_quintic_eval(&c->pitch_plan, c->pitch_time, &pitch, NULL, NULL);
         c->pitch_time += c->dt;
-        if (c->phase == AHC_STEP_SETTLE) knee = c->knee_settle * (1.0 - smooth01(c->phase_time / c->phase_duration));
+        if (c->close_stage == 1 || c->close_stage == 2) knee = c->knee_settle; /* bent for the closing step */
+        else if (c->phase == AHC_STEP_SETTLE) knee = c->knee_settle * (1.0 - smooth01(c->phase_time / c->phase_duration));
         z = c->l1 * cos(0.5 * knee);
         if (one_foot(c->phase)) {
-            const double Tsw = c->p.step_swing_time, u = c->phase_time / Tsw;
+            const double Tsw = c->swing_time, u = c->phase_time / Tsw;
             if (u <= 1.0) {
                 const double b = u * (1.0 - u);
                 /* up early, down late: u^2 (1-u)^3, its peak (at u = 0.4) step_height */
@@ -996,8 +1042,11 @@ int ahc_step_state_validate(const ahc_stepper *c, char *msg, size_t msg_size)
         return ahc_rows_fail(msg, msg_size, AHC_ERR_INCONSISTENT, "stepping swing side %d invalid", c->swing_side);
     if (c->steps < 0 || c->est_valid < 0 || c->est_valid > 1 || c->q_prev_valid < 0 || c->q_prev_valid > 1 ||
         c->tilt_valid < 0 || c->tilt_valid > 1 || c->pelvis_z_valid < 0 || c->pelvis_z_valid > 1 ||
-        c->blend_from_flat < 0 || c->blend_from_flat > 1)
+        c->blend_from_flat < 0 || c->blend_from_flat > 1 || c->close_stage < 0 || c->close_stage > 3 ||
+        (c->close_stage != 0 && c->phase == AHC_STEP_STAND))
         return ahc_rows_fail(msg, msg_size, AHC_ERR_INCONSISTENT, "stepping counters or flags corrupt");
+    if (!(c->swing_time >= 0.0 && c->swing_time <= 2.0) || ((c->phase == AHC_STEP_SWING || c->phase == AHC_STEP_CLOSE) && !(c->swing_time > 0.0)))
+        return ahc_rows_fail(msg, msg_size, AHC_ERR_INCONSISTENT, "stepping swing time %g invalid", c->swing_time);
     {
         const double v[] = {c->phase_time, c->phase_duration, c->step_clock, c->blend_time, c->pitch_time,
                             c->pitch_prev, c->pitch_rate,

@@ -47,7 +47,10 @@ static void test_kinematic_step(void)
     double flat[2][AHC_LEG_JOINTS], prev[2][AHC_LEG_JOINTS];
     double th = 0.0, dth = 0.0, max_jump = 0.0, max_com_err = 0.0, max_rate[AHC_LEG_JOINTS] = {0};
     const double weight = HOAP2_TOTAL_MASS * HOAP2_G;
-    int k, side, j, last_phase = AHC_STEP_STAND, phases_seen = 0, started = 0, ended = 0;
+    int k, side, j, last_phase = AHC_STEP_STAND, phases_seen = 0, started = 0, ended = 0, n_seq = 0, seq[16];
+    /* the recovery step, at rest on the feet apart, the closing step, at rest together, standing */
+    static const int expected[] = {AHC_STEP_SHIFT, AHC_STEP_SWING, AHC_STEP_TRANSFER, AHC_STEP_SETTLE,
+                                   AHC_STEP_SHIFT, AHC_STEP_CLOSE, AHC_STEP_SETTLE, AHC_STEP_STAND};
     double landing[2] = {0, 0};
     defaults(&sp, &fp, &st);
     CHECK(ahc_step_init(&c, &st, &sp, &fp) == AHC_OK, "init");
@@ -78,7 +81,7 @@ static void test_kinematic_step(void)
                 imu_of(&g, s.q[stance], &s.imu_roll, &s.imu_pitch);
                 if (out.phase == AHC_STEP_SWING || out.phase == AHC_STEP_CLOSE) {
                     /* the swing sole carries the weight once its plan has brought it down */
-                    const int down = c.phase_time >= st.step_swing_time;
+                    const int down = c.phase_time >= c.swing_time;
                     s.fz_left = out.swing_side == AHC_LEFT ? (down ? weight : 0.0) : weight;
                     s.fz_right = out.swing_side == AHC_RIGHT ? (down ? weight : 0.0) : weight;
                 } else {
@@ -122,6 +125,7 @@ static void test_kinematic_step(void)
         }
         if (out.phase != last_phase) {
             phases_seen |= 1 << out.phase;
+            if (n_seq < 16) seq[n_seq++] = out.phase;
             if (last_phase == AHC_STEP_SWING) {
                 landing[0] = out.landing[0];
                 landing[1] = out.landing[1];
@@ -135,6 +139,8 @@ static void test_kinematic_step(void)
                           (1 << AHC_STEP_CLOSE) | (1 << AHC_STEP_SETTLE) | (1 << AHC_STEP_STAND)),
           "every phase ran (mask 0x%x)", phases_seen);
     CHECK(out.steps == 2, "two steps landed (%d)", out.steps);
+    CHECK(n_seq == 8 && memcmp(seq, expected, sizeof expected) == 0,
+          "the phases in order: shift, swing, transfer, settle, shift, close, settle, stand (%d phases)", n_seq);
     CHECK(landing[0] > 0.02, "the first step went forward (landing x %.4f)", landing[0]);
     CHECK(max_jump < 0.02, "the references move at most 0.02 rad per tick (%.4f)", max_jump);
     CHECK(max_com_err < 2e-3, "the estimate follows the plan's CoM within 2 mm (%.5f)", max_com_err);

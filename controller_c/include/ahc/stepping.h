@@ -17,7 +17,10 @@
  *             predicted at touch-down, within the leg's reach and clear of the stance foot) and
  *             comes down; it has landed when its sole carries step_touchdown_fz;
  *   TRANSFER  both feet down, apart: the capture point is moved over the foot that landed;
- *   CLOSE     (step_close) one foot down: the other one is brought beside it;
+ *   SETTLE    both feet down: the CoM reference comes to rest over the feet's mid-point; with
+ *             step_close, then (at rest) the closing step, slower than the recovery step:
+ *   SHIFT     the capture point moves over the landed foot, in step_close_shift_time;
+ *   CLOSE     one foot down: the other one is brought beside it, in step_close_swing_time;
  *   SETTLE    both feet down, together: the CoM reference comes to rest over the feet, the legs
  *             stretch back to the erect height; then the sagittal and frontal controllers take
  *             over from the last references (bumpless), in phase 0.
@@ -51,8 +54,8 @@ enum {
     AHC_STEP_SHIFT = 1,    /* both feet: the capture point moves over the stance foot           */
     AHC_STEP_SWING = 2,    /* one foot: the other swings to the landing point                   */
     AHC_STEP_TRANSFER = 3, /* both feet, apart: the capture point moves over the landed foot     */
-    AHC_STEP_CLOSE = 4,    /* one foot: the other is brought beside it                           */
-    AHC_STEP_SETTLE = 5    /* both feet, together: to rest and erect; then back to STAND         */
+    AHC_STEP_CLOSE = 4,    /* one foot: the other is brought beside it (after a SETTLE and SHIFT) */
+    AHC_STEP_SETTLE = 5    /* both feet: to rest; at the end, erect and back to STAND            */
 };
 #define AHC_STEP_PHASES 6
 
@@ -92,6 +95,8 @@ typedef struct {
     int step_dcm_feedback;     /* 1: the reference's ZMP tracks the measured capture point           */
     double step_dcm_gain;      /* capture-point feedback: the planned ZMP moves by (1 + gain/omega)
                                   times the measured minus the reference capture point [1/s]     */
+    double step_close_shift_time; /* the closing step's weight shift onto the landed foot [s]       */
+    double step_close_swing_time; /* the closing step's swing [s]                                   */
 } ahc_step_params;
 
 /* HOAP-2 defaults (docs/controller.md §12): stepping off. */
@@ -161,6 +166,9 @@ typedef struct {
     double pelvis_z;            /* the hips' planned height last tick [m]                           */
     int pelvis_z_valid;
     double knee_settle;         /* the legs' planned knee bend at SETTLE's start [rad]              */
+    int close_stage;            /* the closing step: 0 none, 1 at rest on the feet apart (SETTLE),
+                                   2 its weight shift and swing (SHIFT, CLOSE), 3 the last SETTLE   */
+    double swing_time;          /* the running swing's planned duration [s]                        */
     double q_prev[2][AHC_LEG_JOINTS];   /* last tick's planned joint angles (rates)                 */
     double q_rate[2][AHC_LEG_JOINTS];   /* their low-passed rates (the servo lead)                  */
     int q_prev_valid;
