@@ -9,7 +9,9 @@ paper_five_pushes_3d's base, run with the 3D controller:
    that stand keep the capture point inside the soles: the evidence for the decision's thresholds;
 2. stepping on, the layer's defaults (or --set NAME=VALUE ...): the outcome, the steps landed, where
    the first step landed against where it was sent, and the fastest joint set point rate asked of
-   the servos during the swing (Hoap2Plant3D's vel_max is 5 rad/s).
+   the servos during the swing (Hoap2Plant3D's vel_max is 5 rad/s);
+3. side (90 deg) and diagonal (45 deg: back and left) pushes, stepping on and flat-footed (stepping on,
+   its thresholds out of reach): the outcome and the steps landed.
 
     .venv/bin/python scripts/stepping_trials.py [--set NAME=VALUE ...]
 
@@ -33,13 +35,17 @@ from anklehip.running.master import Models, simulate  # noqa: E402
 
 FLAT = [(14, 0.2), (17, 0.2), (19, 0.2), (20, 0.2), (21, 0.2), (22, 0.2), (-10, 0.2), (-13, 0.2), (-14, 0.2),
         (8, 1.0), (9, 1.0), (10, 1.0), (-6, 1.0), (-7, 1.0)]
-STEPPING = [(21, 0.2), (22, 0.2), (24, 0.2), (26, 0.2), (10, 1.0), (12, 1.0)]
+STEPPING = [(20, 0.2), (21, 0.2), (22, 0.2), (23, 0.2), (24, 0.2), (26, 0.2), (10, 1.0), (12, 1.0)]
+SIDEWAYS = [(90, 20), (90, 24), (90, 28), (45, 20), (45, 24), (45, 28)]  # (direction [deg], force [N]), 0.2 s
 JOINTS = ("hip_yaw", "hip", "hip_roll", "knee", "ankle", "ankle_roll")
 
 
-def run(scenario, models, engine, force, duration, overrides):
-    push = PushProfile.from_segments([PushSegment("pulse", t=1.0, force=float(force), duration=duration, rise=0.05)])
-    sc = dataclasses.replace(scenario, controller_model="3d", push=push, stop_time=4.0)
+def run(scenario, models, engine, force, duration, overrides, angle=0.0):
+    a = np.radians(angle)
+    push, push_y = (PushProfile.from_segments([PushSegment("pulse", t=1.0, force=float(f), duration=duration, rise=0.05)])
+                    for f in (force * np.cos(a), force * np.sin(a)))
+    sc = dataclasses.replace(scenario, controller_model="3d", push=push, stop_time=4.0,
+                             **({"push_y": push_y} if angle else {}))
     return simulate(sc, models, controller_overrides=overrides, progress=False, engine=engine)
 
 
@@ -106,10 +112,22 @@ def main(argv=None) -> int:
                 rate = rate[stepping[1:] & stepping[:-1]]
                 if rate.size and rate.max() > fastest:
                     fastest, which = float(rate.max()), f"{side} {joint}"
-        outcome = "stood" if r.outcome == "completed" else f"fell at {r.end_time:.2f} s"
-        print(f"| {force:+d} | {duration:g} | {outcome} | {int(col(d, 'steps')[-1])} | "
+        print(f"| {force:+d} | {duration:g} | {outcome(r)} | {int(col(d, 'steps')[-1])} | "
               f"{1e3 * sent:.0f} -> {1e3 * landed:.0f} | {fastest:.1f} ({which}) |")
+
+    print("\n3. side and diagonal pushes (0.2 s), stepping on" + (f" ({', '.join(args.set)})" if args.set else "")
+          + " and flat-footed")
+    print("| direction [deg] | push [N] | stepping: outcome, steps | flat-footed: outcome |")
+    print("|---|---|---|---|")
+    for angle, force in SIDEWAYS:
+        r = run(scenario, models, engine, force, 0.2, {"stepping_enabled": 1, **extra}, angle)
+        f = run(scenario, models, engine, force, 0.2, watch, angle)
+        print(f"| {angle} | {force} | {outcome(r)}, {int(col(r.data, 'steps')[-1])} | {outcome(f)} |")
     return 0
+
+
+def outcome(r) -> str:
+    return "stood" if r.outcome == "completed" else f"fell at {r.end_time:.2f} s"
 
 
 if __name__ == "__main__":
