@@ -14,6 +14,14 @@ paper_five_pushes_3d's base, run with the 3D controller:
    its thresholds out of reach): the outcome and the steps landed.
 
     .venv/bin/python scripts/stepping_trials.py [--set NAME=VALUE ...]
+    .venv/bin/python scripts/stepping_trials.py --sweep NAME=V1,V2,... [--set ...]
+    .venv/bin/python scripts/stepping_trials.py --map [--set ...]
+
+--map: the boundary (the largest force below which every 1 N step stands) of back pushes of each
+duration, flat-footed (the 3D controller's defaults, stepping off) and with stepping, and their ratio.
+
+--sweep: one stepping parameter over its values (the others as --set or the defaults), on 0.2 s back
+pushes of 20-30 N: a table of the outcome (S stood, F fell) and the steps landed per force.
 
 Runs on the native engine in well under a minute.
 """
@@ -36,6 +44,7 @@ from anklehip.running.master import Models, simulate  # noqa: E402
 FLAT = [(14, 0.2), (17, 0.2), (19, 0.2), (20, 0.2), (21, 0.2), (22, 0.2), (-10, 0.2), (-13, 0.2), (-14, 0.2),
         (8, 1.0), (9, 1.0), (10, 1.0), (-6, 1.0), (-7, 1.0)]
 STEPPING = [(20, 0.2), (21, 0.2), (22, 0.2), (23, 0.2), (24, 0.2), (26, 0.2), (10, 1.0), (12, 1.0)]
+MAP_DURATIONS = (0.15, 0.2, 0.3, 0.5, 1.0)
 SIDEWAYS = [(90, 20), (90, 24), (90, 28), (45, 20), (45, 24), (45, 28)]  # (direction [deg], force [N]), 0.2 s
 JOINTS = ("hip_yaw", "hip", "hip_roll", "knee", "ankle", "ankle_roll")
 
@@ -67,6 +76,10 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
                     help="a stepping (or any controller) parameter for part 2")
+    ap.add_argument("--sweep", metavar="NAME=V1,V2,...",
+                    help="one parameter over these values, on 0.2 s back pushes of 20-30 N (nothing else runs)")
+    ap.add_argument("--map", action="store_true",
+                    help="the boundaries of back pushes per duration, flat-footed and with stepping (nothing else runs)")
     args = ap.parse_args(argv)
     extra = {}
     for kv in args.set:
@@ -75,6 +88,34 @@ def main(argv=None) -> int:
     scenario = load_scenario(find_scenario("paper_five_pushes_3d"))
     models = Models.load(None, plant_model="3d", controller_model="3d")
     engine = native.default_engine()
+    if args.map:
+        print("back pushes (50 ms ramps): the boundary, the largest force [N] below which every 1 N step stands")
+        print("| duration [s] | flat-footed | stepping | stepping / flat-footed |")
+        print("|---|---|---|---|")
+        for duration in MAP_DURATIONS:
+            def boundary(overrides):
+                force = 1
+                while force < 80 and run(scenario, models, engine, force, duration, overrides).outcome == "completed":
+                    force += 1
+                return force - 1
+            flat = boundary({"stepping_enabled": 0})
+            step = boundary({"stepping_enabled": 1, **extra})
+            print(f"| {duration:g} | {flat} | {step} | {step / flat:.2f} |")
+        return 0
+    if args.sweep:
+        name, _, values = args.sweep.partition("=")
+        forces = range(20, 31)
+        print(f"0.2 s back pushes, stepping on{' (' + ', '.join(args.set) + ')' if args.set else ''}: "
+              f"S stood, F fell, and the steps landed")
+        print(f"| {name} | " + " | ".join(f"{f} N" for f in forces) + " | stood |")
+        print("|---|" + "---|" * (len(forces) + 1))
+        for v in values.split(","):
+            cells = []
+            for force in forces:
+                r = run(scenario, models, engine, force, 0.2, {"stepping_enabled": 1, **extra, name: float(v)})
+                cells.append(("S" if r.outcome == "completed" else "F") + str(int(col(r.data, "steps")[-1])))
+            print(f"| {v} | " + " | ".join(cells) + f" | {sum(c[0] == 'S' for c in cells)} |")
+        return 0
 
     print("1. flat-footed: the capture point of the stepping layer's estimate (thresholds out of reach)")
     print("| push [N] | duration [s] | stood | capture point x, min .. max [mm] |")

@@ -1,5 +1,5 @@
 """The stepping layer recovers a push on the 3D plant (issue 30, docs/controller.md §12.4):
-scenarios/step_recovery_3d.toml, a 22 N back push for 0.2 s.
+scenarios/step_recovery_3d.toml, a 24 N back push for 0.2 s.
 
 - With stepping off the 3D controller falls (they stand 0.2 s back pushes up to 19 N and fall from
   20 N): the push is beyond them.
@@ -53,7 +53,7 @@ def test_with_stepping_the_robot_stands_erect_after_the_designed_sequence(runs):
     # the first landing forward, ahead of the toes (57.5 mm); the closing step beside it (the
     # landing output keeps the last landing: the foot brought beside the first one)
     first = d["landing_x"][np.argmax((phase == 3))]
-    assert 0.08 < first <= 0.121
+    assert 0.08 < first <= 0.12 + 0.015     # step_length_max, plus the touch-down tolerance (measured)
     last = d["landing_x"][-1]
     assert abs(last - first) < 0.015                            # within step_touchdown_tol
     assert int(d["swing_side"][np.argmax(phase == 4)]) != int(d["swing_side"][np.argmax(phase == 2)])
