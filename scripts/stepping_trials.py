@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """The stepping layer on the 3D plant, measured (docs/controller.md §12.4).
 
-Back pushes (0.2 s and 1 s pulses, 50 ms ramps, at the trunk's push point, from 1 s) on
+Back pushes (0.2 s and 1 s pulses, 50 ms ramps, at the trunk's push point, from 1 s; runs of 6 s) on
 paper_five_pushes_3d's base, run with the 3D controller:
 
 1. flat-footed (stepping on, its thresholds out of reach, so that the layer only estimates): the
@@ -53,7 +53,7 @@ def run(scenario, models, engine, force, duration, overrides, angle=0.0):
     a = np.radians(angle)
     push, push_y = (PushProfile.from_segments([PushSegment("pulse", t=1.0, force=float(f), duration=duration, rise=0.05)])
                     for f in (force * np.cos(a), force * np.sin(a)))
-    sc = dataclasses.replace(scenario, controller_model="3d", push=push, stop_time=4.0,
+    sc = dataclasses.replace(scenario, controller_model="3d", push=push, stop_time=6.0,
                              **({"push_y": push_y} if angle else {}))
     return simulate(sc, models, controller_overrides=overrides, progress=False, engine=engine)
 

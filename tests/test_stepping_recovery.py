@@ -67,3 +67,32 @@ def test_the_recovery_is_the_same_on_the_native_engine(runs):
     assert not nat.fell
     assert int(nat.data["steps"][-1]) == 2
     assert np.max(np.abs(nat.data["landing_x"] - on.data["landing_x"])) < 1e-6
+
+
+def _point(sf, fmu_dir, variant, force, duration):
+    from anklehip.running import native
+    from anklehip.running.sweepfile import sweepfile_point
+    v = next(x for x in sf.variants if x.name == variant)
+    spec = {"sweep": str(sf.path), "fmu_dir": str(fmu_dir), "engine": native.default_engine(), "variant": v.as_dict(),
+            "values": {"push.force": force, "push.duration": duration}}
+    return sweepfile_point(spec)
+
+
+@pytest.mark.parametrize("force, duration, flat, stepping", [
+    (4.0, 0.2, ("ankle", "completed"), ("ankle", "completed")),       # the ankle strategy alone
+    (14.0, 0.2, ("hip", "completed"), ("hip", "completed")),          # the hip strategy, no step
+    (24.0, 0.2, ("hip", "fell"), ("step", "completed")),              # beyond the flat-footed: a step
+    (45.0, 0.3, ("hip", "fell"), ("step", "fell")),                   # beyond both
+])
+def test_decision_surface_points(fmu_dir, force, duration, flat, stepping):
+    """scenarios/sweeps/stepping_3d.toml (docs/capability.md §10): each run's strategy, as the decision
+    surfaces colour it (anklehip.analysis.capability.strategy_of), and its outcome."""
+    from anklehip.analysis.capability import strategy_of
+    from anklehip.files.paths import find_sweep_file
+    from anklehip.running.sweepfile import load_sweep_file
+    sf = load_sweep_file(find_sweep_file("stepping_3d"))
+    assert [v.name for v in sf.variants] == ["flat_footed", "stepping"]
+    for variant, want in (("flat_footed", flat), ("stepping", stepping)):
+        row = _point(sf, fmu_dir, variant, force, duration)
+        assert (strategy_of(row), row["outcome"]) == want, (variant, row)
+        assert row["stepped"] == (want[0] == "step")

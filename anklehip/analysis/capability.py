@@ -50,7 +50,7 @@ def plot_points(sf, rows: list[dict[str, Any]], out: Path) -> list[Path]:
         ax.set_yticks(range(len(variants)), variants)
         ax.set_ylim(-0.7, len(variants) - 0.3)
         ax.set_xlabel(_label(k))
-        ax.set_title(f"{sf.name}: o stood (green ankle strategy only, blue hip strategy), x fell", fontsize=9)
+        ax.set_title(f"{sf.name}: o stood, x fell; the strategy used: green the ankle strategy alone, blue the hip strategy, purple a step", fontsize=9)
         ax.grid(alpha=0.3)
         fig.tight_layout()
         p = out / "points_outcome.png"
@@ -88,7 +88,7 @@ def plot_points(sf, rows: list[dict[str, Any]], out: Path) -> list[Path]:
         if sc is not None:
             fig.colorbar(sc, ax=axes[0].tolist(), label="peak |ZMP| [mm]" if what == "peak_zmp"
                          else "time to recover after the push [s]")
-        fig.suptitle(f"{sf.name}: " + {"outcome": "o stood (green ankle strategy only, blue hip strategy), x fell",
+        fig.suptitle(f"{sf.name}: " + {"outcome": "o stood, x fell; the strategy used: green the ankle strategy alone, blue the hip strategy, purple a step",
                                       "peak_zmp": "peak |ZMP| of the runs that stood; x fell",
                                       "time_to_recover": "time to recover; x fell"}[what], fontsize=10)
         p = out / fname
@@ -105,9 +105,18 @@ def _finite(x) -> bool:
 def _marker(r: dict, size: int = 60) -> dict:
     if r.get("outcome") == "error":
         return {"marker": "s", "c": "0.6", "s": size}
-    if r.get("outcome") != "completed":
-        return {"marker": "x", "c": "tab:red", "s": size}
-    return {"marker": "o", "c": "tab:blue" if r.get("max_phase", 0) > 0 else "tab:green", "s": size}
+    return {"marker": "o" if r.get("outcome") == "completed" else "x", "c": STRATEGY_COLOURS[strategy_of(r)], "s": size}
+
+
+# the strategy a run used, as Stephens (2007) draws decision surfaces: a step (the stepping layer
+# left STAND), else the hip strategy (sagittal phase 1 or later), else the ankle strategy alone
+STRATEGY_COLOURS = {"ankle": "tab:green", "hip": "tab:blue", "step": "tab:purple"}
+
+
+def strategy_of(r: dict) -> str:
+    if r.get("stepped", 0):
+        return "step"
+    return "hip" if r.get("max_phase", 0) > 0 else "ankle"
 
 
 # ---------------------------------------------------------------------------------------------

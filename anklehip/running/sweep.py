@@ -127,7 +127,17 @@ def _one(scenario_path: str, fmu_dir: str | None, peak: float, variant: Variant,
             "max_abs_foot_pitch": float(np.max(np.abs(d["foot_pitch"]))) if "foot_pitch" in d.dtype.names else float("nan"),
             "mode_switches": int(d["mode_switches"][-1]) if "mode_switches" in d.dtype.names else -1,
             "final_phase": int(d["phase"][-1]) if "phase" in d.dtype.names else -1,
+            **stepping_columns(d),
             "wall_time": res.wall_time, **({"error": res.message} if res.outcome == "error" else {})}
+
+
+def stepping_columns(d) -> dict[str, int]:
+    """The 3D controller's stepping layer in a run (nothing for a controller without one): the steps
+    landed, and whether a step was taken at all (the layer left STAND; a step that falls before its
+    landing counts)."""
+    if "step_phase" not in d.dtype.names:
+        return {}
+    return {"steps": int(d["steps"].max()), "stepped": int(bool((d["step_phase"] != 0).any()))}
 
 
 def sweep_point(spec: dict) -> dict[str, Any]:

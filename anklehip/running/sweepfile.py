@@ -46,7 +46,7 @@ import numpy as np
 
 from ..files.text import read_toml
 from ..files.scenario import PushProfile, PushSegment, ScenarioError, _V
-from .sweep import MAX_GRID, Variant, parse_grid
+from .sweep import MAX_GRID, Variant, parse_grid, stepping_columns
 
 TOP_KEYS = {"description", "scenario", "stop_time", "push", "variant", "grid", "random"}
 PUSH_FIELDS = {"t": 2.0, "force": 8.0, "duration": 0.5, "rise": 0.05, "direction": 1.0}
@@ -298,6 +298,7 @@ def sweepfile_point(spec: dict) -> dict[str, Any]:
                               if "zmp_y" in d.dtype.names and len(d) else {}),
                            "phases": "".join(str(x) for x in s.phases) if s else "",
                            "max_phase": int(d["phase"].max()) if "phase" in d.dtype.names else -1,
+                           **stepping_columns(d),
                            "time_to_recover": s.time_to_recover if s and s.time_to_recover is not None else math.nan,
                            "peak_hip": s.peak_hip if s else math.nan, "peak_ankle": s.peak_ankle if s else math.nan,
                            "max_abs_foot_pitch": float(np.max(np.abs(d["foot_pitch"]))) if "foot_pitch" in d.dtype.names else math.nan,

@@ -24,7 +24,7 @@ void ahc_step_params_default(ahc_step_params *p)
     p->step_pelvis_drop = 0.01;
     p->step_drop_time = 0.25;
     p->step_shift_time_max = 0.1;
-    p->step_pitch_time = 0.18;
+    p->step_pitch_time = 0.17;
     p->step_hip_hike = 0.1;
     p->step_lead_max = 0.1;
     p->step_touchdown_after = 0.5;
