@@ -565,29 +565,25 @@ static void start_close_shift(ahc_stepper *c)
  * then moves as the pendulum over p. Returns p. */
 static void pendulum_tick(ahc_stepper *c, const double xi_meas[2], double p_out[2])
 {
-    double b[4], lo[2], hi[2];
+    double lo[2], hi[2];
+    /* a capture point held at rest (SETTLE's mid-point once reached, the closing swing's point over
+     * the stance foot) is held by the reference's own feedback, d xi / dt = -omega (xi - hold): the
+     * open-loop pendulum would diverge from any rounding at e^(omega t) */
+    const double *hold = c->phase == AHC_STEP_SETTLE && c->phase_time >= c->settle_capture_time ? c->settle_mid
+                         : c->phase == AHC_STEP_CLOSE                                           ? c->zmp
+                                                                                                : NULL;
     int i;
     if (one_foot(c->phase)) {
+        double b[4];
         sole_box(c, stance_of(c), b);
         lo[0] = b[0]; hi[0] = b[1]; lo[1] = b[2]; hi[1] = b[3];
     } else {
-        double b2[4];
-        sole_box(c, AHC_LEFT, b);
-        sole_box(c, AHC_RIGHT, b2);
-        lo[0] = fmin(b[0], b2[0]); hi[0] = fmax(b[1], b2[1]);
-        lo[1] = fmin(b[2], b2[2]); hi[1] = fmax(b[3], b2[3]);
+        support_box(c, lo, hi);
     }
     for (i = 0; i < 2; ++i) {
         const double xi_ref = c->cref[i] + c->vref[i] / c->omega;
         const double fb = c->p.step_dcm_feedback ? (1.0 + c->p.step_dcm_gain / c->omega) * (xi_meas[i] - xi_ref) : 0.0;
-        double plan = c->zmp[i];
-        /* a capture point held at rest (SETTLE's mid-point once reached, the closing swing's point
-         * over the stance foot) is held by the reference's own feedback, d xi / dt = -omega (xi -
-         * hold): the open-loop pendulum would diverge from any rounding at e^(omega t) */
-        if (c->phase == AHC_STEP_SETTLE && c->phase_time >= c->settle_capture_time)
-            plan = c->settle_mid[i] + 2.0 * (xi_ref - c->settle_mid[i]);
-        else if (c->phase == AHC_STEP_CLOSE)
-            plan = c->zmp[i] + 2.0 * (xi_ref - c->zmp[i]);
+        const double plan = hold ? hold[i] + 2.0 * (xi_ref - hold[i]) : c->zmp[i];
         const double p = clampd(plan + fb, lo[i], hi[i]);
         c->vref[i] += c->omega * c->omega * (c->cref[i] - p) * c->dt;
         c->cref[i] += c->vref[i] * c->dt;
