@@ -496,3 +496,58 @@ def test_docs_n_step_table_is_the_modules(fmu_path):
     plant = FMUInfo.load(fmu_path("Hoap2Plant"))
     table = n_step_table(bounds_parameters(plant.start_values(), plant_header(plant.unzipdir)))
     assert table in (REPO_ROOT / "docs" / "capability.md").read_text()
+
+
+SIDE = {**PARAMS, "l1": NOMINAL["L1"], "I1_roll": NOMINAL["I1_ROLL"], "ankle_y": NOMINAL["ANKLE_Y"],
+        "sole_width": NOMINAL["SOLE_WIDTH"], "thigh": NOMINAL["THIGH"], "shank": NOMINAL["SHANK"],
+        "hip_y": NOMINAL["HIP_Y"], "hip_abduction_max": NOMINAL["HIP_ABDUCTION_MAX"],
+        "hip_adduction_max": NOMINAL["HIP_ADDUCTION_MAX"], "vel_max_hip": 5.0}
+
+
+@pytest.mark.parametrize("dt", [0.108, 0.15])
+def test_side_step_bound_is_the_capture_threshold_of_the_lateral_pendulum(dt):
+    """Establishes: SideSteps.side_step is the threshold of the model it is derived from, checked by
+    integrating that model: the pendulum (omega) starts at the mid-plane with the capture point 1 %
+    below or above the bound, its CoP on the right sole's inner edge until the left foot lands
+    `width` from the right ankle at dt, then on the landed sole's outer edge: below, it swings back
+    inside that edge; above, it diverges over it."""
+    from anklehip.analysis.bounds import side_steps
+    s = side_steps(SIDE)
+    a, w, om = s.ankle_y, s.half_sole, s.omega
+    xi0 = np.array([0.99, 1.01]) * s.side_step(dt)
+    y, v = np.zeros(2), om * xi0          # the CoM at the mid-plane, moving toward +y
+    h = 1e-4
+    for k in range(int(3.0 / h)):
+        p = -a + w if k * h < dt else -a + s.width + w
+        v = v + h * om * om * (y - p)
+        y = y + h * v
+    edge = -a + s.width + w
+    assert y[0] < edge and y[1] > edge + 0.1
+
+
+def test_side_steps_of_hoap2():
+    """Establishes: HOAP-2's sideways step bounds (docs/capability.md section 9.1): the side step by
+    the loaded leg gains over the flat-footed stance only when it lands within ln(W / 2 ankle_y) /
+    omega of the decision (equal there, less after, e.g. at the controller's 0.2 s swing), at most
+    22.6 mm at the hip servo's speed; the crossover gains nothing, the hip's adduction limit keeping
+    the crossing ankle short of the stance ankle (it would gain with a hip that adducts further)."""
+    from anklehip.analysis.bounds import side_steps
+    s = side_steps(SIDE)
+    assert s.width == pytest.approx(0.039 + 0.039 + 0.2 * math.sin(NOMINAL["HIP_ABDUCTION_MAX"]), rel=1e-12)
+    assert s.side_step(s.break_even) == pytest.approx(s.flat, abs=1e-12)
+    assert s.side_step(s.dt_min) - s.flat == pytest.approx(0.0226, abs=1e-4)
+    assert s.side_step(0.2) < s.flat < s.side_step(0.9 * s.break_even)
+    assert s.cross_ankle < s.ankle_y and s.crossover(s.dt_min) == s.flat
+    wide = side_steps({**SIDE, "hip_adduction_max": 1.0})
+    assert wide.cross_ankle > wide.ankle_y and wide.crossover(wide.dt_min) > wide.flat
+
+
+def test_docs_side_step_table_is_the_modules(fmu_path):
+    """Establishes: the sideways table of docs/capability.md section 9.1 is what `python -m
+    anklehip.analysis.bounds` prints for the sagittal plant FMU's robot (side_step_table)."""
+    from anklehip.analysis.bounds import side_step_table
+    from anklehip.running.fmu import FMUInfo
+    from conftest import REPO_ROOT
+    plant = FMUInfo.load(fmu_path("Hoap2Plant"))
+    table = side_step_table(bounds_parameters(plant.start_values(), plant_header(plant.unzipdir)))
+    assert table in (REPO_ROOT / "docs" / "capability.md").read_text()

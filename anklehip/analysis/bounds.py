@@ -446,6 +446,80 @@ def n_step_table(params: dict, durations=None, rise: float = 0.05, hip_drop: flo
                    + " | ".join(f"{sustained_push_limit_stepped(r, l_max, d):.2f}" for _ in STEP_COUNTS[1:]) + " |")
     return "\n".join(out)
 
+@dataclass(frozen=True)
+class SideSteps:
+    """One step sideways toward a capture point beyond an outer sole edge (docs/capability.md section
+    9.1), pushed toward +y (the left foot loaded), y from the mid-plane [m], times [s]. The loaded-leg
+    side step stands on the right foot (ankle at -ankle_y, its CoP up to its inner edge, r_max =
+    half the sole) while the left swings out, landing at most `width` from the right ankle: the
+    pelvis over the mid-plane, the stance leg vertical, the swing leg (thigh + shank) rolled out to
+    the hip's abduction limit, width = hip_y + ankle_y + L sin(abduction_max), in dt_min =
+    abduction_max / vel_max_hip at the hip servo's speed. The crossover stands on the left foot (its
+    CoP up to its outer edge) while the right leg crosses: within the hip's adduction limit its ankle
+    gets at most cross_ankle = -hip_y + L sin(adduction_max) from the mid-plane. Koolen's one-step
+    margin d_1 = r_max + l_max e^(-omega dt) (capture_margin) about the stance ankle gives the largest
+    capture point y that comes to rest. Optimistic as a bound must be: omega the rigid body's about
+    the ankle (the smallest of the module's), the CoP moved to the far foot at once, no lift-off or
+    touch-down time, the feet's collision ignored."""
+    omega: float
+    ankle_y: float
+    half_sole: float
+    width: float
+    dt_min: float
+    cross_ankle: float
+
+    @property
+    def flat(self) -> float:
+        """Flat-footed: the capture point at most at the outer sole edge."""
+        return self.ankle_y + self.half_sole
+
+    def side_step(self, dt: float) -> float:
+        """The loaded-leg side step landing dt after the decision."""
+        return -self.ankle_y + capture_margin(self.half_sole, self.width, self.omega, dt, 1)
+
+    def crossover(self, dt: float) -> float:
+        """The crossover landing dt after the decision (no gain while the crossing ankle cannot get
+        beyond the stance ankle)."""
+        return self.ankle_y + capture_margin(self.half_sole, max(self.cross_ankle - self.ankle_y, 0.0), self.omega, dt, 1)
+
+    @property
+    def break_even(self) -> float:
+        """The side step gains over flat-footed only landing sooner than ln(width / 2 ankle_y) / omega."""
+        return math.log(self.width / (2 * self.ankle_y)) / self.omega
+
+
+def side_steps(params: dict) -> SideSteps:
+    """SideSteps of the robot of bounds_parameters' numbers (the header's legs, hip and stance, the
+    plant's hip servo speed)."""
+    st = stance_from_params(params)
+    L = float(params["thigh"]) + float(params["shank"])
+    hip_y, abd = float(params["hip_y"]), float(params["hip_abduction_max"])
+    return SideSteps(omega=st.body.omega, ankle_y=st.ankle_y, half_sole=st.sole_width / 2,
+                     width=hip_y + st.ankle_y + L * math.sin(abd), dt_min=abd / float(params["vel_max_hip"]),
+                     cross_ankle=-hip_y + L * math.sin(float(params["hip_adduction_max"])))
+
+
+def side_step_table(params: dict, swing_times=(0.15, 0.2)) -> str:
+    """side_steps' numbers (docs/capability.md section 9.1) as markdown, the side step landing at
+    the servo-limited dt_min and at the swing times given."""
+    s = side_steps(params)
+    out = [f"Sideways (pushed toward +y; ω = {s.omega:.3f} s⁻¹): the loaded-leg side step lands at most "
+           f"{1000 * s.width:.1f} mm from the right ankle, its hip rolling out in dt ≥ {1000 * s.dt_min:.0f} ms; "
+           f"the crossing right ankle gets at most {1000 * s.cross_ankle:+.1f} mm from the mid-plane "
+           f"(the left ankle at {1000 * s.ankle_y:+.1f} mm).", "",
+           "| strategy | stance foot | landing after [ms] | capture point's largest y [mm] | against flat-footed [mm] |",
+           "|---|---|---|---|---|",
+           f"| flat-footed (both feet) | both | – | {1000 * s.flat:.1f} | 0 |"]
+    for t in (s.dt_min,) + tuple(swing_times):
+        y = s.side_step(t)
+        out.append(f"| side step, loaded (left) leg | right | {1000 * t:.0f} | {1000 * y:.1f} | {1000 * (y - s.flat):+.1f} |")
+    y = s.crossover(s.dt_min)
+    out.append(f"| crossover, unloaded (right) leg | left | {1000 * s.dt_min:.0f} | {1000 * y:.1f} | {1000 * (y - s.flat):+.1f} |")
+    out += ["", f"The side step gains only landing within ln(W / 2 ankle_y) / ω = {1000 * s.break_even:.0f} ms "
+            "of the decision."]
+    return "\n".join(out)
+
+
 # ---------------------------------------------------------------------------------------------
 # every horizontal direction: the robot on both feet (docs/capability.md section 7)
 
@@ -609,7 +683,7 @@ HEADER_NAMES = {"g": "G", "m1": "M1", "l1": "L1", "lg1": "LG1", "I1": "I1", "m2"
                 "I1_roll": "I1_ROLL", "link2_com_y": "LINK2_COM_Y", "ankle_roll_max": "ANKLE_ROLL_MAX",
                 "hip_abduction_max": "HIP_ABDUCTION_MAX", "hip_adduction_max": "HIP_ADDUCTION_MAX",
                 "ankle_min": "ANKLE_MIN", "ankle_max": "ANKLE_MAX", "hip_min": "HIP_MIN", "hip_max": "HIP_MAX",
-                "thigh": "THIGH", "shank": "SHANK"}
+                "thigh": "THIGH", "shank": "SHANK", "hip_y": "HIP_Y"}
 
 
 def header_numbers(text: str) -> dict[str, float]:
@@ -750,3 +824,4 @@ if __name__ == "__main__":      # pragma: no cover - prints the doc's tables
     print("\n" + nominal_tables_3d(p, p.get("theta_ankle_erect", 0.0), p.get("theta_hip_erect", 0.0)))
     print("\n" + optimum_table())          # the cached flat-footed optimum (section 8)
     print("\n" + n_step_table(bounds_parameters(plant.start_values(), plant_header(plant.unzipdir))))   # section 9
+    print("\n" + side_step_table(bounds_parameters(plant.start_values(), plant_header(plant.unzipdir))))   # 9.1
