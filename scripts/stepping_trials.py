@@ -6,7 +6,8 @@ paper_five_pushes_3d's base, run with the 3D controller:
 
 1. flat-footed (stepping on, its thresholds out of reach, so that the layer only estimates): the
    range of the capture point's x that each push produced and whether the robot stood. The pushes
-   that stand keep the capture point inside the soles: the evidence for the decision's thresholds;
+   that stand keep the capture point inside the soles: the evidence for the decision's thresholds
+   (and the trunk's largest forward lean, for step_trigger_lean's);
 2. stepping on, the layer's defaults (or --set NAME=VALUE ...): the outcome, the steps landed, where
    the first step landed against where it was sent, and the fastest joint set point rate asked of
    the servos during the swing (Hoap2Plant3D's vel_max is 5 rad/s);
@@ -16,12 +17,16 @@ paper_five_pushes_3d's base, run with the 3D controller:
     .venv/bin/python scripts/stepping_trials.py [--set NAME=VALUE ...]
     .venv/bin/python scripts/stepping_trials.py --sweep NAME=V1,V2,... [--set ...]
     .venv/bin/python scripts/stepping_trials.py --map [--set ...]
+    .venv/bin/python scripts/stepping_trials.py --map --sweep NAME=V1,V2,... [--set ...]
 
 --map: the boundary (the largest force below which every 1 N step stands) of back pushes of each
 duration, flat-footed (the 3D controller's defaults, stepping off) and with stepping, and their ratio.
 
 --sweep: one stepping parameter over its values (the others as --set or the defaults), on 0.2 s back
 pushes of 20-30 N: a table of the outcome (S stood, F fell) and the steps landed per force.
+
+--map --sweep NAME=V1,...: the boundaries with stepping for each value of one parameter (a row each),
+under the flat-footed ones.
 
 Runs on the native engine in well under a minute.
 """
@@ -45,7 +50,7 @@ FLAT = [(14, 0.2), (17, 0.2), (19, 0.2), (20, 0.2), (21, 0.2), (22, 0.2), (-10, 
         (8, 1.0), (9, 1.0), (10, 1.0), (-6, 1.0), (-7, 1.0)]
 STEPPING = [(20, 0.2), (21, 0.2), (22, 0.2), (23, 0.2), (24, 0.2), (26, 0.2), (10, 1.0), (12, 1.0)]
 MAP_DURATIONS = (0.15, 0.2, 0.3, 0.5, 1.0)
-SIDEWAYS = [(90, 20), (90, 24), (90, 28), (45, 20), (45, 24), (45, 28)]  # (direction [deg], force [N]), 0.2 s
+SIDEWAYS = [(90, 20), (90, 24), (90, 28), (90, 32), (45, 20), (45, 24), (45, 28), (45, 32)]  # (direction [deg], force [N]), 0.2 s
 JOINTS = ("hip_yaw", "hip", "hip_roll", "knee", "ankle", "ankle_roll")
 
 
@@ -77,7 +82,8 @@ def main(argv=None) -> int:
     ap.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
                     help="a stepping (or any controller) parameter for part 2")
     ap.add_argument("--sweep", metavar="NAME=V1,V2,...",
-                    help="one parameter over these values, on 0.2 s back pushes of 20-30 N (nothing else runs)")
+                    help="one parameter over these values, on 0.2 s back pushes of 20-30 N; with --map, the boundaries "
+                         "per value (nothing else runs)")
     ap.add_argument("--map", action="store_true",
                     help="the boundaries of back pushes per duration, flat-footed and with stepping (nothing else runs)")
     args = ap.parse_args(argv)
@@ -88,18 +94,30 @@ def main(argv=None) -> int:
     scenario = load_scenario(find_scenario("paper_five_pushes_3d"))
     models = Models.load(None, plant_model="3d", controller_model="3d")
     engine = native.default_engine()
+    def boundary(duration, overrides):
+        force = 1
+        while force < 80 and run(scenario, models, engine, force, duration, overrides).outcome == "completed":
+            force += 1
+        return force - 1
+
+    if args.map and args.sweep:
+        name, _, values = args.sweep.partition("=")
+        print("back pushes (50 ms ramps): the boundary, the largest force [N] below which every 1 N step stands, "
+              f"with stepping for each {name}" + (f" ({', '.join(args.set)})" if args.set else ""))
+        print(f"| {name} | " + " | ".join(f"{d:g} s" for d in MAP_DURATIONS) + " |")
+        print("|---|" + "---|" * len(MAP_DURATIONS))
+        print("| flat-footed | " + " | ".join(str(boundary(d, {"stepping_enabled": 0})) for d in MAP_DURATIONS) + " |")
+        for v in values.split(","):
+            over = {"stepping_enabled": 1, **extra, name: float(v)}
+            print(f"| {v} | " + " | ".join(str(boundary(d, over)) for d in MAP_DURATIONS) + " |")
+        return 0
     if args.map:
         print("back pushes (50 ms ramps): the boundary, the largest force [N] below which every 1 N step stands")
         print("| duration [s] | flat-footed | stepping | stepping / flat-footed |")
         print("|---|---|---|---|")
         for duration in MAP_DURATIONS:
-            def boundary(overrides):
-                force = 1
-                while force < 80 and run(scenario, models, engine, force, duration, overrides).outcome == "completed":
-                    force += 1
-                return force - 1
-            flat = boundary({"stepping_enabled": 0})
-            step = boundary({"stepping_enabled": 1, **extra})
+            flat = boundary(duration, {"stepping_enabled": 0})
+            step = boundary(duration, {"stepping_enabled": 1, **extra})
             print(f"| {duration:g} | {flat} | {step} | {step / flat:.2f} |")
         return 0
     if args.sweep:
@@ -118,14 +136,15 @@ def main(argv=None) -> int:
         return 0
 
     print("1. flat-footed: the capture point of the stepping layer's estimate (thresholds out of reach)")
-    print("| push [N] | duration [s] | stood | capture point x, min .. max [mm] |")
-    print("|---|---|---|---|")
+    print("| push [N] | duration [s] | stood | capture point x, min .. max [mm] | trunk lean, largest forward [rad] |")
+    print("|---|---|---|---|---|")
     watch = {"stepping_enabled": 1, "step_trigger_x": 1.0, "step_trigger_y": 1.0}
     for force, duration in FLAT:
         r = run(scenario, models, engine, force, duration, watch)
         xi = col(r.data, "capture_point_x")
+        lean = col(r.data, "imu_pitch") - col(r.data, "imu_pitch")[0]  # from the pitch at rest
         print(f"| {force:+d} | {duration:g} | {'yes' if r.outcome == 'completed' else 'no, at %.2f s' % r.end_time} | "
-              f"{1e3 * xi.min():+.1f} .. {1e3 * xi.max():+.1f} |")
+              f"{1e3 * xi.min():+.1f} .. {1e3 * xi.max():+.1f} | {lean.max():.2f} |")
 
     print("\n2. stepping on" + (f" ({', '.join(args.set)})" if args.set else " (the layer's defaults)"))
     print("| push [N] | duration [s] | outcome | steps | first landing x, sent -> landed [mm] | "

@@ -129,6 +129,7 @@ void ahc3d_step(ahc3d *c, const ahc3d_sensors *s, ahc3d_outputs *out)
     ss.imu_pitch = s->imu_pitch;
     ss.fz_left = s->fz_left;
     ss.fz_right = s->fz_right;
+    ss.zmp_x = s->sag.zmp_x;
     stepping = c->step.phase != AHC_STEP_STAND;
     if (!stepping) {
         flat_footed(c, s, out);

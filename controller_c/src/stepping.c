@@ -16,7 +16,7 @@ void ahc_step_params_default(ahc_step_params *p)
     memset(p, 0, sizeof *p);
     p->stepping_enabled = 0;
     p->step_trigger_x = 0.0;
-    p->step_trigger_y = 0.0;
+    p->step_trigger_y = 0.1; /* a side step cannot gain on this robot (docs/capability.md §9.1) */
     p->step_swing_time = 0.2;
     p->step_height = 0.015;
     p->step_length_max = 0.12;
@@ -45,6 +45,8 @@ void ahc_step_params_default(ahc_step_params *p)
     p->step_close = 1;
     p->step_close_shift_time = 0.4;
     p->step_close_swing_time = 0.4;
+    p->step_trigger_lean = 0.0;
+    p->step_trigger_time = 0.0;
 }
 
 #define SD(field, unit, lo, hi, desc) \
@@ -85,6 +87,8 @@ static const ahc_param_info k_stable[] = {
     SD(step_pitch_time, "s", 0.05, 5.0, "The trunk's pitch returns to erect over this (a quintic from the measured pitch and rate at the decision and at the landing)"),
     SD(step_close_shift_time, "s", 0.05, 2.0, "The closing step (at rest after the recovery step): the weight shift onto the landed foot takes this"),
     SD(step_close_swing_time, "s", 0.05, 2.0, "The closing step's swing takes this"),
+    SD(step_trigger_lean, "rad", 0.0, 1.5, "Step also when the trunk leans this far from erect toward the toe or heel edge the measured ZMP is within step_zmp_margin of (the hip strategy at its limit); 0: off"),
+    SD(step_trigger_time, "s", 0.0, 1.0, "A trigger must hold this long before the step starts (0: at once)"),
 };
 #define STABLE_LEN (sizeof k_stable / sizeof k_stable[0])
 
@@ -783,11 +787,20 @@ void ahc_step_step(ahc_stepper *c, const ahc_step_sensors *s, const double flat_
         const double w2 = 0.5 * c->sole_width;
         const double x_front = fmax(c->feet[0][0], c->feet[1][0]) + c->toe_x;
         const double x_back = fmin(c->feet[0][0], c->feet[1][0]) + c->heel_x;
-        const int trigger = c->p.stepping_enabled && c->est_valid && c->tick > 20 && flat_q &&
-                            (xi[0] > x_front + c->p.step_trigger_x || xi[0] < x_back - c->p.step_trigger_x ||
-                             xi[1] > c->feet[AHC_LEFT][1] + w2 + c->p.step_trigger_y ||
-                             xi[1] < c->feet[AHC_RIGHT][1] - w2 - c->p.step_trigger_y);
-        if (trigger) {
+        /* the hip strategy at its limit: the trunk leans step_trigger_lean toward the sole edge the
+         * measured ZMP has reached (within step_zmp_margin) */
+        const double lean = c->pitch_prev - c->pitch_erect, m = c->p.step_zmp_margin;
+        const int at_limit = c->p.step_trigger_lean > 0.0 &&
+                             ((s->zmp_x > x_front - m && lean > c->p.step_trigger_lean) ||
+                              (s->zmp_x < x_back + m && lean < -c->p.step_trigger_lean));
+        /* the capture point beyond an edge of the feet by step_trigger_x or _y */
+        const int beyond = xi[0] > x_front + c->p.step_trigger_x || xi[0] < x_back - c->p.step_trigger_x ||
+                           xi[1] > c->feet[AHC_LEFT][1] + w2 + c->p.step_trigger_y ||
+                           xi[1] < c->feet[AHC_RIGHT][1] - w2 - c->p.step_trigger_y;
+        const int trigger = c->p.stepping_enabled && c->est_valid && c->tick > 20 && flat_q && (beyond || at_limit);
+        c->trigger_held = trigger ? c->trigger_held + c->dt : 0.0;
+        if (trigger && c->trigger_held >= c->p.step_trigger_time - 1e-12) {
+            c->trigger_held = 0.0;
             ahc_quintic_init(&c->pitch_plan, c->pitch_prev, c->pitch_rate, 0.0, c->pitch_erect, 0.0, 0.0,
                              c->p.step_pitch_time);
             c->pitch_time = 0.0;
@@ -1044,7 +1057,7 @@ int ahc_step_state_validate(const ahc_stepper *c, char *msg, size_t msg_size)
     if (!(c->swing_time >= 0.0 && c->swing_time <= 2.0) || ((c->phase == AHC_STEP_SWING || c->phase == AHC_STEP_CLOSE) && !(c->swing_time > 0.0)))
         return ahc_rows_fail(msg, msg_size, AHC_ERR_INCONSISTENT, "stepping swing time %g invalid", c->swing_time);
     {
-        const double v[] = {c->phase_time, c->phase_duration, c->step_clock, c->blend_time, c->pitch_time,
+        const double v[] = {c->phase_time, c->phase_duration, c->step_clock, c->blend_time, c->pitch_time, c->trigger_held,
                             c->pitch_prev, c->pitch_rate,
                             c->knee_settle, c->com_prev[0], c->com_prev[1], c->com_rate[0], c->com_rate[1], c->c0[0],
                             c->c0[1], c->v0[0], c->v0[1], c->cref[0], c->cref[1], c->vref[0], c->vref[1], c->zmp[0], c->zmp[1],

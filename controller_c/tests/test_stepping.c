@@ -235,6 +235,7 @@ static void test_foot_choice(void)
     };
     for (side = 0; side < 2; ++side) {
         defaults(&sp, &fp, &st);
+        st.step_trigger_y = 0.0; /* side steps at the outer sole edges (the default waits 100 mm beyond) */
         CHECK(ahc_step_init(&c, &st, &sp, &fp) == AHC_OK, "init");
         memset(&s, 0, sizeof s);
         s.fz_left = s.fz_right = 0.5 * weight;
@@ -321,8 +322,56 @@ static void test_nonfinite_inputs(void)
     CHECK(ahc_step_state_validate(&c, NULL, 0) == AHC_OK, "the state stays valid");
 }
 
+/* The second trigger (the trunk leaning step_trigger_lean toward the edge the measured ZMP is at)
+ * and the trigger's hold time, on a robot standing still, its feet flat, its trunk leaned forward by
+ * the hips: the step starts on the tick the rule says, and not otherwise. */
+static int first_step_tick(double trigger_lean, double lean, double zmp_x, double trigger_x, double trigger_time)
+{
+    ahc_params sp;
+    ahc_frontal_params fp;
+    ahc_step_params st;
+    static ahc_stepper c;
+    ahc_step_sensors s;
+    ahc_step_outputs out;
+    const double flat[2][AHC_LEG_JOINTS] = {{0}};
+    double e1, e2;
+    int k;
+    defaults(&sp, &fp, &st);
+    st.step_trigger_lean = trigger_lean;
+    st.step_trigger_x = trigger_x;
+    st.step_trigger_time = trigger_time;
+    CHECK(ahc_step_init(&c, &st, &sp, &fp) == AHC_OK, "init");
+    ahc_erect_posture(&sp, &e1, &e2);
+    memset(&s, 0, sizeof s);
+    s.fz_left = s.fz_right = 35.0;
+    s.zmp_x = zmp_x;
+    s.imu_pitch = e1 + e2 + lean;
+    s.q[0][AHC_LEG_HIP_PITCH] = s.q[1][AHC_LEG_HIP_PITCH] = lean; /* the legs stay upright */
+    for (k = 1; k <= 200; ++k) {
+        ahc_step_step(&c, &s, flat, &out);
+        if (out.phase != AHC_STEP_STAND) return k;
+    }
+    return -1;
+}
+
+static void test_triggers(void)
+{
+    const double toe = HOAP2_TOE_X, m = 0.01; /* step_zmp_margin's default */
+    const int k0 = first_step_tick(0.4, 0.45, toe - 0.5 * m, 1.0, 0.0);
+    CHECK(k0 == 21, "leaned 0.45 rad > step_trigger_lean 0.4 with the ZMP at the toe: a step at once (tick %d)", k0);
+    CHECK(first_step_tick(0.4, 0.45, toe - 2.0 * m, 1.0, 0.0) < 0, "the same lean with the ZMP inside the sole: no step");
+    CHECK(first_step_tick(0.4, 0.35, toe - 0.5 * m, 1.0, 0.0) < 0, "a lean below step_trigger_lean: no step");
+    CHECK(first_step_tick(0.0, 0.45, toe - 0.5 * m, 1.0, 0.0) < 0, "step_trigger_lean 0: the rule is off");
+    CHECK(first_step_tick(0.0, 0.0, 0.0, -0.05, 0.0) == 21, "the capture point beyond the edge: a step at once");
+    {
+        const int k = first_step_tick(0.0, 0.0, 0.0, -0.05, 0.03);
+        CHECK(k == 50, "step_trigger_time 0.03 s: the step starts on the trigger's 30th tick (tick %d)", k);
+    }
+}
+
 int main(void)
 {
+    test_triggers();
     test_nonfinite_inputs();
     test_params();
     test_off_is_flat_footed();

@@ -7,7 +7,9 @@
  * (omega = sqrt(g / z_c), c the CoM from the measured joint angles and the trunk's IMU) leaves the
  * feet's support polygon by more than step_trigger_x (toward the toes or the heels) or
  * step_trigger_y (sideways). The flat-footed strategies cannot bring a capture point back from
- * there (docs/capability.md §8-9).
+ * there (docs/capability.md §8-9). Optional, off by default (docs/controller.md §12.1): the hip
+ * strategy at its limit — the trunk leaning step_trigger_lean toward the sole edge the measured ZMP
+ * is at — and a hold time, step_trigger_time, for either rule.
  *
  * The step, as phases that continue the paper's Table I (AHC_STEP_*):
  *   SHIFT     both feet down: the CoM reference's pendulum moves the capture point over the stance
@@ -97,6 +99,10 @@ typedef struct {
                                   times the measured minus the reference capture point [1/s]     */
     double step_close_shift_time; /* the closing step's weight shift onto the landed foot [s]       */
     double step_close_swing_time; /* the closing step's swing [s]                                   */
+    double step_trigger_lean;  /* step also when the trunk leans this far from erect toward the sole
+                                  edge the measured ZMP is at (the hip strategy at its limit);
+                                  0: off [rad]                                                    */
+    double step_trigger_time;  /* a trigger must hold this long before the step starts [s]        */
 } ahc_step_params;
 
 /* HOAP-2 defaults (docs/controller.md §12): stepping off. */
@@ -114,6 +120,7 @@ typedef struct {
     double q[2][AHC_LEG_JOINTS]; /* [AHC_LEFT], [AHC_RIGHT], leg_ik.h's senses [rad]              */
     double imu_roll, imu_pitch;  /* the trunk's roll (+ top toward -y) and pitch (+ forward) [rad] */
     double fz_left, fz_right;    /* each sole's normal load [N]                                     */
+    double zmp_x;                /* the measured ZMP, x from the ankles' mid-point [m]              */
 } ahc_step_sensors;
 
 typedef struct {
@@ -169,6 +176,7 @@ typedef struct {
     int close_stage;            /* the closing step: 0 none, 1 at rest on the feet apart (SETTLE),
                                    2 its weight shift and swing (SHIFT, CLOSE), 3 the last SETTLE   */
     double swing_time;          /* the running swing's planned duration [s]                        */
+    double trigger_held;        /* how long the step's trigger has held [s]                        */
     double q_prev[2][AHC_LEG_JOINTS];   /* last tick's planned joint angles (rates)                 */
     double q_rate[2][AHC_LEG_JOINTS];   /* their low-passed rates (the servo lead)                  */
     int q_prev_valid;
