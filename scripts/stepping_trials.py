@@ -11,8 +11,8 @@ paper_five_pushes_3d's base, run with the 3D controller:
 2. stepping on, the layer's defaults (or --set NAME=VALUE ...): the outcome, the steps landed, where
    the first step landed against where it was sent, and the fastest joint set point rate asked of
    the servos during the swing (Hoap2Plant3D's vel_max is 5 rad/s);
-3. side (90 deg) and diagonal (45 deg: back and left) pushes, stepping on and flat-footed (stepping on,
-   its thresholds out of reach): the outcome and the steps landed.
+3. side (90 deg) and diagonal (45 and 30 deg: back and left) pushes, stepping on and flat-footed
+   (stepping on, its thresholds out of reach): the outcome and the steps landed.
 
     .venv/bin/python scripts/stepping_trials.py [--set NAME=VALUE ...]
     .venv/bin/python scripts/stepping_trials.py --sweep NAME=V1,V2,... [--set ...]
@@ -50,7 +50,8 @@ FLAT = [(14, 0.2), (17, 0.2), (19, 0.2), (20, 0.2), (21, 0.2), (22, 0.2), (-10, 
         (8, 1.0), (9, 1.0), (10, 1.0), (-6, 1.0), (-7, 1.0)]
 STEPPING = [(20, 0.2), (21, 0.2), (22, 0.2), (23, 0.2), (24, 0.2), (26, 0.2), (10, 1.0), (12, 1.0)]
 MAP_DURATIONS = (0.15, 0.2, 0.3, 0.5, 1.0)
-SIDEWAYS = [(90, 20), (90, 24), (90, 28), (90, 32), (45, 20), (45, 24), (45, 28), (45, 32)]  # (direction [deg], force [N]), 0.2 s
+SIDEWAYS = [(90, 20), (90, 24), (90, 28), (90, 32), (45, 20), (45, 24), (45, 28), (45, 32), (30, 20), (30, 24), (30, 26),
+            (30, 28), (30, 32)]  # (direction [deg], force [N]), 0.2 s
 JOINTS = ("hip_yaw", "hip", "hip_roll", "knee", "ankle", "ankle_roll")
 
 

@@ -1,8 +1,9 @@
 """The stepping layer recovers a push on the 3D plant (issue 30, docs/controller.md §12.4):
-scenarios/step_recovery_3d.toml, a 24 N back push for 0.2 s.
+scenarios/step_recovery_3d.toml, a 24 N back push for 0.2 s, and
+scenarios/step_recovery_diagonal_3d.toml, a 26 N push 30 degrees off the back toward the left.
 
 - With stepping off the 3D controller falls (they stand 0.2 s back pushes up to 19 N and fall from
-  20 N): the push is beyond them.
+  20 N; in the diagonal's direction they stand 20 N and fall from 24 N): the push is beyond them.
 - With stepping on it stands, and the run is the designed sequence: the recovery step (SHIFT, SWING,
   TRANSFER), at rest on the feet apart (SETTLE), the closing step (SHIFT, CLOSE), at rest on the
   feet together (SETTLE), then the flat-footed layers (STAND); the first step lands forward, ahead
@@ -25,9 +26,9 @@ from anklehip.running.master import Models, simulate
 DESIGNED = [0, 1, 2, 3, 5, 1, 4, 5, 0]   # stand, the recovery step, rest, the closing step, rest, stand
 
 
-@pytest.fixture(scope="module")
-def runs():
-    sc = load_scenario(find_scenario("step_recovery_3d"))
+@pytest.fixture(scope="module", params=["step_recovery_3d", "step_recovery_diagonal_3d"])
+def runs(request):
+    sc = load_scenario(find_scenario(request.param))
     models = Models.load(None, plant_model="3d", controller_model="3d")
     on = simulate(sc, models, progress=False)
     off = simulate(sc, models, controller_overrides={"stepping_enabled": 0}, progress=False)

@@ -46,7 +46,7 @@ void ahc_step_params_default(ahc_step_params *p)
     p->step_close_shift_time = 0.4;
     p->step_close_swing_time = 0.4;
     p->step_trigger_lean = 0.0;
-    p->step_trigger_time = 0.0;
+    p->step_impact_hold = 0.02;
 }
 
 #define SD(field, unit, lo, hi, desc) \
@@ -88,7 +88,7 @@ static const ahc_param_info k_stable[] = {
     SD(step_close_shift_time, "s", 0.05, 2.0, "The closing step (at rest after the recovery step): the weight shift onto the landed foot takes this"),
     SD(step_close_swing_time, "s", 0.05, 2.0, "The closing step's swing takes this"),
     SD(step_trigger_lean, "rad", 0.0, 1.5, "Step also when the trunk leans this far from erect toward the toe or heel edge the measured ZMP is within step_zmp_margin of (the hip strategy at its limit); 0: off"),
-    SD(step_trigger_time, "s", 0.0, 1.0, "A trigger must hold this long before the step starts (0: at once)"),
+    SD(step_impact_hold, "s", 0.0, 1.0, "No step starts for this long after the capture point jumped faster than twice what the pendulum allows (an impact)"),
 };
 #define STABLE_LEN (sizeof k_stable / sizeof k_stable[0])
 
@@ -782,6 +782,21 @@ void ahc_step_step(ahc_stepper *c, const ahc_step_sensors *s, const double flat_
     }
     for (i = 0; i < 2; ++i) xi[i] = c->com_prev[i] + c->com_rate[i] / c->omega;
     c->tick++;
+    {
+        /* an impact: the capture point moves faster than twice what any ZMP on the feet could
+         * drive, |xi'| = omega |xi - p| at the farthest corner of the feet's box */
+        double lo[2], hi[2], far2 = 0.0;
+        support_box(c, lo, hi);
+        for (i = 0; i < 2; ++i) {
+            const double d = fmax(fabs(xi[i] - lo[i]), fabs(xi[i] - hi[i]));
+            far2 += d * d;
+        }
+        c->since_impact += c->dt;
+        if (c->tick > 1 && hypot(xi[0] - c->xi_prev[0], xi[1] - c->xi_prev[1]) > 2.0 * c->omega * sqrt(far2) * c->dt)
+            c->since_impact = 0.0;
+        c->xi_prev[0] = xi[0];
+        c->xi_prev[1] = xi[1];
+    }
 
     if (c->phase == AHC_STEP_STAND) {
         const double w2 = 0.5 * c->sole_width;
@@ -798,9 +813,7 @@ void ahc_step_step(ahc_stepper *c, const ahc_step_sensors *s, const double flat_
                            xi[1] > c->feet[AHC_LEFT][1] + w2 + c->p.step_trigger_y ||
                            xi[1] < c->feet[AHC_RIGHT][1] - w2 - c->p.step_trigger_y;
         const int trigger = c->p.stepping_enabled && c->est_valid && c->tick > 20 && flat_q && (beyond || at_limit);
-        c->trigger_held = trigger ? c->trigger_held + c->dt : 0.0;
-        if (trigger && c->trigger_held >= c->p.step_trigger_time - 1e-12) {
-            c->trigger_held = 0.0;
+        if (trigger && c->since_impact >= c->p.step_impact_hold - 1e-12) {
             ahc_quintic_init(&c->pitch_plan, c->pitch_prev, c->pitch_rate, 0.0, c->pitch_erect, 0.0, 0.0,
                              c->p.step_pitch_time);
             c->pitch_time = 0.0;
@@ -896,6 +909,8 @@ void ahc_step_step(ahc_stepper *c, const ahc_step_sensors *s, const double flat_
                 }
                 c->com_prev[0] -= mx;
                 c->com_prev[1] -= my;
+                c->xi_prev[0] -= mx; /* the new frame is not an impact */
+                c->xi_prev[1] -= my;
                 c->phase = AHC_STEP_STAND;
                 c->swing_side = -1;
                 c->close_stage = 0;
@@ -1057,7 +1072,7 @@ int ahc_step_state_validate(const ahc_stepper *c, char *msg, size_t msg_size)
     if (!(c->swing_time >= 0.0 && c->swing_time <= 2.0) || ((c->phase == AHC_STEP_SWING || c->phase == AHC_STEP_CLOSE) && !(c->swing_time > 0.0)))
         return ahc_rows_fail(msg, msg_size, AHC_ERR_INCONSISTENT, "stepping swing time %g invalid", c->swing_time);
     {
-        const double v[] = {c->phase_time, c->phase_duration, c->step_clock, c->blend_time, c->pitch_time, c->trigger_held,
+        const double v[] = {c->phase_time, c->phase_duration, c->step_clock, c->blend_time, c->pitch_time, c->since_impact, c->xi_prev[0], c->xi_prev[1],
                             c->pitch_prev, c->pitch_rate,
                             c->knee_settle, c->com_prev[0], c->com_prev[1], c->com_rate[0], c->com_rate[1], c->c0[0],
                             c->c0[1], c->v0[0], c->v0[1], c->cref[0], c->cref[1], c->vref[0], c->vref[1], c->zmp[0], c->zmp[1],

@@ -323,9 +323,11 @@ static void test_nonfinite_inputs(void)
 }
 
 /* The second trigger (the trunk leaning step_trigger_lean toward the edge the measured ZMP is at)
- * and the trigger's hold time, on a robot standing still, its feet flat, its trunk leaned forward by
- * the hips: the step starts on the tick the rule says, and not otherwise. */
-static int first_step_tick(double trigger_lean, double lean, double zmp_x, double trigger_x, double trigger_time)
+ * and the impact hold, on a robot standing still, its feet flat, its trunk leaned forward by the
+ * hips: the step starts on the tick the rule says, and not otherwise. With jump_tick > 0 the trunk's
+ * pitch jumps by 0.05 rad on that tick (the estimate's capture point with it, as a foot slapping
+ * down moves it). */
+static int first_step_tick(double trigger_lean, double lean, double zmp_x, double trigger_x, int jump_tick)
 {
     ahc_params sp;
     ahc_frontal_params fp;
@@ -339,15 +341,14 @@ static int first_step_tick(double trigger_lean, double lean, double zmp_x, doubl
     defaults(&sp, &fp, &st);
     st.step_trigger_lean = trigger_lean;
     st.step_trigger_x = trigger_x;
-    st.step_trigger_time = trigger_time;
     CHECK(ahc_step_init(&c, &st, &sp, &fp) == AHC_OK, "init");
     ahc_erect_posture(&sp, &e1, &e2);
     memset(&s, 0, sizeof s);
     s.fz_left = s.fz_right = 35.0;
     s.zmp_x = zmp_x;
-    s.imu_pitch = e1 + e2 + lean;
     s.q[0][AHC_LEG_HIP_PITCH] = s.q[1][AHC_LEG_HIP_PITCH] = lean; /* the legs stay upright */
     for (k = 1; k <= 200; ++k) {
+        s.imu_pitch = e1 + e2 + lean + (jump_tick > 0 && k >= jump_tick ? 0.05 : 0.0);
         ahc_step_step(&c, &s, flat, &out);
         if (out.phase != AHC_STEP_STAND) return k;
     }
@@ -357,15 +358,21 @@ static int first_step_tick(double trigger_lean, double lean, double zmp_x, doubl
 static void test_triggers(void)
 {
     const double toe = HOAP2_TOE_X, m = 0.01; /* step_zmp_margin's default */
-    const int k0 = first_step_tick(0.4, 0.45, toe - 0.5 * m, 1.0, 0.0);
+    const int k0 = first_step_tick(0.4, 0.45, toe - 0.5 * m, 1.0, 0);
     CHECK(k0 == 21, "leaned 0.45 rad > step_trigger_lean 0.4 with the ZMP at the toe: a step at once (tick %d)", k0);
-    CHECK(first_step_tick(0.4, 0.45, toe - 2.0 * m, 1.0, 0.0) < 0, "the same lean with the ZMP inside the sole: no step");
-    CHECK(first_step_tick(0.4, 0.35, toe - 0.5 * m, 1.0, 0.0) < 0, "a lean below step_trigger_lean: no step");
-    CHECK(first_step_tick(0.0, 0.45, toe - 0.5 * m, 1.0, 0.0) < 0, "step_trigger_lean 0: the rule is off");
-    CHECK(first_step_tick(0.0, 0.0, 0.0, -0.05, 0.0) == 21, "the capture point beyond the edge: a step at once");
+    CHECK(first_step_tick(0.4, 0.45, toe - 2.0 * m, 1.0, 0) < 0, "the same lean with the ZMP inside the sole: no step");
+    CHECK(first_step_tick(0.4, 0.35, toe - 0.5 * m, 1.0, 0) < 0, "a lean below step_trigger_lean: no step");
+    CHECK(first_step_tick(0.0, 0.45, toe - 0.5 * m, 1.0, 0) < 0, "step_trigger_lean 0: the rule is off");
+    CHECK(first_step_tick(0.0, 0.0, 0.0, -0.05, 0) == 21, "the capture point beyond the edge: a step at once");
     {
-        const int k = first_step_tick(0.0, 0.0, 0.0, -0.05, 0.03);
-        CHECK(k == 50, "step_trigger_time 0.03 s: the step starts on the trigger's 30th tick (tick %d)", k);
+        /* the impact on tick 40 (the step started on 21) and on tick 15 (before it may start): the
+         * step waits step_impact_hold (20 ms) after the capture point last moved faster than the
+         * pendulum allows; the estimate's low-passed rate spreads the jump over some 30 ticks, so
+         * the step starts some 50 ticks after the jump, and it does start */
+        const int k15 = first_step_tick(0.0, 0.0, 0.0, -0.05, 15);
+        CHECK(first_step_tick(0.0, 0.0, 0.0, -0.05, 40) == 21, "an impact after the step started changes nothing");
+        CHECK(k15 >= 35 && k15 <= 100, "an impact on tick 15: the step starts 20 ms after the capture point settles "
+              "(tick %d)", k15);
     }
 }
 

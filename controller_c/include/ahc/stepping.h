@@ -9,7 +9,8 @@
  * step_trigger_y (sideways). The flat-footed strategies cannot bring a capture point back from
  * there (docs/capability.md §8-9). Optional, off by default (docs/controller.md §12.1): the hip
  * strategy at its limit — the trunk leaning step_trigger_lean toward the sole edge the measured ZMP
- * is at — and a hold time, step_trigger_time, for either rule.
+ * is at. No step starts within step_impact_hold of an impact (the capture point jumping faster
+ * than any ZMP on the feet could move it: a foot slapping down, not a fall).
  *
  * The step, as phases that continue the paper's Table I (AHC_STEP_*):
  *   SHIFT     both feet down: the CoM reference's pendulum moves the capture point over the stance
@@ -102,7 +103,8 @@ typedef struct {
     double step_trigger_lean;  /* step also when the trunk leans this far from erect toward the sole
                                   edge the measured ZMP is at (the hip strategy at its limit);
                                   0: off [rad]                                                    */
-    double step_trigger_time;  /* a trigger must hold this long before the step starts [s]        */
+    double step_impact_hold;   /* no step starts for this long after an impact (the capture point
+                                  jumping faster than the pendulum allows) [s]                    */
 } ahc_step_params;
 
 /* HOAP-2 defaults (docs/controller.md §12): stepping off. */
@@ -176,7 +178,9 @@ typedef struct {
     int close_stage;            /* the closing step: 0 none, 1 at rest on the feet apart (SETTLE),
                                    2 its weight shift and swing (SHIFT, CLOSE), 3 the last SETTLE   */
     double swing_time;          /* the running swing's planned duration [s]                        */
-    double trigger_held;        /* how long the step's trigger has held [s]                        */
+    double xi_prev[2];          /* last tick's capture point [m]                                    */
+    double since_impact;        /* time since the capture point last jumped faster than the
+                                   pendulum can move it (an impact) [s]                            */
     double q_prev[2][AHC_LEG_JOINTS];   /* last tick's planned joint angles (rates)                 */
     double q_rate[2][AHC_LEG_JOINTS];   /* their low-passed rates (the servo lead)                  */
     int q_prev_valid;
