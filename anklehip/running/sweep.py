@@ -117,18 +117,25 @@ def _one(scenario_path: str, fmu_dir: str | None, peak: float, variant: Variant,
     res = simulate(sc, cached_models(fmu_dir, sc.plant_model, sc.controller_model), controller_overrides=variant.controller,
                    plant_overrides=variant.plant, push=sc.push.scaled(peak / base), progress=False, engine=engine, check_load=False)
     d = res.data
-    return {"variant": variant.name, "peak_force": peak, "outcome": res.outcome,
-            "fell_at": res.fell_at if res.fell_at is not None else float("nan"),
-            "max_phase": int(d["phase"].max()) if "phase" in d.dtype.names else -1,
+    return {"variant": variant.name, "peak_force": peak, **run_columns(res),
             "max_abs_zmp": float(np.max(np.abs(d["zmp_x"]))),
             "max_abs_hip": float(np.max(np.abs(d["theta_hip"]))),
-            # how far the foot tipped (0 while it stays flat), how often the plant switched contact
-            # (including sub-millisecond switches at communication points), the last phase
-            "max_abs_foot_pitch": float(np.max(np.abs(d["foot_pitch"]))) if "foot_pitch" in d.dtype.names else float("nan"),
-            "mode_switches": int(d["mode_switches"][-1]) if "mode_switches" in d.dtype.names else -1,
             "final_phase": int(d["phase"][-1]) if "phase" in d.dtype.names else -1,
-            **stepping_columns(d),
             "wall_time": res.wall_time, **({"error": res.message} if res.outcome == "error" else {})}
+
+
+def run_columns(res) -> dict[str, Any]:
+    """The columns of a run that every sweep's rows carry (force sweeps here, sweep files in
+    sweepfile.py): the outcome and fall time, the deepest phase, how far the foot tipped (0 while it
+    stays flat), how often the plant switched contact (including sub-millisecond switches at
+    communication points), and the stepping layer's (stepping_columns)."""
+    d = res.data
+    names = d.dtype.names
+    return {"outcome": res.outcome, "fell_at": res.fell_at if res.fell_at is not None else float("nan"),
+            "max_phase": int(d["phase"].max()) if "phase" in names else -1,
+            "max_abs_foot_pitch": float(np.max(np.abs(d["foot_pitch"]))) if "foot_pitch" in names else float("nan"),
+            "mode_switches": int(d["mode_switches"][-1]) if "mode_switches" in names else -1,
+            **stepping_columns(d)}
 
 
 def stepping_columns(d) -> dict[str, int]:

@@ -46,7 +46,7 @@ import numpy as np
 
 from ..files.text import read_toml
 from ..files.scenario import PushProfile, PushSegment, ScenarioError, _V
-from .sweep import MAX_GRID, Variant, parse_grid, stepping_columns
+from .sweep import MAX_GRID, Variant, parse_grid, run_columns
 
 TOP_KEYS = {"description", "scenario", "stop_time", "push", "variant", "grid", "random"}
 PUSH_FIELDS = {"t": 2.0, "force": 8.0, "duration": 0.5, "rise": 0.05, "direction": 1.0}
@@ -290,19 +290,14 @@ def sweepfile_point(spec: dict) -> dict[str, Any]:
     d = res.data
     ps = summarize_pushes(res, pt.along, sc.expect.erect_tol)
     s = ps[0] if ps else None
-    row: dict[str, Any] = {"variant": var["name"], **vals, "outcome": res.outcome,
-                           "fell_at": res.fell_at if res.fell_at is not None else math.nan,
+    row: dict[str, Any] = {"variant": var["name"], **vals, **run_columns(res),
                            "peak_force": pt.along.peak(), "impulse": s.impulse if s else math.nan,
                            "peak_zmp": s.peak_zmp if s else math.nan,
                            **({"peak_zmp_y": float(d["zmp_y"][np.argmax(np.abs(d["zmp_y"]))])}
                               if "zmp_y" in d.dtype.names and len(d) else {}),
                            "phases": "".join(str(x) for x in s.phases) if s else "",
-                           "max_phase": int(d["phase"].max()) if "phase" in d.dtype.names else -1,
-                           **stepping_columns(d),
                            "time_to_recover": s.time_to_recover if s and s.time_to_recover is not None else math.nan,
                            "peak_hip": s.peak_hip if s else math.nan, "peak_ankle": s.peak_ankle if s else math.nan,
-                           "max_abs_foot_pitch": float(np.max(np.abs(d["foot_pitch"]))) if "foot_pitch" in d.dtype.names else math.nan,
-                           "mode_switches": int(d["mode_switches"][-1]) if "mode_switches" in d.dtype.names else -1,
                            "solver_steps": int(d["cvode_steps"][-1]) if "cvode_steps" in d.dtype.names else -1,
                            "rhs_evals": int(d["rhs_evals"][-1]) if "rhs_evals" in d.dtype.names else -1,
                            "engine": engine, "wall_time": res.wall_time}
