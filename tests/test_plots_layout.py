@@ -177,6 +177,31 @@ def test_sweep_figure_has_a_legend_inside_the_figure():
     plots.plt.close(fig)
 
 
+def test_sweep_figure_marks_steps():
+    """With the stepping layer's columns, sweep.png colours a run that stepped as the decision surfaces
+    do (purple, anklehip.analysis.capability.strategy_of) and its legend says so, still inside the
+    figure and clear of the axes."""
+    from matplotlib.colors import to_rgba
+    from anklehip.running.sweep import sweep_figure
+    rows = [{"variant": "stepping", "peak_force": f, "outcome": "fell" if f > 30 else "completed",
+             "max_phase": 0 if f < 10 else 2, "steps": 2 if f > 20 else 0, "stepped": int(f > 20)}
+            for f in np.arange(4.0, 34.0, 2.0)]
+    fig = sweep_figure(rows, "stepping")
+    fig.canvas.draw()
+    r = fig.canvas.get_renderer()
+    (ax,) = fig.axes
+    (leg,) = fig.legends
+    assert [t.get_text() for t in leg.get_texts()] == [
+        "stood, ankle strategy only (phase 0)", "stood, hip strategy (n: highest phase)", "stood, a step", "fell"]
+    colours = [tuple(c.get_facecolors()[0]) for c in ax.collections]
+    stood_stepped = [c for row, c in zip(rows, colours) if row["stepped"] and row["outcome"] == "completed"]
+    assert stood_stepped and all(c == to_rgba("tab:purple") for c in stood_stepped)
+    lb, fb = leg.get_window_extent(r), fig.bbox
+    assert fb.x0 <= lb.x0 and lb.x1 <= fb.x1 and fb.y0 <= lb.y0 and lb.y1 <= fb.y1
+    assert not _intersect(lb, ax.get_window_extent(r))
+    plots.plt.close(fig)
+
+
 def test_polar_capability_map_legend_and_titles_clear_of_the_panels(tmp_path):
     """The polar capability map (anklehip/analysis/capability.py: polar_figure): one polar panel per
     duration, the legend (variants and the three bounds) inside the figure and clear of every panel,

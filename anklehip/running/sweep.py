@@ -240,9 +240,11 @@ def plot_sweep(rows: list[dict[str, Any]], path: Path, title: str = "") -> Path:
 
 def sweep_figure(rows: list[dict[str, Any]], title: str = ""):
     """Outcome over peak push force, a row per variant: o stood (green: the ankle strategy alone,
-    blue: the hip strategy too, the highest phase reached written above), x fell; a legend says so."""
+    blue: the hip strategy too, the highest phase reached written above; purple: a step, with the 3D
+    controller's stepping layer), x fell; a legend says so."""
     import matplotlib.pyplot as plt
     from matplotlib.lines import Line2D
+    from ..analysis.capability import STRATEGY_COLOURS, strategy_of
     variants = list(dict.fromkeys(r["variant"] for r in rows))
     fig, ax = plt.subplots(figsize=(8, 2.0 + 0.7 * len(variants)), layout="constrained")
     for i, v in enumerate(variants):
@@ -250,7 +252,7 @@ def sweep_figure(rows: list[dict[str, Any]], title: str = ""):
         for r in rr:
             fell = r["outcome"] == "fell"
             ax.scatter(r["peak_force"], i, marker="x" if fell else "o", s=60,
-                       c="tab:red" if fell else ("tab:green" if r["max_phase"] <= 0 else "tab:blue"))
+                       c="tab:red" if fell else STRATEGY_COLOURS[strategy_of(r)])
             if not fell:
                 ax.annotate(str(r["max_phase"]), (r["peak_force"], i), textcoords="offset points",
                             xytext=(0, 7), ha="center", fontsize=7)
@@ -262,7 +264,9 @@ def sweep_figure(rows: list[dict[str, Any]], title: str = ""):
     handles = [Line2D([], [], ls="", marker="o", color="tab:green", label="stood, ankle strategy only (phase 0)"),
                Line2D([], [], ls="", marker="o", color="tab:blue", label="stood, hip strategy (n: highest phase)"),
                Line2D([], [], ls="", marker="x", color="tab:red", label="fell")]
-    fig.legend(handles=handles, loc="outside lower center", ncol=3, fontsize=8, frameon=False)
+    if any(r.get("stepped", 0) for r in rows):
+        handles.insert(2, Line2D([], [], ls="", marker="o", color=STRATEGY_COLOURS["step"], label="stood, a step"))
+    fig.legend(handles=handles, loc="outside lower center", ncol=len(handles), fontsize=8, frameon=False)
     return fig
 
 
