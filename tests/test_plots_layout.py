@@ -165,16 +165,21 @@ def test_sweep_figure_has_a_legend_inside_the_figure():
              "max_phase": 0 if f < 8 else 3} for v, lim in (("full", 11.0), ("ankle_only", 8.0))
             for f in np.arange(7.0, 12.5, 0.5)]
     fig = sweep_figure(rows, "hip_saves_push: outcome vs peak push force")
+    assert _sweep_legend(fig) == [
+        "stood, ankle strategy only (phase 0)", "stood, hip strategy (n: highest phase)", "fell"]
+    plots.plt.close(fig)
+
+
+def _sweep_legend(fig) -> list[str]:
+    """The texts of sweep_figure's one legend, asserted inside the figure and clear of its one axes."""
     fig.canvas.draw()
     r = fig.canvas.get_renderer()
     (ax,) = fig.axes
     (leg,) = fig.legends
-    assert leg is not None and [t.get_text() for t in leg.get_texts()] == [
-        "stood, ankle strategy only (phase 0)", "stood, hip strategy (n: highest phase)", "fell"]
     lb, fb = leg.get_window_extent(r), fig.bbox
     assert fb.x0 <= lb.x0 and lb.x1 <= fb.x1 and fb.y0 <= lb.y0 and lb.y1 <= fb.y1
     assert not _intersect(lb, ax.get_window_extent(r))
-    plots.plt.close(fig)
+    return [t.get_text() for t in leg.get_texts()]
 
 
 def test_sweep_figure_marks_steps():
@@ -187,18 +192,11 @@ def test_sweep_figure_marks_steps():
              "max_phase": 0 if f < 10 else 2, "steps": 2 if f > 20 else 0, "stepped": int(f > 20)}
             for f in np.arange(4.0, 34.0, 2.0)]
     fig = sweep_figure(rows, "stepping")
-    fig.canvas.draw()
-    r = fig.canvas.get_renderer()
-    (ax,) = fig.axes
-    (leg,) = fig.legends
-    assert [t.get_text() for t in leg.get_texts()] == [
+    assert _sweep_legend(fig) == [
         "stood, ankle strategy only (phase 0)", "stood, hip strategy (n: highest phase)", "stood, a step", "fell"]
-    colours = [tuple(c.get_facecolors()[0]) for c in ax.collections]
+    colours = [tuple(c.get_facecolors()[0]) for c in fig.axes[0].collections]
     stood_stepped = [c for row, c in zip(rows, colours) if row["stepped"] and row["outcome"] == "completed"]
     assert stood_stepped and all(c == to_rgba("tab:purple") for c in stood_stepped)
-    lb, fb = leg.get_window_extent(r), fig.bbox
-    assert fb.x0 <= lb.x0 and lb.x1 <= fb.x1 and fb.y0 <= lb.y0 and lb.y1 <= fb.y1
-    assert not _intersect(lb, ax.get_window_extent(r))
     plots.plt.close(fig)
 
 
