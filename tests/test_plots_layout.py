@@ -230,3 +230,35 @@ def test_polar_capability_map_legend_and_titles_clear_of_the_panels(tmp_path):
         tb = ax.title.get_window_extent(r)
         assert fb.y0 <= tb.y0 and tb.y1 <= fb.y1
     plots.plt.close(fig)
+
+
+def test_sweep_points_figures_share_one_x_label(tmp_path, monkeypatch):
+    """The point figures of a two-key sweep file (anklehip/analysis/capability.py: plot_points) have
+    one x label under all the variants' panels, inside the figure and clear of every panel (each
+    panel had its own, and side by side the long ones ran into each other)."""
+    from pathlib import Path
+    from types import SimpleNamespace
+    import matplotlib.figure
+    from anklehip.analysis import capability
+    from anklehip.running.sweep import Variant
+    sf = SimpleNamespace(name="syn", axes={"push.angle": [0, 90, 180], "push.force": [10, 20]}, ranges={},
+                         variants=[Variant("flat_footed", {}, {}), Variant("stepping", {}, {})])
+    rows = [{"variant": v, "push.angle": a, "push.force": f, "outcome": "completed" if f < 20 else "fell",
+             "max_phase": 1, "stepped": int(v == "stepping" and f >= 20), "peak_zmp": 0.05, "time_to_recover": 1.0}
+            for v in ("flat_footed", "stepping") for a in (0, 90, 180) for f in (10, 20)]
+    drawn = {}
+    real_savefig = matplotlib.figure.Figure.savefig
+
+    def keep(fig, path, *a, **k):
+        fig.canvas.draw()
+        drawn[Path(path).name] = (fig, fig.canvas.get_renderer())
+        return real_savefig(fig, path, *a, **k)
+    monkeypatch.setattr(matplotlib.figure.Figure, "savefig", keep)
+    capability.plot_points(sf, rows, tmp_path)
+    fig, r = drawn["points_outcome.png"]
+    assert [ax.get_xlabel() for ax in fig.axes] == ["", ""]
+    label = fig._supxlabel
+    assert label is not None and label.get_text().startswith("push direction [deg]")
+    lb, fb = label.get_window_extent(r), fig.bbox
+    assert fb.x0 <= lb.x0 and lb.x1 <= fb.x1 and fb.y0 <= lb.y0
+    assert not any(_intersect(lb, ax.get_window_extent(r)) for ax in fig.axes)

@@ -70,12 +70,12 @@ def test_the_recovery_is_the_same_on_the_native_engine(runs):
     assert np.max(np.abs(nat.data["landing_x"] - on.data["landing_x"])) < 1e-6
 
 
-def _point(sf, fmu_dir, variant, force, duration):
+def _point(sf, fmu_dir, variant, values):
     from anklehip.running import native
     from anklehip.running.sweepfile import sweepfile_point
     v = next(x for x in sf.variants if x.name == variant)
     spec = {"sweep": str(sf.path), "fmu_dir": str(fmu_dir), "engine": native.default_engine(), "variant": v.as_dict(),
-            "values": {"push.force": force, "push.duration": duration}}
+            "values": values}
     return sweepfile_point(spec)
 
 
@@ -94,6 +94,24 @@ def test_decision_surface_points(fmu_dir, force, duration, flat, stepping):
     sf = load_sweep_file(find_sweep_file("stepping_3d"))
     assert [v.name for v in sf.variants] == ["flat_footed", "stepping"]
     for variant, want in (("flat_footed", flat), ("stepping", stepping)):
-        row = _point(sf, fmu_dir, variant, force, duration)
+        row = _point(sf, fmu_dir, variant, {"push.force": force, "push.duration": duration})
         assert (strategy_of(row), row["outcome"]) == want, (variant, row)
         assert row["stepped"] == (want[0] == "step")
+
+
+@pytest.mark.parametrize("angle, force, flat, stepping", [
+    (30.0, 26.0, ("hip", "fell"), ("step", "completed")),            # a diagonal push: a step recovers it
+    (90.0, 24.0, ("hip", "completed"), ("hip", "completed")),        # sideways the layer does not step
+    (45.0, 28.0, ("hip", "completed"), ("step", "fell")),            # the one push stepping loses
+])
+def test_decision_surface_points_over_direction(fmu_dir, angle, force, flat, stepping):
+    """scenarios/sweeps/stepping_polar_3d.toml (docs/capability.md §10, over the push's direction):
+    each run's strategy and outcome at three points of the surface."""
+    from anklehip.analysis.capability import strategy_of
+    from anklehip.files.paths import find_sweep_file
+    from anklehip.running.sweepfile import load_sweep_file
+    sf = load_sweep_file(find_sweep_file("stepping_polar_3d"))
+    assert [v.name for v in sf.variants] == ["flat_footed", "stepping"]
+    for variant, want in (("flat_footed", flat), ("stepping", stepping)):
+        row = _point(sf, fmu_dir, variant, {"push.angle": angle, "push.force": force})
+        assert (strategy_of(row), row["outcome"]) == want, (variant, row)

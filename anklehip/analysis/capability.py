@@ -78,8 +78,8 @@ def plot_points(sf, rows: list[dict[str, Any]], out: Path) -> list[Path]:
                                 cmap="viridis", s=28, vmin=0.0)
                 ax.scatter([r[kx] for r in fell], [r[ky] for r in fell], marker="x", c="tab:red", s=24)
                 ax.set_title(v, fontsize=9)
-            ax.set_xlabel(_label(kx))
             ax.grid(alpha=0.3)
+        fig.supxlabel(_label(kx), fontsize=10)   # one label for the panels (theirs overlapped)
         for k, setter in ((kx, axes[0][0].set_xscale), (ky, axes[0][0].set_yscale)):
             vals = [r[k] for r in rows if _finite(r.get(k))]
             if vals and min(vals) > 0 and max(vals) / min(vals) >= 20:   # e.g. durations 0.1 ... 4 s
