@@ -19,7 +19,8 @@ from conftest import REPO_ROOT
 DOCS = [REPO_ROOT / "README.md", *sorted((REPO_ROOT / "docs").glob("*.md"))]
 
 
-@pytest.mark.parametrize("name,least", [("force_duration", 4), ("polar_3d", 3)])
+@pytest.mark.parametrize("name,least", [("force_duration", 4), ("polar_3d", 3), ("stepping_3d", 3),
+                                        ("stepping_polar_3d", 2)])
 def test_capability_map_run_count_is_the_sweep_files(name, least):
     from anklehip.running.sweepfile import load_sweep_file
     f = REPO_ROOT / "scenarios" / "sweeps" / f"{name}.toml"
@@ -27,7 +28,8 @@ def test_capability_map_run_count_is_the_sweep_files(name, least):
     quoted = []
     for p in DOCS + [f]:
         text = p.read_text()
-        for m in re.finditer(name + r"[^\n]{0,80}?\(?(\d[\d ]*) (?:closed-loop )?runs", text):
+        # the sweep's own name, not a longer one ending in it (stepping_polar_3d is not polar_3d)
+        for m in re.finditer(r"(?<![\w])" + name + r"[^\n]{0,80}?\(?(\d[\d ]*) (?:closed-loop )?runs", text):
             quoted.append((p.name, int(m[1].replace(" ", ""))))
         for m in re.finditer(r"\((\d+) runs", text) if p == f else []:
             quoted.append((p.name, int(m[1])))
