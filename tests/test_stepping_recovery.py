@@ -3,7 +3,7 @@ scenarios/step_recovery_3d.toml, a 24 N back push for 0.2 s, and
 scenarios/step_recovery_diagonal_3d.toml, a 26 N push 30 degrees off the back toward the left.
 
 - With stepping off the 3D controller falls (they stand 0.2 s back pushes up to 19 N and fall from
-  20 N; in the diagonal's direction they stand 20 N and fall from 24 N): the push is beyond them.
+  20 N; in the diagonal's direction they stand 22 N and fall from 24 N): the push is beyond them.
 - With stepping on it stands, and the run is the designed sequence: the recovery step (SHIFT, SWING,
   TRANSFER), at rest on the feet apart (SETTLE), the closing step (SHIFT, CLOSE), at rest on the
   feet together (SETTLE), then the flat-footed layers (STAND); the first step lands forward, ahead
