@@ -232,20 +232,16 @@ def test_polar_capability_map_legend_and_titles_clear_of_the_panels(tmp_path):
     plots.plt.close(fig)
 
 
-def test_sweep_points_figures_share_one_x_label(tmp_path, monkeypatch):
-    """The point figures of a two-key sweep file (anklehip/analysis/capability.py: plot_points) have
-    one x label under all the variants' panels, inside the figure and clear of every panel (each
-    panel had its own, and side by side the long ones ran into each other)."""
+def _draw_points(tmp_path, monkeypatch, axes, rows):
+    """capability.plot_points on a synthetic two-variant sweep of `axes`: its drawn figures by file
+    name, each with its renderer."""
     from pathlib import Path
     from types import SimpleNamespace
     import matplotlib.figure
     from anklehip.analysis import capability
     from anklehip.running.sweep import Variant
-    sf = SimpleNamespace(name="syn", axes={"push.angle": [0, 90, 180], "push.force": [10, 20]}, ranges={},
+    sf = SimpleNamespace(name="syn", axes=axes, ranges={},
                          variants=[Variant("flat_footed", {}, {}), Variant("stepping", {}, {})])
-    rows = [{"variant": v, "push.angle": a, "push.force": f, "outcome": "completed" if f < 20 else "fell",
-             "max_phase": 1, "stepped": int(v == "stepping" and f >= 20), "peak_zmp": 0.05, "time_to_recover": 1.0}
-            for v in ("flat_footed", "stepping") for a in (0, 90, 180) for f in (10, 20)]
     drawn = {}
     real_savefig = matplotlib.figure.Figure.savefig
 
@@ -255,10 +251,41 @@ def test_sweep_points_figures_share_one_x_label(tmp_path, monkeypatch):
         return real_savefig(fig, path, *a, **k)
     monkeypatch.setattr(matplotlib.figure.Figure, "savefig", keep)
     capability.plot_points(sf, rows, tmp_path)
-    fig, r = drawn["points_outcome.png"]
+    return drawn
+
+
+def test_sweep_points_figures_share_one_x_label(tmp_path, monkeypatch):
+    """The point figures of a two-key sweep file (anklehip/analysis/capability.py: plot_points) have
+    one x label under all the variants' panels, inside the figure and clear of every panel (each
+    panel had its own, and side by side the long ones ran into each other)."""
+    rows = [{"variant": v, "push.angle": a, "push.force": f, "outcome": "completed" if f < 20 else "fell",
+             "max_phase": 1, "stepped": int(v == "stepping" and f >= 20), "peak_zmp": 0.05, "time_to_recover": 1.0}
+            for v in ("flat_footed", "stepping") for a in (0, 90, 180) for f in (10, 20)]
+    fig, r = _draw_points(tmp_path, monkeypatch, {"push.angle": [0, 90, 180], "push.force": [10, 20]},
+                          rows)["points_outcome.png"]
     assert [ax.get_xlabel() for ax in fig.axes] == ["", ""]
     label = fig._supxlabel
     assert label is not None and label.get_text().startswith("push direction [deg]")
     lb, fb = label.get_window_extent(r), fig.bbox
     assert fb.x0 <= lb.x0 and lb.x1 <= fb.x1 and fb.y0 <= lb.y0
     assert not any(_intersect(lb, ax.get_window_extent(r)) for ax in fig.axes)
+
+
+def test_sweep_points_log_axis_labels_are_plain_and_apart(tmp_path, monkeypatch):
+    """A key spanning 20 times or more is drawn on a log axis (stepping_3d's forces, 2-50 N): its tick
+    labels are plain numbers (the default log formatter labelled the minor ticks "2x10^0 3x10^0 ..."
+    and they ran into each other) and no two labels of a panel overlap."""
+    forces = [2, 5, 8, 10, 12, 14, 16, 18, 20, 22, 24, 26, 28, 30, 32, 36, 40, 44, 50]
+    rows = [{"variant": v, "push.duration": d, "push.force": f, "outcome": "completed" if f < 20 else "fell",
+             "max_phase": 1, "stepped": 0, "peak_zmp": 0.05, "time_to_recover": 1.0}
+            for v in ("flat_footed", "stepping") for d in (0.1, 0.2, 0.5, 1.0) for f in forces]
+    for name, (fig, r) in _draw_points(tmp_path, monkeypatch, {"push.force": forces,
+                                                               "push.duration": [0.1, 0.2, 0.5, 1.0]}, rows).items():
+        for ax in fig.axes[:2]:
+            assert ax.get_xscale() == "log", name
+            labels = [t for t in ax.get_xticklabels() + ax.get_xticklabels(minor=True)
+                      if t.get_visible() and t.get_text() and _intersect(t.get_window_extent(r), ax.bbox.expanded(1.0, 2.0))]
+            texts = [t.get_text() for t in labels]
+            assert texts and all("times" not in x and "^" not in x for x in texts), (name, texts)
+            boxes = [t.get_window_extent(r) for t in labels]
+            assert not any(_intersect(a, b) for i, a in enumerate(boxes) for b in boxes[i + 1:]), (name, texts)

@@ -80,10 +80,10 @@ def plot_points(sf, rows: list[dict[str, Any]], out: Path) -> list[Path]:
                 ax.set_title(v, fontsize=9)
             ax.grid(alpha=0.3)
         fig.supxlabel(_label(kx), fontsize=10)   # one label for the panels (theirs overlapped)
-        for k, setter in ((kx, axes[0][0].set_xscale), (ky, axes[0][0].set_yscale)):
+        for k, which in ((kx, "x"), (ky, "y")):
             vals = [r[k] for r in rows if _finite(r.get(k))]
             if vals and min(vals) > 0 and max(vals) / min(vals) >= 20:   # e.g. durations 0.1 ... 4 s
-                setter("log")
+                _plain_log(axes[0][0], which)
         axes[0][0].set_ylabel(_label(ky))
         if sc is not None:
             fig.colorbar(sc, ax=axes[0].tolist(), label="peak |ZMP| [mm]" if what == "peak_zmp"
@@ -96,6 +96,21 @@ def plot_points(sf, rows: list[dict[str, Any]], out: Path) -> list[Path]:
         plt.close(fig)
         figs.append(p)
     return figs
+
+
+def _plain_log(ax, which: str) -> None:
+    """ax's `which` ("x" or "y") axis logarithmic, labelled 1, 2, 5 per decade in plain numbers (the
+    default labels its minor ticks "2x10^0 3x10^0 ..." and they run into each other)."""
+    from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
+    if which == "x":
+        ax.set_xscale("log")
+        axis = ax.xaxis
+    else:
+        ax.set_yscale("log")
+        axis = ax.yaxis
+    axis.set_major_locator(LogLocator(subs=(1.0, 2.0, 5.0)))
+    axis.set_major_formatter(FuncFormatter(lambda x, _: f"{x:g}"))
+    axis.set_minor_formatter(NullFormatter())
 
 
 def _finite(x) -> bool:
