@@ -18,7 +18,7 @@ void ahc_step_params_default(ahc_step_params *p)
     p->step_trigger_x = 0.0;
     p->step_trigger_y = 0.1; /* a side step cannot gain on this robot (docs/capability.md §9.1) */
     p->step_swing_time = 0.2;
-    p->step_height = 0.015;
+    p->step_height = 0.02;
     p->step_length_max = 0.12;
     p->step_width_max = 0.16;
     p->step_pelvis_drop = 0.01;
@@ -29,7 +29,7 @@ void ahc_step_params_default(ahc_step_params *p)
     p->step_lead_max = 0.1;
     p->step_touchdown_after = 0.5;
     p->step_pelvis_rate = 0.1;
-    p->step_touchdown_tol = 0.015;
+    p->step_touchdown_tol = 0.03;
     p->step_lead_tau = 0.03;
     p->step_dcm_gain = 0.0;
     p->step_shift_inset = 0.03;
@@ -47,6 +47,9 @@ void ahc_step_params_default(ahc_step_params *p)
     p->step_close_swing_time = 0.4;
     p->step_trigger_lean = 0.0;
     p->step_impact_hold = 0.02;
+    p->step_close_rest = 0.005;
+    p->step_close_rest_tilt = 0.02;
+    p->step_close_wait = 1.0;
 }
 
 #define SD(field, unit, lo, hi, desc) \
@@ -89,6 +92,9 @@ static const ahc_param_info k_stable[] = {
     SD(step_close_swing_time, "s", 0.05, 2.0, "The closing step's swing takes this"),
     SD(step_trigger_lean, "rad", 0.0, 1.5, "Step also when the trunk leans this far from erect toward the toe or heel edge the measured ZMP is within step_zmp_margin of (the hip strategy at its limit); 0: off"),
     SD(step_impact_hold, "s", 0.0, 1.0, "No step starts for this long after the capture point jumped faster than twice what the pendulum allows (an impact)"),
+    SD(step_close_rest, "m", 0.0, 0.1, "The closing step waits for rest: the capture point within this of the CoM, both soles carrying step_touchdown_fz and flat within step_close_rest_tilt; 0: it starts after SETTLE's planned time"),
+    SD(step_close_rest_tilt, "rad", 0.001, 0.5, "The closing step's rest: each sole flat within this"),
+    SD(step_close_wait, "s", 0.0, 10.0, "The closing step waits for rest at most this long after SETTLE's planned time"),
 };
 #define STABLE_LEN (sizeof k_stable / sizeof k_stable[0])
 
@@ -549,6 +555,19 @@ static void start_settle(ahc_stepper *c)
     }
 }
 
+/* At rest on both feet (the closing step's start, step_close_rest > 0): the capture point within
+ * step_close_rest of the CoM (the CoM slower than omega step_close_rest), each sole carrying
+ * step_touchdown_fz and flat within step_close_rest_tilt. */
+static int at_rest(const ahc_stepper *c, const ahc_step_sensors *s, const double xi[2], const double Rfw[2][9])
+{
+    int side;
+    if (!(hypot(xi[0] - c->com_prev[0], xi[1] - c->com_prev[1]) <= c->p.step_close_rest)) return 0;
+    if (!(s->fz_left > c->p.step_touchdown_fz && s->fz_right > c->p.step_touchdown_fz)) return 0;
+    for (side = 0; side < 2; ++side)
+        if (!(acos(clampd(Rfw[side][8], -1.0, 1.0)) <= c->p.step_close_rest_tilt)) return 0;
+    return 1;
+}
+
 /* The closing step's weight shift, from rest: the capture point to step_shift_inset inside of the
  * landed ankle, in step_close_shift_time at least. */
 static void start_close_shift(ahc_stepper *c)
@@ -898,7 +917,10 @@ void ahc_step_step(ahc_stepper *c, const ahc_step_sensors *s, const double flat_
         case AHC_STEP_SETTLE:
             if (c->phase_time < c->phase_duration) break;
             if (c->close_stage == 1) {
-                start_close_shift(c); /* at rest on the feet apart: the closing step */
+                /* on the feet apart: the closing step, at rest (or after SETTLE's planned time) */
+                if (c->p.step_close_rest <= 0.0 || at_rest(c, s, xi, (const double(*)[9])Rfw) ||
+                    c->phase_time >= c->phase_duration + c->p.step_close_wait)
+                    start_close_shift(c);
             } else if (c->close_stage == 3 || !feet_apart(c)) {
                 /* done: the flat-footed layers take over (ahc3d restarts them); the step's frame
                  * becomes the feet's new one */

@@ -33,31 +33,39 @@ static void defaults(ahc_params *sp, ahc_frontal_params *fp, ahc_step_params *st
     st->step_servo_lead = st->step_servo_lead_hip = 0.0; /* the kinematic robot has no servo lag */
 }
 
+/* What a kinematic run shows (kinematic_run). */
+typedef struct {
+    int started, ended, steps, phases_seen, n_seq, seq[16];
+    double landing[2], max_jump, max_com_err, max_rate[AHC_LEG_JOINTS];
+    double rest_planned;  /* the first SETTLE's planned end (the closing step's earliest start) [s] */
+    double close_start;   /* the closing step's weight shift began [s]                         */
+} kinematic_result;
+
 /* A robot falling forward about its ankles (both legs pitched by th, all else 0) until the step
- * starts; then its joints are the step's references of the tick before. */
-static void test_kinematic_step(void)
+ * starts; then its joints are the step's references of the tick before. For `unrest` seconds after
+ * the first SETTLE's planned end the right sole reads no load (the robot not yet at rest). */
+static void kinematic_run(const ahc_step_params *st, double unrest, kinematic_result *r)
 {
     ahc_params sp;
     ahc_frontal_params fp;
-    ahc_step_params st;
-    ahc_stepper c;
+    ahc_step_params unused;
+    static ahc_stepper c;
     ahc_step_outputs out;
     ahc_step_sensors s;
     const ahc_leg_geometry g = ahc_test_hoap2_legs();
     double flat[2][AHC_LEG_JOINTS], prev[2][AHC_LEG_JOINTS];
-    double th = 0.0, dth = 0.0, max_jump = 0.0, max_com_err = 0.0, max_rate[AHC_LEG_JOINTS] = {0};
+    double th = 0.0, dth = 0.0, t;
     const double weight = HOAP2_TOTAL_MASS * HOAP2_G;
-    int k, side, j, last_phase = AHC_STEP_STAND, phases_seen = 0, started = 0, ended = 0, n_seq = 0, seq[16];
-    /* the recovery step, at rest on the feet apart, the closing step, at rest together, standing */
-    static const int expected[] = {AHC_STEP_SHIFT, AHC_STEP_SWING, AHC_STEP_TRANSFER, AHC_STEP_SETTLE,
-                                   AHC_STEP_SHIFT, AHC_STEP_CLOSE, AHC_STEP_SETTLE, AHC_STEP_STAND};
-    double landing[2] = {0, 0};
-    defaults(&sp, &fp, &st);
-    CHECK(ahc_step_init(&c, &st, &sp, &fp) == AHC_OK, "init");
+    int k, side, j, last_phase = AHC_STEP_STAND;
+    memset(r, 0, sizeof *r);
+    r->rest_planned = r->close_start = -1.0;
+    defaults(&sp, &fp, &unused);
+    CHECK(ahc_step_init(&c, st, &sp, &fp) == AHC_OK, "init");
     memset(&s, 0, sizeof s);
     memset(prev, 0, sizeof prev);
-    for (k = 0; k < 4000; ++k) {
-        if (!started) {
+    for (k = 0; k < 6000; ++k) {
+        t = k * sp.sample_period;
+        if (!r->started) {
             /* an inverted pendulum falling forward from rest */
             const double omega2 = HOAP2_G / 0.26;
             if (k > 100) {
@@ -86,70 +94,124 @@ static void test_kinematic_step(void)
                     s.fz_right = out.swing_side == AHC_RIGHT ? (down ? weight : 0.0) : weight;
                 } else {
                     s.fz_left = s.fz_right = 0.5 * weight;
+                    /* (this tick's phase time: the last one's and a tick) */
+                    const double pt = c.phase_time + sp.sample_period;
+                    if (out.phase == AHC_STEP_SETTLE && c.close_stage == 1 && pt >= c.phase_duration - 1e-9 &&
+                        pt < c.phase_duration + unrest - 1e-9)
+                        s.fz_right = 0.0;
                 }
             }
         }
         ahc_step_step(&c, &s, (const double(*)[AHC_LEG_JOINTS])flat, &out);
+        if (out.phase == AHC_STEP_SETTLE && c.close_stage == 1 && r->rest_planned < 0.0)
+            r->rest_planned = t + c.phase_duration - c.phase_time;
+        if (out.phase == AHC_STEP_SHIFT && c.close_stage == 2 && r->close_start < 0.0) r->close_start = t;
         if (out.active) {
             double jump = 0.0;
-            if (started)
+            if (r->started)
                 for (side = 0; side < 2; ++side)
                     for (j = 0; j < AHC_LEG_JOINTS; ++j) jump = fmax(jump, fabs(out.q_ref[side][j] - prev[side][j]));
             else
                 for (side = 0; side < 2; ++side)
                     for (j = 0; j < AHC_LEG_JOINTS; ++j) jump = fmax(jump, fabs(out.q_ref[side][j] - flat[side][j]));
-            if (getenv("STEP_DEBUG") && started)
+            if (getenv("STEP_DEBUG") && r->started)
                 for (side = 0; side < 2; ++side)
                     for (j = 0; j < AHC_LEG_JOINTS; ++j)
                         if (fabs(out.q_ref[side][j] - prev[side][j]) > 0.005)
                             fprintf(stderr, "rate tick %d phase %d t %.4f side %d joint %d: %.1f rad/s\n", k, out.phase,
                                     c.phase_time, side, j, (out.q_ref[side][j] - prev[side][j]) / sp.sample_period);
-            if (jump > 0.02 && getenv("STEP_DEBUG"))
+            r->max_jump = fmax(r->max_jump, jump);
+            if (r->started)
                 for (side = 0; side < 2; ++side)
                     for (j = 0; j < AHC_LEG_JOINTS; ++j)
-                        if (fabs(out.q_ref[side][j] - prev[side][j]) > 0.02)
-                            fprintf(stderr, "tick %d phase %d t %.4f side %d joint %d: %.4f -> %.4f\n", k, out.phase,
-                                    c.phase_time, side, j, prev[side][j], out.q_ref[side][j]);
-            max_jump = fmax(max_jump, jump);
-            if (started)
-                for (side = 0; side < 2; ++side)
-                    for (j = 0; j < AHC_LEG_JOINTS; ++j)
-                        max_rate[j] = fmax(max_rate[j], fabs(out.q_ref[side][j] - prev[side][j]) / sp.sample_period);
+                        r->max_rate[j] = fmax(r->max_rate[j], fabs(out.q_ref[side][j] - prev[side][j]) / sp.sample_period);
             memcpy(prev, out.q_ref, sizeof prev);
-            started = 1;
+            r->started = 1;
             if (out.phase != AHC_STEP_STAND && c.phase_time > 0.05)
-                max_com_err = fmax(max_com_err, hypot(out.com[0] - out.com_ref[0], out.com[1] - out.com_ref[1]));
-        } else if (started) {
-            ended = 1;
+                r->max_com_err = fmax(r->max_com_err, hypot(out.com[0] - out.com_ref[0], out.com[1] - out.com_ref[1]));
+        } else if (r->started) {
+            r->ended = 1;
             break;
         }
         if (out.phase != last_phase) {
-            phases_seen |= 1 << out.phase;
-            if (n_seq < 16) seq[n_seq++] = out.phase;
+            r->phases_seen |= 1 << out.phase;
+            if (r->n_seq < 16) r->seq[r->n_seq++] = out.phase;
             if (last_phase == AHC_STEP_SWING) {
-                landing[0] = out.landing[0];
-                landing[1] = out.landing[1];
+                r->landing[0] = out.landing[0];
+                r->landing[1] = out.landing[1];
             }
             last_phase = out.phase;
         }
     }
-    CHECK(started, "a step started (capture point %.4f)", out.capture[0]);
-    CHECK(ended, "the step ended within 4 s (phase %d)", out.phase);
-    CHECK(phases_seen == ((1 << AHC_STEP_SHIFT) | (1 << AHC_STEP_SWING) | (1 << AHC_STEP_TRANSFER) |
-                          (1 << AHC_STEP_CLOSE) | (1 << AHC_STEP_SETTLE) | (1 << AHC_STEP_STAND)),
-          "every phase ran (mask 0x%x)", phases_seen);
-    CHECK(out.steps == 2, "two steps landed (%d)", out.steps);
-    CHECK(n_seq == 8 && memcmp(seq, expected, sizeof expected) == 0,
-          "the phases in order: shift, swing, transfer, settle, shift, close, settle, stand (%d phases)", n_seq);
-    CHECK(landing[0] > 0.02, "the first step went forward (landing x %.4f)", landing[0]);
-    CHECK(max_jump < 0.02, "the references move at most 0.02 rad per tick (%.4f)", max_jump);
-    CHECK(max_com_err < 2e-3, "the estimate follows the plan's CoM within 2 mm (%.5f)", max_com_err);
+    r->steps = out.steps;
+}
+
+static void test_kinematic_step(void)
+{
+    ahc_params sp;
+    ahc_frontal_params fp;
+    ahc_step_params st;
+    kinematic_result r;
+    /* the recovery step, at rest on the feet apart, the closing step, at rest together, standing */
+    static const int expected[] = {AHC_STEP_SHIFT, AHC_STEP_SWING, AHC_STEP_TRANSFER, AHC_STEP_SETTLE,
+                                   AHC_STEP_SHIFT, AHC_STEP_CLOSE, AHC_STEP_SETTLE, AHC_STEP_STAND};
+    defaults(&sp, &fp, &st);
+    kinematic_run(&st, 0.0, &r);
+    CHECK(r.started, "a step started");
+    CHECK(r.ended, "the step ended within 6 s");
+    CHECK(r.phases_seen == ((1 << AHC_STEP_SHIFT) | (1 << AHC_STEP_SWING) | (1 << AHC_STEP_TRANSFER) |
+                            (1 << AHC_STEP_CLOSE) | (1 << AHC_STEP_SETTLE) | (1 << AHC_STEP_STAND)),
+          "every phase ran (mask 0x%x)", r.phases_seen);
+    CHECK(r.steps == 2, "two steps landed (%d)", r.steps);
+    CHECK(r.n_seq == 8 && memcmp(r.seq, expected, sizeof expected) == 0,
+          "the phases in order: shift, swing, transfer, settle, shift, close, settle, stand (%d phases)", r.n_seq);
+    CHECK(r.landing[0] > 0.02, "the first step went forward (landing x %.4f)", r.landing[0]);
+    CHECK(r.max_jump < 0.02, "the references move at most 0.02 rad per tick (%.4f)", r.max_jump);
+    CHECK(r.max_com_err < 2e-3, "the estimate follows the plan's CoM within 2 mm (%.5f)", r.max_com_err);
     printf("kinematic step: landing (%.4f, %.4f), largest step of a reference %.5f rad/tick, CoM estimate - plan %.2e m\n",
-           landing[0], landing[1], max_jump, max_com_err);
+           r.landing[0], r.landing[1], r.max_jump, r.max_com_err);
     /* what the plan asks of the servos (Hoap2Plant3D's vel_max: 5 rad/s; docs/controller.md §12.4) */
     printf("kinematic step: fastest planned joint rates [rad/s]: hip yaw %.1f, hip pitch %.1f, hip roll %.1f, knee %.1f, "
            "ankle pitch %.1f, ankle roll %.1f\n",
-           max_rate[0], max_rate[1], max_rate[2], max_rate[3], max_rate[4], max_rate[5]);
+           r.max_rate[0], r.max_rate[1], r.max_rate[2], r.max_rate[3], r.max_rate[4], r.max_rate[5]);
+}
+
+/* The closing step's rest (step_close_rest): off, it starts at SETTLE's planned end; on (the default), it waits
+ * while a sole reads no load, and starts on the first tick at rest; a robot that never comes to
+ * rest gets it step_close_wait after the planned end. */
+static void test_close_rest(void)
+{
+    ahc_params sp;
+    ahc_frontal_params fp;
+    ahc_step_params st;
+    kinematic_result r;
+    const double dt = 0.001;
+    defaults(&sp, &fp, &st);
+    st.step_close_rest = 0.0;
+    kinematic_run(&st, 0.3, &r);
+    CHECK(r.rest_planned > 0.0 && fabs(r.close_start - r.rest_planned) < 1.5 * dt,
+          "off: the closing step at SETTLE's planned end (%.4f vs %.4f s), a sole unloaded or not", r.close_start,
+          r.rest_planned);
+    st.step_close_rest = 0.005;
+    kinematic_run(&st, 0.0, &r);
+    CHECK(fabs(r.close_start - r.rest_planned) < 1.5 * dt, "on, at rest: at the planned end (%.4f vs %.4f s)",
+          r.close_start, r.rest_planned);
+    kinematic_run(&st, 0.3, &r);
+    CHECK(fabs(r.close_start - (r.rest_planned + 0.3)) < 1.5 * dt,
+          "on, a sole unloaded 0.3 s: the closing step when it is loaded again (%.4f vs %.4f s)", r.close_start,
+          r.rest_planned + 0.3);
+    CHECK(r.ended && r.steps == 2, "... and both steps run to the end (%d steps)", r.steps);
+    st.step_close_wait = 0.2;
+    kinematic_run(&st, 0.3, &r);
+    CHECK(fabs(r.close_start - (r.rest_planned + 0.2)) < 1.5 * dt,
+          "on, never at rest within step_close_wait 0.2 s: the closing step then (%.4f vs %.4f s)", r.close_start,
+          r.rest_planned + 0.2);
+    st.step_close_wait = 1.0;
+    st.step_close_rest = 1e-6;
+    kinematic_run(&st, 0.0, &r);
+    CHECK(r.close_start > r.rest_planned + 1.5 * dt,
+          "a capture point never within 1 um of the CoM (it moves): the closing step waits (%.4f vs %.4f s)",
+          r.close_start, r.rest_planned);
 }
 
 /* Validation names the parameter and its value. */
@@ -379,6 +441,7 @@ static void test_triggers(void)
 int main(void)
 {
     test_triggers();
+    test_close_rest();
     test_nonfinite_inputs();
     test_params();
     test_off_is_flat_footed();

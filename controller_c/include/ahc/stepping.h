@@ -21,7 +21,9 @@
  *             comes down; it has landed when its sole carries step_touchdown_fz;
  *   TRANSFER  both feet down, apart: the capture point is moved over the foot that landed;
  *   SETTLE    both feet down: the CoM reference comes to rest over the feet's mid-point; with
- *             step_close, then (at rest) the closing step, slower than the recovery step:
+ *             step_close, then — once the robot is measured at rest (step_close_rest: the capture
+ *             point near the CoM, both soles loaded and flat) — the closing step, slower than the
+ *             recovery step:
  *   SHIFT     the capture point moves over the landed foot, in step_close_shift_time;
  *   CLOSE     one foot down: the other one is brought beside it, in step_close_swing_time;
  *   SETTLE    both feet down, together: the CoM reference comes to rest over the feet, the legs
@@ -105,6 +107,11 @@ typedef struct {
                                   0: off [rad]                                                    */
     double step_impact_hold;   /* no step starts for this long after an impact (the capture point
                                   jumping faster than the pendulum allows) [s]                    */
+    double step_close_rest;    /* the closing step waits for rest: the capture point within this of
+                                  the CoM, both soles loaded and flat; 0: it starts after SETTLE's
+                                  planned time [m]                                                */
+    double step_close_rest_tilt; /* ... each sole flat within this [rad]                           */
+    double step_close_wait;    /* ... for at most this after SETTLE's planned time [s]            */
 } ahc_step_params;
 
 /* HOAP-2 defaults (docs/controller.md §12): stepping off. */
