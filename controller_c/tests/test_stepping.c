@@ -48,7 +48,6 @@ static void kinematic_run(const ahc_step_params *st, double unrest, kinematic_re
 {
     ahc_params sp;
     ahc_frontal_params fp;
-    ahc_step_params unused;
     static ahc_stepper c;
     ahc_step_outputs out;
     ahc_step_sensors s;
@@ -59,7 +58,8 @@ static void kinematic_run(const ahc_step_params *st, double unrest, kinematic_re
     int k, side, j, last_phase = AHC_STEP_STAND;
     memset(r, 0, sizeof *r);
     r->rest_planned = r->close_start = -1.0;
-    defaults(&sp, &fp, &unused);
+    ahc_params_default(&sp);
+    ahc_frontal_params_default(&fp);
     CHECK(ahc_step_init(&c, st, &sp, &fp) == AHC_OK, "init");
     memset(&s, 0, sizeof s);
     memset(prev, 0, sizeof prev);
