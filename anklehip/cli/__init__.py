@@ -56,10 +56,13 @@ def _ending_signals_interrupt():
 
 def main(argv=None) -> int:
     try:
+        # imported before the handlers: a kill while the interpreter still imports ends it at once
+        # (nothing touched yet); a Terminated raised during these imports once crashed the
+        # interpreter's exit (SIGTERM 0.3 s after the start: "Fatal Python error ... finalizing")
+        import matplotlib
+        matplotlib.use("Agg")          # the command line only writes figures (the API leaves the backend alone)
+        from . import commands
         with _ending_signals_interrupt():
-            import matplotlib
-            matplotlib.use("Agg")          # the command line only writes figures (the API leaves the backend alone)
-            from . import commands
             p = build_parser()
             a = p.parse_args(argv)
             if a.fmi == 3 and a.cmd not in FMI3_COMMANDS:
