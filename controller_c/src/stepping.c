@@ -50,6 +50,7 @@ void ahc_step_params_default(ahc_step_params *p)
     p->step_close_rest = 0.005;
     p->step_close_rest_tilt = 0.02;
     p->step_close_wait = 1.0;
+    p->step_close_inset = 0.01;
 }
 
 #define SD(field, unit, lo, hi, desc) \
@@ -95,6 +96,7 @@ static const ahc_param_info k_stable[] = {
     SD(step_close_rest, "m", 0.0, 0.1, "The closing step waits for rest: the capture point within this of the CoM, both soles carrying step_touchdown_fz and flat within step_close_rest_tilt; 0: it starts after SETTLE's planned time"),
     SD(step_close_rest_tilt, "rad", 0.001, 0.5, "The closing step's rest: each sole flat within this"),
     SD(step_close_wait, "s", 0.0, 10.0, "The closing step waits for rest at most this long after SETTLE's planned time"),
+    SD(step_close_inset, "m", 0.0, 0.05, "The closing step's weight shift moves the capture point this far inside of the landed ankle (toward the other foot)"),
 };
 #define STABLE_LEN (sizeof k_stable / sizeof k_stable[0])
 
@@ -568,7 +570,7 @@ static int at_rest(const ahc_stepper *c, const ahc_step_sensors *s, const double
     return 1;
 }
 
-/* The closing step's weight shift, from rest: the capture point to step_shift_inset inside of the
+/* The closing step's weight shift, from rest: the capture point to step_close_inset inside of the
  * landed ankle, in step_close_shift_time at least. */
 static void start_close_shift(ahc_stepper *c)
 {
@@ -576,7 +578,7 @@ static void start_close_shift(ahc_stepper *c)
     const int landed = c->swing_side;
     begin_phase(c, AHC_STEP_SHIFT, 0.0);
     aim[0] = c->feet[landed][0];
-    aim[1] = c->feet[landed][1] + (landed == AHC_LEFT ? -1.0 : 1.0) * c->p.step_shift_inset;
+    aim[1] = c->feet[landed][1] + (landed == AHC_LEFT ? -1.0 : 1.0) * c->p.step_close_inset;
     c->phase_duration = plan_transfer(c, aim, c->p.step_close_shift_time);
     c->close_stage = 2;
 }

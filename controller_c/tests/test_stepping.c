@@ -39,6 +39,7 @@ typedef struct {
     double landing[2], max_jump, max_com_err, max_rate[AHC_LEG_JOINTS];
     double rest_planned;  /* the first SETTLE's planned end (the closing step's earliest start) [s] */
     double close_start;   /* the closing step's weight shift began [s]                         */
+    double close_capture[2]; /* the capture point when the closing step's swing began [m]         */
 } kinematic_result;
 
 /* A robot falling forward about its ankles (both legs pitched by th, all else 0) until the step
@@ -106,6 +107,10 @@ static void kinematic_run(const ahc_step_params *st, double unrest, kinematic_re
         if (out.phase == AHC_STEP_SETTLE && c.close_stage == 1 && r->rest_planned < 0.0)
             r->rest_planned = t + c.phase_duration - c.phase_time;
         if (out.phase == AHC_STEP_SHIFT && c.close_stage == 2 && r->close_start < 0.0) r->close_start = t;
+        if (out.phase == AHC_STEP_CLOSE && last_phase != AHC_STEP_CLOSE) {
+            r->close_capture[0] = out.capture[0];
+            r->close_capture[1] = out.capture[1];
+        }
         if (out.active) {
             double jump = 0.0;
             if (r->started)
@@ -212,6 +217,33 @@ static void test_close_rest(void)
     CHECK(r.close_start > r.rest_planned + 1.5 * dt,
           "a capture point never within 1 um of the CoM (it moves): the closing step waits (%.4f vs %.4f s)",
           r.close_start, r.rest_planned);
+}
+
+/* The closing step's weight shift (step_close_inset): the capture point ends step_close_inset inside
+ * of the landed ankle, toward the other foot, whatever the recovery step's step_shift_inset. */
+static void test_close_inset(void)
+{
+    ahc_params sp;
+    ahc_frontal_params fp;
+    ahc_step_params st;
+    kinematic_result r;
+    const double insets[] = {0.0, 0.01, 0.02};
+    size_t i;
+    defaults(&sp, &fp, &st);
+    for (i = 0; i < sizeof insets / sizeof insets[0]; ++i) {
+        double aim;
+        st.step_close_inset = insets[i];
+        kinematic_run(&st, 0.0, &r);
+        /* the landed foot's side: the closing foot goes to the other one */
+        aim = r.landing[1] + (r.landing[1] > 0.0 ? -1.0 : 1.0) * insets[i];
+        CHECK(r.ended && r.steps == 2, "close inset %g: both steps run to the end (%d steps)", insets[i], r.steps);
+        CHECK(fabs(r.close_capture[1] - aim) < 2e-3,
+              "close inset %g: the capture point at the closing swing's start %.4f m, aimed at %.4f m (the landed "
+              "ankle at %.4f m)", insets[i], r.close_capture[1], aim, r.landing[1]);
+        CHECK(fabs(r.close_capture[0] - r.landing[0]) < 2e-3,
+              "close inset %g: ... over the landed ankle in x (%.4f vs %.4f m)", insets[i], r.close_capture[0],
+              r.landing[0]);
+    }
 }
 
 /* Validation names the parameter and its value. */
@@ -442,6 +474,7 @@ int main(void)
 {
     test_triggers();
     test_close_rest();
+    test_close_inset();
     test_nonfinite_inputs();
     test_params();
     test_off_is_flat_footed();

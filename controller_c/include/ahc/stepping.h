@@ -112,6 +112,8 @@ typedef struct {
                                   planned time [m]                                                */
     double step_close_rest_tilt; /* ... each sole flat within this [rad]                           */
     double step_close_wait;    /* ... for at most this after SETTLE's planned time [s]            */
+    double step_close_inset;   /* the closing step's weight shift moves the capture point this far
+                                  inside of the landed ankle, toward the other foot [m]          */
 } ahc_step_params;
 
 /* HOAP-2 defaults (docs/controller.md §12): stepping off. */
