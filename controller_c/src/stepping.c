@@ -18,7 +18,7 @@ void ahc_step_params_default(ahc_step_params *p)
     p->step_trigger_x = 0.0;
     p->step_trigger_y = 0.1; /* a side step cannot gain on this robot (docs/capability.md §9.1) */
     p->step_swing_time = 0.2;
-    p->step_height = 0.02;
+    p->step_height = 0.025;
     p->step_length_max = 0.12;
     p->step_width_max = 0.16;
     p->step_pelvis_drop = 0.01;
@@ -32,7 +32,7 @@ void ahc_step_params_default(ahc_step_params *p)
     p->step_touchdown_tol = 0.03;
     p->step_lead_tau = 0.03;
     p->step_dcm_gain = 0.0;
-    p->step_shift_inset = 0.03;
+    p->step_shift_inset = 0.035;
     p->step_dcm_feedback = 0;
     p->step_zmp_margin = 0.01;
     p->step_touchdown_fz = 0.2 * HOAP2_TOTAL_MASS * HOAP2_G;
