@@ -4,7 +4,7 @@
 Back pushes (0.2 s and 1 s pulses, 50 ms ramps, at the trunk's push point, from 1 s; runs of 6 s) on
 paper_five_pushes_3d's base, run with the 3D controller:
 
-1. flat-footed (stepping on, its thresholds out of reach, so that the layer only estimates): the
+1. flat-footed (stepping on, its thresholds out of reach and the lean rule off, so that the layer only estimates): the
    range of the capture point's x that each push produced and whether the robot stood. The pushes
    that stand keep the capture point inside the soles: the evidence for the decision's thresholds
    (and the trunk's largest forward lean, for step_trigger_lean's);
@@ -12,7 +12,7 @@ paper_five_pushes_3d's base, run with the 3D controller:
    the first step landed against where it was sent, and the fastest joint set point rate asked of
    the servos during the swing (Hoap2Plant3D's vel_max is 5 rad/s);
 3. side (90 deg) and diagonal (45 and 30 deg: back and left) pushes, stepping on and flat-footed
-   (stepping on, its thresholds out of reach): the outcome and the steps landed.
+   (stepping on, its thresholds out of reach, the lean rule off): the outcome and the steps landed.
 
     .venv/bin/python scripts/stepping_trials.py [--set NAME=VALUE ...]
     .venv/bin/python scripts/stepping_trials.py --sweep NAME=V1,V2,... [--set ...]
@@ -139,7 +139,7 @@ def main(argv=None) -> int:
     print("1. flat-footed: the capture point of the stepping layer's estimate (thresholds out of reach)")
     print("| push [N] | duration [s] | stood | capture point x, min .. max [mm] | trunk lean, largest forward [rad] |")
     print("|---|---|---|---|---|")
-    watch = {"stepping_enabled": 1, "step_trigger_x": 1.0, "step_trigger_y": 1.0}
+    watch = {"stepping_enabled": 1, "step_trigger_x": 1.0, "step_trigger_y": 1.0, "step_trigger_lean": 0.0}
     for force, duration in FLAT:
         r = run(scenario, models, engine, force, duration, watch)
         xi = col(r.data, "capture_point_x")

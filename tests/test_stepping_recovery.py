@@ -103,7 +103,8 @@ def test_decision_surface_points(fmu_dir, force, duration, flat, stepping):
 @pytest.mark.parametrize("angle, force, flat, stepping", [
     (30.0, 26.0, ("hip", "fell"), ("step", "completed")),            # a diagonal push: a step recovers it
     (90.0, 24.0, ("hip", "completed"), ("hip", "completed")),        # sideways the layer does not step
-    (45.0, 28.0, ("hip", "completed"), ("step", "fell")),            # the one push stepping loses
+    (45.0, 28.0, ("hip", "completed"), ("step", "completed")),       # stands either way, here with a step
+    (45.0, 32.0, ("hip", "fell"), ("step", "fell")),                 # beyond both
 ])
 def test_decision_surface_points_over_direction(fmu_dir, angle, force, flat, stepping):
     """scenarios/sweeps/stepping_polar_3d.toml (docs/capability.md §10, over the push's direction):

@@ -45,7 +45,7 @@ void ahc_step_params_default(ahc_step_params *p)
     p->step_close = 1;
     p->step_close_shift_time = 0.4;
     p->step_close_swing_time = 0.4;
-    p->step_trigger_lean = 0.0;
+    p->step_trigger_lean = 0.35;
     p->step_impact_hold = 0.02;
     p->step_close_rest = 0.005;
     p->step_close_rest_tilt = 0.02;
@@ -91,7 +91,7 @@ static const ahc_param_info k_stable[] = {
     SD(step_pitch_time, "s", 0.05, 5.0, "The trunk's pitch returns to erect over this (a quintic from the measured pitch and rate at the decision and at the landing)"),
     SD(step_close_shift_time, "s", 0.05, 2.0, "The closing step (at rest after the recovery step): the weight shift onto the landed foot takes this"),
     SD(step_close_swing_time, "s", 0.05, 2.0, "The closing step's swing takes this"),
-    SD(step_trigger_lean, "rad", 0.0, 1.5, "Step also when the trunk leans this far from erect toward the toe or heel edge the measured ZMP is within step_zmp_margin of (the hip strategy at its limit); 0: off"),
+    SD(step_trigger_lean, "rad", 0.0, 1.5, "Step also when the trunk leans this far from erect toward the toe or heel edge the measured ZMP is within step_zmp_margin of (the hip strategy at its limit), the capture point between the soles' inner edges; 0: off"),
     SD(step_impact_hold, "s", 0.0, 1.0, "No step starts for this long after the capture point jumped faster than twice what the pendulum allows (an impact)"),
     SD(step_close_rest, "m", 0.0, 0.1, "The closing step waits for rest: the capture point within this of the CoM, both soles carrying step_touchdown_fz and flat within step_close_rest_tilt; 0: it starts after SETTLE's planned time"),
     SD(step_close_rest_tilt, "rad", 0.001, 0.5, "The closing step's rest: each sole flat within this"),
@@ -824,9 +824,13 @@ void ahc_step_step(ahc_stepper *c, const ahc_step_sensors *s, const double flat_
         const double x_front = fmax(c->feet[0][0], c->feet[1][0]) + c->toe_x;
         const double x_back = fmin(c->feet[0][0], c->feet[1][0]) + c->heel_x;
         /* the hip strategy at its limit: the trunk leans step_trigger_lean toward the sole edge the
-         * measured ZMP has reached (within step_zmp_margin) */
+         * measured ZMP has reached (within step_zmp_margin) — a sagittal rule, so only while the
+         * capture point lies between the soles' inner edges (an oblique push's lean stepped and
+         * fell where the flat-footed layers stand: docs/controller.md §12.1) */
         const double lean = c->pitch_prev - c->pitch_erect, m = c->p.step_zmp_margin;
+        const double inner = c->ankle_y - w2; /* the soles' inner edges, from the mid-line */
         const int at_limit = c->p.step_trigger_lean > 0.0 &&
+                             fabs(xi[1] - 0.5 * (c->feet[AHC_LEFT][1] + c->feet[AHC_RIGHT][1])) < inner &&
                              ((s->zmp_x > x_front - m && lean > c->p.step_trigger_lean) ||
                               (s->zmp_x < x_back + m && lean < -c->p.step_trigger_lean));
         /* the capture point beyond an edge of the feet by step_trigger_x or _y */

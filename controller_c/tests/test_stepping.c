@@ -421,7 +421,12 @@ static void test_nonfinite_inputs(void)
  * hips: the step starts on the tick the rule says, and not otherwise. With jump_tick > 0 the trunk's
  * pitch jumps by 0.05 rad on that tick (the estimate's capture point with it, as a foot slapping
  * down moves it). */
-static int first_step_tick(double trigger_lean, double lean, double zmp_x, double trigger_x, int jump_tick)
+/* The tick the first step starts (-1: none in 200 ticks) on a robot standing still, its legs
+ * upright and its trunk leaning `lean` forward and `roll` sideways (+: top toward -y); the measured
+ * ZMP at zmp_x; from jump_tick on the trunk reads 0.05 rad more (an impact). *xi_y, if given: the
+ * estimate's lateral capture point on the last tick. */
+static int first_step_tick_rolled(double trigger_lean, double lean, double zmp_x, double trigger_x, int jump_tick,
+                                  double roll, double *xi_y)
 {
     ahc_params sp;
     ahc_frontal_params fp;
@@ -440,13 +445,21 @@ static int first_step_tick(double trigger_lean, double lean, double zmp_x, doubl
     memset(&s, 0, sizeof s);
     s.fz_left = s.fz_right = 35.0;
     s.zmp_x = zmp_x;
+    s.imu_roll = roll;
     s.q[0][AHC_LEG_HIP_PITCH] = s.q[1][AHC_LEG_HIP_PITCH] = lean; /* the legs stay upright */
+    s.q[0][AHC_LEG_HIP_ROLL] = s.q[1][AHC_LEG_HIP_ROLL] = roll;
     for (k = 1; k <= 200; ++k) {
         s.imu_pitch = e1 + e2 + lean + (jump_tick > 0 && k >= jump_tick ? 0.05 : 0.0);
         ahc_step_step(&c, &s, flat, &out);
+        if (xi_y) *xi_y = out.capture[1];
         if (out.phase != AHC_STEP_STAND) return k;
     }
     return -1;
+}
+
+static int first_step_tick(double trigger_lean, double lean, double zmp_x, double trigger_x, int jump_tick)
+{
+    return first_step_tick_rolled(trigger_lean, lean, zmp_x, trigger_x, jump_tick, 0.0, NULL);
 }
 
 static void test_triggers(void)
@@ -457,6 +470,15 @@ static void test_triggers(void)
     CHECK(first_step_tick(0.4, 0.45, toe - 2.0 * m, 1.0, 0) < 0, "the same lean with the ZMP inside the sole: no step");
     CHECK(first_step_tick(0.4, 0.35, toe - 0.5 * m, 1.0, 0) < 0, "a lean below step_trigger_lean: no step");
     CHECK(first_step_tick(0.0, 0.45, toe - 0.5 * m, 1.0, 0) < 0, "step_trigger_lean 0: the rule is off");
+    {
+        /* a sagittal rule: the same lean with the capture point beyond a sole's inner edge (the
+         * robot rolled toward -y) starts no step (upright across, k0 above, it does) */
+        double xi_y = 0.0;
+        const double inner = HOAP2_ANKLE_Y - 0.5 * HOAP2_SOLE_WIDTH;
+        CHECK(first_step_tick_rolled(0.4, 0.45, toe - 0.5 * m, 1.0, 0, 0.2, &xi_y) < 0 && fabs(xi_y) > inner,
+              "leaned 0.45 rad at the toe, the capture point %.4f m sideways, beyond the inner edge %.4f m: no step",
+              xi_y, inner);
+    }
     CHECK(first_step_tick(0.0, 0.0, 0.0, -0.05, 0) == 21, "the capture point beyond the edge: a step at once");
     {
         /* the impact on tick 40 (the step started on 21) and on tick 15 (before it may start): the

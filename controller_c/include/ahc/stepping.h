@@ -7,9 +7,9 @@
  * (omega = sqrt(g / z_c), c the CoM from the measured joint angles and the trunk's IMU) leaves the
  * feet's support polygon by more than step_trigger_x (toward the toes or the heels) or
  * step_trigger_y (sideways). The flat-footed strategies cannot bring a capture point back from
- * there (docs/capability.md §8-9). Optional, off by default (docs/controller.md §12.1): the hip
- * strategy at its limit — the trunk leaning step_trigger_lean toward the sole edge the measured ZMP
- * is at. No step starts within step_impact_hold of an impact (the capture point jumping faster
+ * there (docs/capability.md §8-9). And (docs/controller.md §12.1) the hip strategy at its limit —
+ * the trunk leaning step_trigger_lean toward the sole edge the measured ZMP is at, with the capture
+ * point between the soles' inner edges (a sagittal push). No step starts within step_impact_hold of an impact (the capture point jumping faster
  * than any ZMP on the feet could move it: a foot slapping down, not a fall).
  *
  * The step, as phases that continue the paper's Table I (AHC_STEP_*):
@@ -103,8 +103,8 @@ typedef struct {
     double step_close_shift_time; /* the closing step's weight shift onto the landed foot [s]       */
     double step_close_swing_time; /* the closing step's swing [s]                                   */
     double step_trigger_lean;  /* step also when the trunk leans this far from erect toward the sole
-                                  edge the measured ZMP is at (the hip strategy at its limit);
-                                  0: off [rad]                                                    */
+                                  edge the measured ZMP is at (the hip strategy at its limit), the
+                                  capture point between the soles' inner edges; 0: off [rad]     */
     double step_impact_hold;   /* no step starts for this long after an impact (the capture point
                                   jumping faster than the pendulum allows) [s]                    */
     double step_close_rest;    /* the closing step waits for rest: the capture point within this of
