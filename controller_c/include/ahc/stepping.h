@@ -9,8 +9,9 @@
  * step_trigger_y (sideways). The flat-footed strategies cannot bring a capture point back from
  * there (docs/capability.md §8-9). And (docs/controller.md §12.1) the hip strategy at its limit —
  * the trunk leaning step_trigger_lean toward the sole edge the measured ZMP is at, with the capture
- * point between the soles' inner edges (a sagittal push). No step starts within step_impact_hold of an impact (the capture point jumping faster
- * than any ZMP on the feet could move it: a foot slapping down, not a fall).
+ * point between the soles' inner edges (a sagittal push). No step starts within step_impact_hold
+ * of an impact (the capture point jumping faster than any ZMP on the feet could move it: a foot
+ * slapping down, not a fall).
  *
  * The step, as phases that continue the paper's Table I (AHC_STEP_*):
  *   SHIFT     both feet down: the CoM reference's pendulum moves the capture point over the stance
