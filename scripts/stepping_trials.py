@@ -4,10 +4,10 @@
 Back pushes (0.2 s and 1 s pulses, 50 ms ramps, at the trunk's push point, from 1 s; runs of 6 s) on
 paper_five_pushes_3d's base, run with the 3D controller:
 
-1. flat-footed (stepping on, its thresholds out of reach and the lean rule off, so that the layer only estimates): the
-   range of the capture point's x that each push produced and whether the robot stood. The pushes
-   that stand keep the capture point inside the soles: the evidence for the decision's thresholds
-   (and the trunk's largest forward lean, for step_trigger_lean's);
+1. flat-footed (stepping on, its thresholds out of reach and the lean rule off, so that the layer
+   only estimates): the range of the capture point's x that each push produced and whether the
+   robot stood. The pushes that stand keep the capture point inside the soles: the evidence for
+   the decision's thresholds (and the trunk's largest forward lean, for step_trigger_lean's);
 2. stepping on, the layer's defaults (or --set NAME=VALUE ...): the outcome, the steps landed, where
    the first step landed against where it was sent, and the fastest joint set point rate asked of
    the servos during the swing (Hoap2Plant3D's vel_max is 5 rad/s);
