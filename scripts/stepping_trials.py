@@ -18,6 +18,7 @@ paper_five_pushes_3d's base, run with the 3D controller:
     .venv/bin/python scripts/stepping_trials.py --sweep NAME=V1,V2,... [--set ...]
     .venv/bin/python scripts/stepping_trials.py --map [--set ...]
     .venv/bin/python scripts/stepping_trials.py --map --sweep NAME=V1,V2,... [--set ...]
+    .venv/bin/python scripts/stepping_trials.py --landing [--set ...]
 
 --map: the boundary (the largest force below which every 1 N step stands) of back pushes of each
 duration, flat-footed (the 3D controller's defaults, stepping off) and with stepping, and their ratio.
@@ -27,6 +28,10 @@ pushes of 20-30 N: a table of the outcome (S stood, F fell) and the steps landed
 
 --map --sweep NAME=V1,...: the boundaries with stepping for each value of one parameter (a row each),
 under the flat-footed ones.
+
+--landing: 1 s back pushes of 8-20 N with stepping: when the layer decided and when its first step
+landed, after the push onset, against the LIP's one-step bound for a first step landing then
+(docs/capability.md §9.2: anklehip.analysis.bounds.n_step_force_limit with dt_first).
 
 Runs on the native engine in well under a minute.
 """
@@ -85,6 +90,9 @@ def main(argv=None) -> int:
     ap.add_argument("--sweep", metavar="NAME=V1,V2,...",
                     help="one parameter over these values, on 0.2 s back pushes of 20-30 N; with --map, the boundaries "
                          "per value (nothing else runs)")
+    ap.add_argument("--landing", action="store_true",
+                    help="1 s back pushes: the decision's and the first landing's time against the one-step bound "
+                         "(nothing else runs)")
     ap.add_argument("--map", action="store_true",
                     help="the boundaries of back pushes per duration, flat-footed and with stepping (nothing else runs)")
     args = ap.parse_args(argv)
@@ -101,6 +109,8 @@ def main(argv=None) -> int:
             force += 1
         return force - 1
 
+    if args.landing:
+        return landing_times(scenario, models, engine, extra, args.set)
     if args.map and args.sweep:
         name, _, values = args.sweep.partition("=")
         print("back pushes (50 ms ramps): the boundary, the largest force [N] below which every 1 N step stands, "
@@ -184,6 +194,36 @@ def main(argv=None) -> int:
         r = run(scenario, models, engine, force, 0.2, {"stepping_enabled": 1, **extra}, angle)
         f = run(scenario, models, engine, force, 0.2, watch, angle)
         print(f"| {angle} | {force} | {outcome(r)}, {int(col(r.data, 'steps')[-1])} | {outcome(f)} |")
+    return 0
+
+
+LANDING_FORCES = range(8, 21, 2)
+ONSET = 1.0  # run()'s push onset [s]
+
+
+def landing_times(scenario, models, engine, extra, settings) -> int:
+    from anklehip.analysis import bounds as B
+    from anklehip.files.paths import PLANT_FMU, find_fmu
+    from anklehip.running.fmu import FMUInfo
+    plant = FMUInfo.load(find_fmu(PLANT_FMU))
+    params = B.bounds_parameters(plant.start_values(), B.plant_header(plant.unzipdir))
+    robot, (l_max, dt_s) = B.robot_from_plant_params(params), B.step_reach(params)
+    print("1 s back pushes (50 ms ramps), stepping on" + (f" ({', '.join(settings)})" if settings else "")
+          + ": times after the push onset [ms]; the bound: the LIP capturable in one step landing then (§9.2)")
+    print(f"| push [N] | outcome | decision | first step lands | one-step bound for that landing [N] | landed ahead [mm] "
+          f"| stance ZMP in the swing, mean [mm] (toe {1000 * robot.x_toe:.0f}) |")
+    print("|---|---|---|---|---|---|---|")
+    for force in LANDING_FORCES:
+        r = run(scenario, models, engine, force, 1.0, {"stepping_enabled": 1, **extra})
+        t, phase, steps = r.data["time"], col(r.data, "step_phase"), col(r.data, "steps")
+        decided, landed = np.flatnonzero(phase != 0), np.flatnonzero(steps >= 1)
+        cells = [f"{1000 * (t[i[0]] - ONSET):.0f}" if i.size else "-" for i in (decided, landed)]
+        bound = (f"{float(B.n_step_force_limit(robot, 1.0, 0.05, 1, 1, l_max, dt_s, dt_first=t[landed[0]] - ONSET)):.1f}"
+                 if landed.size else "-")
+        swing = (phase == 2) & (steps == 0)
+        ahead = f"{1000 * col(r.data, 'landing_x')[landed[0]]:.0f}" if landed.size else "-"
+        zmp = f"{1000 * col(r.data, 'zmp_x')[swing].mean():.0f}" if swing.any() else "-"
+        print(f"| {force} | {outcome(r)} | {cells[0]} | {cells[1]} | {bound} | {ahead} | {zmp} |")
     return 0
 
 

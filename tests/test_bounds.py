@@ -411,8 +411,8 @@ def test_docs_tables_are_the_modules():
 # ---------------------------------------------------------------------------------------------
 # N-step capturability of the LIP with a maximum step length (Koolen et al. 2012; docs/capability.md section 9)
 
-from anklehip.analysis.bounds import (capture_margin, n_step_force_limit, n_step_impulse_limit,  # noqa: E402
-                                      step_reach, sustained_push_limit_stepped)
+from anklehip.analysis.bounds import (capture_margin, first_step_deadline, n_step_force_limit,  # noqa: E402
+                                      n_step_impulse_limit, step_reach, sustained_push_limit_stepped)
 
 L_MAX, DT_S = 0.1249, 0.127
 
@@ -446,20 +446,23 @@ def test_zero_steps_is_the_lip_bound():
         assert sustained_push_limit_stepped(R, 0.0, d) == pytest.approx(sustained_push_limit(R, d), rel=1e-13)
 
 
-@pytest.mark.parametrize("steps", [1, 2])
-def test_n_step_bound_is_the_capture_threshold_of_the_stepping_pendulum(steps):
+@pytest.mark.parametrize("steps, dur, first", [(1, 0.3, None), (2, 0.3, None), (1, 1.0, 0.3), (2, 1.0, 0.36)])
+def test_n_step_bound_is_the_capture_threshold_of_the_stepping_pendulum(steps, dur, first):
     """Establishes: n_step_force_limit is the threshold of the model it is derived from: the pendulum
     of test_lip_limit_is_the_capture_threshold_of_the_pendulum whose foot (sole edge and feet
-    with it) moves l_max forward at dt_s, 2 dt_s, ...: a 0.3 s push 1 % below the bound ends
-    swinging back over the last foot, 1 % above it diverges over that foot's edge."""
-    w, mu, dur, rise = R.omega, R.m_f / R.m_b, 0.3, 0.05
+    with it) moves l_max forward at dt_s, 2 dt_s, ... (or, with dt_first, at dt_first,
+    dt_first + dt_s, ...): a push 1 % below the bound ends swinging back over the last foot,
+    1 % above it diverges over that foot's edge (0.3 s pushes; 1 s ones whose first step lands
+    at 0.3 and 0.36 s, docs/capability.md section 9.2)."""
+    w, mu, rise = R.omega, R.m_f / R.m_b, 0.05
     prof = PushProfile.from_segments([PushSegment("pulse", t=0, force=1.0, duration=dur, rise=rise)])
-    fmax = float(n_step_force_limit(R, dur, rise, 1, steps, L_MAX, DT_S))
+    fmax = float(n_step_force_limit(R, dur, rise, 1, steps, L_MAX, DT_S, dt_first=first))
     assert fmax > float(lip_force_limit(R, dur, rise, 1))
     F = np.array([0.99, 1.01]) * fmax
+    t1 = DT_S if first is None else first
 
     def shift(t):
-        return L_MAX * min(steps, math.floor(t / DT_S + 1e-12))
+        return L_MAX * min(steps, 0 if t < t1 - 1e-12 else 1 + math.floor((t - t1) / DT_S + 1e-12))
 
     def deriv(t, x, v):
         p, xf = R.x_toe + shift(t), R.x_f + shift(t)
@@ -470,6 +473,30 @@ def test_n_step_bound_is_the_capture_threshold_of_the_stepping_pendulum(steps):
     last = steps * L_MAX
     assert x[0] - last < 0             # 1 % below: swung back behind the last foot's ankle
     assert x[1] - last > 0.1           # 1 % above: diverged over its edge
+
+
+def test_first_step_deadline_inverts_the_bound():
+    """Establishes: a first step landing later than DT_S lowers the N-step bound (e^(-w dt_first) in
+    capture_margin's last stage; dt_first = DT_S is the default), and first_step_deadline is that
+    bound's inverse: the landing time at which the bound equals the force; inf for a push the flat
+    foot captures, 0 for one no landing of N steps can."""
+    w, rm = R.omega, 0.06
+    assert capture_margin(rm, L_MAX, w, DT_S, 3, dt_first=DT_S) == pytest.approx(capture_margin(rm, L_MAX, w, DT_S, 3),
+                                                                                    rel=1e-13)
+    d1 = capture_margin(rm, L_MAX, w, DT_S, 1, dt_first=0.3)
+    assert d1 == pytest.approx(rm + L_MAX * math.exp(-w * 0.3), rel=1e-13)
+    assert capture_margin(rm, L_MAX, w, DT_S, 2, dt_first=0.3) == pytest.approx(
+        (capture_margin(rm, L_MAX, w, DT_S, 1) - rm + L_MAX) * math.exp(-w * 0.3) + rm, rel=1e-13)
+    late = [float(n_step_force_limit(R, 1.0, 0.05, 1, 1, L_MAX, DT_S, dt_first=t)) for t in (DT_S, 0.2, 0.4, 0.8)]
+    assert np.all(np.diff(late) < 0) and late[-1] > float(lip_force_limit(R, 1.0, 0.05, 1))
+    for steps in (1, 2, math.inf):
+        for force in (18.0, 22.0):
+            t = first_step_deadline(R, force, 1.0, 0.05, 1, steps, L_MAX, DT_S)
+            assert 0 < t < 1
+            assert float(n_step_force_limit(R, 1.0, 0.05, 1, steps, L_MAX, DT_S, dt_first=t)) == pytest.approx(force,
+                                                                                                              rel=1e-12)
+    assert first_step_deadline(R, 0.9 * float(lip_force_limit(R, 1.0, 0.05, 1)), 1.0, 0.05, 1, 1, L_MAX, DT_S) == math.inf
+    assert first_step_deadline(R, 100.0, 1.0, 0.05, 1, 1, L_MAX, DT_S) == 0.0
 
 
 def test_hoap2_step_reach():
@@ -488,14 +515,17 @@ def test_hoap2_step_reach():
 
 
 def test_docs_n_step_table_is_the_modules(fmu_path):
-    """Establishes: the N-step table of docs/capability.md section 9 is what `python -m
-    anklehip.analysis.bounds` prints for the sagittal plant FMU's robot (n_step_table)."""
-    from anklehip.analysis.bounds import n_step_table
+    """Establishes: the N-step tables of docs/capability.md sections 9 and 9.2 are what `python -m
+    anklehip.analysis.bounds` prints for the sagittal plant FMU's robot (n_step_table,
+    step_timing_table)."""
+    from anklehip.analysis.bounds import n_step_table, step_timing_table
     from anklehip.running.fmu import FMUInfo
     from conftest import REPO_ROOT
     plant = FMUInfo.load(fmu_path("Hoap2Plant"))
-    table = n_step_table(bounds_parameters(plant.start_values(), plant_header(plant.unzipdir)))
-    assert table in (REPO_ROOT / "docs" / "capability.md").read_text()
+    params = bounds_parameters(plant.start_values(), plant_header(plant.unzipdir))
+    doc = (REPO_ROOT / "docs" / "capability.md").read_text()
+    assert n_step_table(params) in doc
+    assert step_timing_table(params) in doc
 
 
 SIDE = {**PARAMS, "l1": NOMINAL["L1"], "I1_roll": NOMINAL["I1_ROLL"], "ankle_y": NOMINAL["ANKLE_Y"],

@@ -344,35 +344,61 @@ def optimum_table(data: dict | None = None) -> str:
 # 2012, section 5): the instantaneous capture point at most d_N ahead of the stance ankle is
 # capturable in N steps, each at most l_max long and at least dt_s after the previous one.
 
-def capture_margin(r_max: float, l_max: float, omega: float, dt_s: float, steps) -> np.ndarray | float:
+def capture_margin(r_max: float, l_max: float, omega: float, dt_s: float, steps,
+                   dt_first: float | None = None) -> np.ndarray | float:
     """d_N [m], the largest distance of the instantaneous capture point ahead of the ankle from which the
     LIP with a foot (the CoP up to r_max ahead of the ankle) comes to rest in N = steps steps
     (Koolen et al. 2012, section 5): d_0 = r_max, d_N = (d_{N-1} - r_max + l_max) e^(-omega dt_s) + r_max,
     i.e. d_N = r_max + l_max sum_{k=1..N} e^(-k omega dt_s); steps = inf gives
-    d_inf = r_max + l_max e^(-omega dt_s) / (1 - e^(-omega dt_s)). Vectorised over steps."""
+    d_inf = r_max + l_max e^(-omega dt_s) / (1 - e^(-omega dt_s)). With dt_first the first step lands
+    dt_first from now and each next one dt_s after the previous one: the recursion's last stage (the
+    first step) takes e^(-omega dt_first), d_N = r_max + l_max e^(-omega dt_first) sum_{k=0..N-1}
+    e^(-k omega dt_s). Vectorised over steps."""
     n = np.asarray(steps, float)
     E = math.exp(-omega * dt_s)
+    first = E if dt_first is None else math.exp(-omega * dt_first)
     with np.errstate(invalid="ignore"):
-        geo = np.where(np.isinf(n), E / (1 - E), E * (1 - E ** np.where(np.isinf(n), 0, n)) / (1 - E))
+        geo = np.where(np.isinf(n), first / (1 - E), first * (1 - E ** np.where(np.isinf(n), 0, n)) / (1 - E))
     out = r_max + l_max * geo
     return float(out) if np.ndim(out) == 0 else out
 
 
 def n_step_force_limit(r: Robot, duration, rise: float = 0.0, direction: float = +1, steps=1,
-                       l_max: float = 0.0, dt_s: float = math.inf, omega: float | None = None):
+                       l_max: float = 0.0, dt_s: float = math.inf, omega: float | None = None,
+                       dt_first: float | None = None):
     """Largest peak force [N, magnitude] of a trapezoid push (duration, rise) from which the LIP of the
     ankle strategy (lip_force_limit's pendulum, the CoP at the sole edge from the onset) is
     capturable with `steps` steps of at most l_max [m], the first dt_s [s] after the push onset and
     each next dt_s later (Koolen et al. 2012: d_N of capture_margin with r_max the sole edge's
     effective distance Delta = F_s h/(m_b g), feet included):
     F_N = m_b g d_N / (h omega S), S = integral s(t) e^(-omega t) dt. steps = 0 is lip_force_limit.
+    dt_first: the first step lands this long after the onset instead of dt_s (capture_margin).
     Assumes what lip_force_limit assumes, plus Koolen's model: instantaneous steps (no double
     support), the CoP up to Delta ahead of each new ankle, the CoM height unchanged, the push
     continuing whatever the steps. A necessary condition, as lip_force_limit. Vectorised over
     duration (or steps)."""
     w = r.omega if omega is None else omega
-    d_n = capture_margin(_edge_moment(r, direction) / r.m_b, l_max, w, dt_s, steps)
+    d_n = capture_margin(_edge_moment(r, direction) / r.m_b, l_max, w, dt_s, steps, dt_first)
     return r.g * r.m_b * d_n / (r.h * w * trapezoid_integral(w, duration, rise))
+
+
+def first_step_deadline(r: Robot, force: float, duration: float, rise: float = 0.0, direction: float = +1,
+                        steps=1, l_max: float = 0.0, dt_s: float = math.inf, omega: float | None = None) -> float:
+    """The latest landing of the first step [s after the push onset] from which a push of `force` [N]
+    (duration, rise) is capturable with `steps` steps (the next ones dt_s apart): the dt_first at which
+    n_step_force_limit equals force, from capture_margin's closed form, e^(-omega dt_first) =
+    (d - r_max) (1 - E) / (l_max (1 - E^N)), d = force h omega S / (m_b g), E = e^(-omega dt_s).
+    inf when the flat foot alone captures it (force <= lip_force_limit), 0 when no landing is soon
+    enough (the push needs more than steps instantaneous steps)."""
+    w = r.omega if omega is None else omega
+    r_max = _edge_moment(r, direction) / r.m_b
+    d = abs(force) * r.h * w * float(trapezoid_integral(w, duration, rise)) / (r.g * r.m_b)
+    if d <= r_max:
+        return math.inf
+    E = math.exp(-w * dt_s)
+    geo = 1 / (1 - E) if math.isinf(steps) else (1 - E ** steps) / (1 - E)
+    x = (d - r_max) / (l_max * geo) if l_max > 0 and steps > 0 else math.inf
+    return -math.log(x) / w if x < 1 else 0.0
 
 
 def n_step_impulse_limit(r: Robot, direction: float = +1, steps=1, l_max: float = 0.0, dt_s: float = math.inf,
@@ -445,6 +471,35 @@ def n_step_table(params: dict, durations=None, rise: float = 0.05, hip_drop: flo
         out.append(f"| sustained-push limit, {side} [N] | {sustained_push_limit(r, d):.2f} | "
                    + " | ".join(f"{sustained_push_limit_stepped(r, l_max, d):.2f}" for _ in STEP_COUNTS[1:]) + " |")
     return "\n".join(out)
+
+FIRST_LANDINGS = (None, 0.2, 0.25, 0.3, 0.35, 0.4, 0.5, 0.6, 0.7)
+
+
+def step_timing_table(params: dict, duration: float = 1.0, rise: float = 0.05, hip_drop: float = 0.01,
+                      landings=FIRST_LANDINGS) -> str:
+    """When the first step must land (docs/capability.md section 9.2): the N-step force limit of a back
+    push of `duration` against the first step's landing after the onset (None: dt_s, the table of
+    section 9), the next steps dt_s apart, and the latest first landing that captures a push at the
+    flat-footed sustained-push limit (first_step_deadline)."""
+    r = robot_from_plant_params(params)
+    l_max, dt_s = step_reach(params, hip_drop)
+    counts = STEP_COUNTS[1:3] + STEP_COUNTS[-1:]
+    head = ["first step lands after the onset [ms]"] + [
+        ("∞ steps" if math.isinf(n) else f"{n} step" + ("s" if n != 1 else "")) + " [N]" for n in counts]
+    out = [f"{duration:g} s back push ({1000 * rise:g} ms ramps), l_max = {1000 * l_max:.1f} mm, the steps after the "
+           f"first dt_s = {1000 * dt_s:.0f} ms apart; 0 steps (the LIP bound): "
+           f"{float(lip_force_limit(r, duration, rise, 1)):.1f} N.", "",
+           "| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+    for t in landings:
+        first = dt_s if t is None else t
+        out.append(f"| {1000 * first:.0f} | " + " | ".join(
+            f"{float(n_step_force_limit(r, duration, rise, 1, n, l_max, dt_s, dt_first=first)):.1f}" for n in counts)
+            + " |")
+    f_s = sustained_push_limit(r, 1)
+    out.append(f"| latest landing for {f_s:.1f} N (the sustained-push limit) [ms] | " + " | ".join(
+        f"{1000 * first_step_deadline(r, f_s, duration, rise, 1, n, l_max, dt_s):.0f}" for n in counts) + " |")
+    return "\n".join(out)
+
 
 @dataclass(frozen=True)
 class SideSteps:
@@ -825,3 +880,4 @@ if __name__ == "__main__":      # pragma: no cover - prints the doc's tables
     print("\n" + optimum_table())          # the cached flat-footed optimum (section 8)
     print("\n" + n_step_table(bounds_parameters(plant.start_values(), plant_header(plant.unzipdir))))   # section 9
     print("\n" + side_step_table(bounds_parameters(plant.start_values(), plant_header(plant.unzipdir))))   # 9.1
+    print("\n" + step_timing_table(bounds_parameters(plant.start_values(), plant_header(plant.unzipdir))))   # 9.2
