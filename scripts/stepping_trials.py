@@ -31,7 +31,8 @@ under the flat-footed ones.
 
 --landing: 1 s back pushes of 8-20 N with stepping: when the layer decided and when its first step
 landed, after the push onset, against the LIP's one-step bound for a first step landing then
-(docs/capability.md §9.2: anklehip.analysis.bounds.n_step_force_limit with dt_first).
+(docs/capability.md §9.2: anklehip.analysis.bounds.n_step_force_limit with dt_first); then the same
+with the decision set 100 ms after the onset (step_trigger_time), whatever the layer's rules.
 
 Runs on the native engine in well under a minute.
 """
@@ -208,13 +209,23 @@ def landing_times(scenario, models, engine, extra, settings) -> int:
     plant = FMUInfo.load(find_fmu(PLANT_FMU))
     params = B.bounds_parameters(plant.start_values(), B.plant_header(plant.unzipdir))
     robot, (l_max, dt_s) = B.robot_from_plant_params(params), B.step_reach(params)
-    print("1 s back pushes (50 ms ramps), stepping on" + (f" ({', '.join(settings)})" if settings else "")
-          + ": times after the push onset [ms]; the bound: the LIP capturable in one step landing then (§9.2)")
+    for set_time in (None, ONSET + 0.1):
+        over = {"stepping_enabled": 1, **extra, **({"step_trigger_time": set_time} if set_time else {})}
+        print(("" if set_time is None else "\n") + "1 s back pushes (50 ms ramps), stepping on"
+              + (f" ({', '.join(settings)})" if settings else "")
+              + ("" if set_time is None else f", the decision at {set_time:g} s (step_trigger_time)")
+              + ": times after the push onset [ms]; the bound: the LIP capturable in one step landing then (§9.2)")
+        landing_table(scenario, models, engine, over, robot, l_max, dt_s)
+    return 0
+
+
+def landing_table(scenario, models, engine, overrides, robot, l_max, dt_s):
+    from anklehip.analysis import bounds as B
     print(f"| push [N] | outcome | decision | first step lands | one-step bound for that landing [N] | landed ahead [mm] "
           f"| stance ZMP in the swing, mean [mm] (toe {1000 * robot.x_toe:.0f}) |")
     print("|---|---|---|---|---|---|---|")
     for force in LANDING_FORCES:
-        r = run(scenario, models, engine, force, 1.0, {"stepping_enabled": 1, **extra})
+        r = run(scenario, models, engine, force, 1.0, overrides)
         t, phase, steps = r.data["time"], col(r.data, "step_phase"), col(r.data, "steps")
         decided, landed = np.flatnonzero(phase != 0), np.flatnonzero(steps >= 1)
         cells = [f"{1000 * (t[i[0]] - ONSET):.0f}" if i.size else "-" for i in (decided, landed)]
@@ -224,7 +235,6 @@ def landing_times(scenario, models, engine, extra, settings) -> int:
         ahead = f"{1000 * col(r.data, 'landing_x')[landed[0]]:.0f}" if landed.size else "-"
         zmp = f"{1000 * col(r.data, 'zmp_x')[swing].mean():.0f}" if swing.any() else "-"
         print(f"| {force} | {outcome(r)} | {cells[0]} | {cells[1]} | {bound} | {ahead} | {zmp} |")
-    return 0
 
 
 def outcome(r) -> str:

@@ -120,16 +120,21 @@ def test_decision_surface_points_over_direction(fmu_dir, angle, force, flat, ste
 
 
 def test_landing_times_table_is_the_docs(fmu_dir):
-    """docs/capability.md §9.2: the table of `scripts/stepping_trials.py --landing` (1 s back pushes:
+    """docs/capability.md §9.2: the tables of `scripts/stepping_trials.py --landing` (1 s back pushes:
     outcome, decision and first landing times, the one-step bound at that landing, where the foot
-    landed, the stance ZMP in the swing) is what the script prints now — the script runs, and the
-    figures the docs draw conclusions from are today's."""
+    landed, the stance ZMP in the swing; the layer's decisions, then decisions set 100 ms into the
+    push with step_trigger_time) are what the script prints now — the script runs, and the figures
+    the docs draw conclusions from are today's."""
     import os
     import subprocess
     import sys
     from conftest import REPO_ROOT
     out = subprocess.run([sys.executable, str(REPO_ROOT / "scripts" / "stepping_trials.py"), "--landing"],
                          capture_output=True, text=True, check=True, env={**os.environ, "ANKLEHIP_FMU_DIR": str(fmu_dir)})
-    table = out.stdout.strip().split("\n", 1)[1]
-    assert table.count("\n") == 8, out.stdout
-    assert table in (REPO_ROOT / "docs" / "capability.md").read_text()
+    doc = (REPO_ROOT / "docs" / "capability.md").read_text()
+    blocks = out.stdout.strip().split("\n\n")
+    assert len(blocks) == 2, out.stdout
+    for block in blocks:
+        table = block.split("\n", 1)[1]
+        assert table.count("\n") == 8, block
+        assert table in doc

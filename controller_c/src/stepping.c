@@ -51,6 +51,7 @@ void ahc_step_params_default(ahc_step_params *p)
     p->step_close_rest_tilt = 0.02;
     p->step_close_wait = 1.0;
     p->step_close_inset = 0.01;
+    p->step_trigger_time = 0.0;
 }
 
 #define SD(field, unit, lo, hi, desc) \
@@ -97,6 +98,7 @@ static const ahc_param_info k_stable[] = {
     SD(step_close_rest_tilt, "rad", 0.001, 0.5, "The closing step's rest: each sole flat within this"),
     SD(step_close_wait, "s", 0.0, 10.0, "The closing step waits for rest at most this long after SETTLE's planned time"),
     SD(step_close_inset, "m", 0.0, 0.05, "The closing step's weight shift moves the capture point this far inside of the landed ankle (toward the other foot)"),
+    SD(step_trigger_time, "s", 0.0, 1e6, "A step starts at the first tick at or after this time (ticks x sample_period from the start) whatever the decision rules, if the robot stands then: experiments on the decision's timing; 0: off"),
 };
 #define STABLE_LEN (sizeof k_stable / sizeof k_stable[0])
 
@@ -837,8 +839,12 @@ void ahc_step_step(ahc_stepper *c, const ahc_step_sensors *s, const double flat_
         const int beyond = xi[0] > x_front + c->p.step_trigger_x || xi[0] < x_back - c->p.step_trigger_x ||
                            xi[1] > c->feet[AHC_LEFT][1] + w2 + c->p.step_trigger_y ||
                            xi[1] < c->feet[AHC_RIGHT][1] - w2 - c->p.step_trigger_y;
-        const int trigger = c->p.stepping_enabled && c->est_valid && c->tick > 20 && flat_q && (beyond || at_limit);
-        if (trigger && c->since_impact >= c->p.step_impact_hold - 1e-12) {
+        /* a step at a set time (step_trigger_time), whatever the rules and the impact hold */
+        const double t_set = c->p.step_trigger_time;
+        const int at_set_time = t_set > 0.0 && (double)c->tick * c->dt >= t_set && (double)(c->tick - 1) * c->dt < t_set;
+        const int trigger = c->p.stepping_enabled && c->est_valid && c->tick > 20 && flat_q &&
+                            (((beyond || at_limit) && c->since_impact >= c->p.step_impact_hold - 1e-12) || at_set_time);
+        if (trigger) {
             ahc_quintic_init(&c->pitch_plan, c->pitch_prev, c->pitch_rate, 0.0, c->pitch_erect, 0.0, 0.0,
                              c->p.step_pitch_time);
             c->pitch_time = 0.0;

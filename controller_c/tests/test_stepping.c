@@ -425,8 +425,8 @@ static void test_nonfinite_inputs(void)
  * upright and its trunk leaning `lean` forward and `roll` sideways (+: top toward -y); the measured
  * ZMP at zmp_x; from jump_tick on the trunk reads 0.05 rad more (an impact). *xi_y, if given: the
  * estimate's lateral capture point on the last tick. */
-static int first_step_tick_rolled(double trigger_lean, double lean, double zmp_x, double trigger_x, int jump_tick,
-                                  double roll, double *xi_y)
+static int first_step_tick_at(double trigger_lean, double lean, double zmp_x, double trigger_x, int jump_tick,
+                              double roll, double trigger_time, double *xi_y)
 {
     ahc_params sp;
     ahc_frontal_params fp;
@@ -440,6 +440,7 @@ static int first_step_tick_rolled(double trigger_lean, double lean, double zmp_x
     defaults(&sp, &fp, &st);
     st.step_trigger_lean = trigger_lean;
     st.step_trigger_x = trigger_x;
+    st.step_trigger_time = trigger_time;
     CHECK(ahc_step_init(&c, &st, &sp, &fp) == AHC_OK, "init");
     ahc_erect_posture(&sp, &e1, &e2);
     memset(&s, 0, sizeof s);
@@ -459,7 +460,7 @@ static int first_step_tick_rolled(double trigger_lean, double lean, double zmp_x
 
 static int first_step_tick(double trigger_lean, double lean, double zmp_x, double trigger_x, int jump_tick)
 {
-    return first_step_tick_rolled(trigger_lean, lean, zmp_x, trigger_x, jump_tick, 0.0, NULL);
+    return first_step_tick_at(trigger_lean, lean, zmp_x, trigger_x, jump_tick, 0.0, 0.0, NULL);
 }
 
 static void test_triggers(void)
@@ -475,7 +476,7 @@ static void test_triggers(void)
          * robot rolled toward -y) starts no step (upright across, k0 above, it does) */
         double xi_y = 0.0;
         const double inner = HOAP2_ANKLE_Y - 0.5 * HOAP2_SOLE_WIDTH;
-        CHECK(first_step_tick_rolled(0.4, 0.45, toe - 0.5 * m, 1.0, 0, 0.2, &xi_y) < 0 && fabs(xi_y) > inner,
+        CHECK(first_step_tick_at(0.4, 0.45, toe - 0.5 * m, 1.0, 0, 0.2, 0.0, &xi_y) < 0 && fabs(xi_y) > inner,
               "leaned 0.45 rad at the toe, the capture point %.4f m sideways, beyond the inner edge %.4f m: no step",
               xi_y, inner);
     }
@@ -489,6 +490,15 @@ static void test_triggers(void)
         CHECK(first_step_tick(0.0, 0.0, 0.0, -0.05, 40) == 21, "an impact after the step started changes nothing");
         CHECK(k15 >= 35 && k15 <= 100, "an impact on tick 15: the step starts 20 ms after the capture point settles "
               "(tick %d)", k15);
+    }
+    {
+        /* step_trigger_time: a robot standing still (no rule would fire) steps on the first tick at or
+         * after the set time, an impact 5 ticks before notwithstanding; not within the estimate's
+         * first 20 ticks */
+        const int k = first_step_tick_at(0.4, 0.0, 0.0, 1.0, 0, 0.0, 0.1, NULL);
+        CHECK(k == 100 || k == 101, "step_trigger_time 0.1 s: a step on tick 100 (tick %d)", k);
+        CHECK(first_step_tick_at(0.4, 0.0, 0.0, 1.0, 95, 0.0, 0.1, NULL) == k, "... after an impact on tick 95 too");
+        CHECK(first_step_tick_at(0.4, 0.0, 0.0, 1.0, 0, 0.0, 0.015, NULL) < 0, "step_trigger_time 15 ms: no step");
     }
 }
 

@@ -115,6 +115,9 @@ typedef struct {
     double step_close_wait;    /* ... for at most this after SETTLE's planned time [s]            */
     double step_close_inset;   /* the closing step's weight shift moves the capture point this far
                                   inside of the landed ankle, toward the other foot [m]          */
+    double step_trigger_time;  /* a step starts at the first tick at or after this time since the
+                                  start (tick x sample_period), whatever the rules, if standing then:
+                                  experiments on the decision's timing; 0: off [s]               */
 } ahc_step_params;
 
 /* HOAP-2 defaults (docs/controller.md §12): stepping off. */
