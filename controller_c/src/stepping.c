@@ -726,6 +726,9 @@ static void blend(ahc_stepper *c, ahc_step_outputs *out)
     c->blend_time += c->dt;
 }
 
+/* The feet's lateral mid-line: y half-way between the ankles. */
+static double feet_mid_y(const ahc_stepper *c) { return 0.5 * (c->feet[AHC_LEFT][1] + c->feet[AHC_RIGHT][1]); }
+
 static void start_step(ahc_stepper *c, const double com[2], const double xi[2])
 {
     const double w2 = 0.5 * c->sole_width;
@@ -734,7 +737,7 @@ static void start_step(ahc_stepper *c, const double com[2], const double xi[2])
      * is the one on the capture point's side */
     if (xi[1] > c->feet[AHC_LEFT][1] + w2 + c->p.step_trigger_y) c->swing_side = AHC_LEFT;
     else if (xi[1] < c->feet[AHC_RIGHT][1] - w2 - c->p.step_trigger_y) c->swing_side = AHC_RIGHT;
-    else c->swing_side = xi[1] >= 0.5 * (c->feet[AHC_LEFT][1] + c->feet[AHC_RIGHT][1]) ? AHC_RIGHT : AHC_LEFT;
+    else c->swing_side = xi[1] >= feet_mid_y(c) ? AHC_RIGHT : AHC_LEFT;
     sigma_swing = c->swing_side == AHC_LEFT ? 1 : -1;
     for (i = 0; i < 2; ++i) {
         c->c0[i] = c->cref[i] = com[i];
@@ -831,8 +834,7 @@ void ahc_step_step(ahc_stepper *c, const ahc_step_sensors *s, const double flat_
          * fell where the flat-footed layers stand: docs/controller.md §12.1) */
         const double lean = c->pitch_prev - c->pitch_erect, m = c->p.step_zmp_margin;
         const double inner = c->ankle_y - w2; /* the soles' inner edges, from the mid-line */
-        const int at_limit = c->p.step_trigger_lean > 0.0 &&
-                             fabs(xi[1] - 0.5 * (c->feet[AHC_LEFT][1] + c->feet[AHC_RIGHT][1])) < inner &&
+        const int at_limit = c->p.step_trigger_lean > 0.0 && fabs(xi[1] - feet_mid_y(c)) < inner &&
                              ((s->zmp_x > x_front - m && lean > c->p.step_trigger_lean) ||
                               (s->zmp_x < x_back + m && lean < -c->p.step_trigger_lean));
         /* the capture point beyond an edge of the feet by step_trigger_x or _y */
