@@ -388,8 +388,8 @@ def first_step_deadline(r: Robot, force: float, duration: float, rise: float = 0
     (duration, rise) is capturable with `steps` steps (the next ones dt_s apart): the dt_first at which
     n_step_force_limit equals force, from capture_margin's closed form, e^(-omega dt_first) =
     (d - r_max) (1 - E) / (l_max (1 - E^N)), d = force h omega S / (m_b g), E = e^(-omega dt_s).
-    inf when the flat foot alone captures it (force <= lip_force_limit), 0 when no landing is soon
-    enough (the push needs more than steps instantaneous steps)."""
+    inf when the flat foot alone captures it (force <= lip_force_limit), nan when no landing does,
+    not even one at the onset (the push needs more than `steps` steps)."""
     w = r.omega if omega is None else omega
     r_max = _edge_moment(r, direction) / r.m_b
     d = abs(force) * r.h * w * float(trapezoid_integral(w, duration, rise)) / (r.g * r.m_b)
@@ -398,7 +398,7 @@ def first_step_deadline(r: Robot, force: float, duration: float, rise: float = 0
     E = math.exp(-w * dt_s)
     geo = 1 / (1 - E) if math.isinf(steps) else (1 - E ** steps) / (1 - E)
     x = (d - r_max) / (l_max * geo) if l_max > 0 and steps > 0 else math.inf
-    return -math.log(x) / w if x < 1 else 0.0
+    return -math.log(x) / w if x <= 1 else math.nan
 
 
 def n_step_impulse_limit(r: Robot, direction: float = +1, steps=1, l_max: float = 0.0, dt_s: float = math.inf,
@@ -471,6 +471,7 @@ def n_step_table(params: dict, durations=None, rise: float = 0.05, hip_drop: flo
         out.append(f"| sustained-push limit, {side} [N] | {sustained_push_limit(r, d):.2f} | "
                    + " | ".join(f"{sustained_push_limit_stepped(r, l_max, d):.2f}" for _ in STEP_COUNTS[1:]) + " |")
     return "\n".join(out)
+
 
 FIRST_LANDINGS = (None, 0.2, 0.25, 0.3, 0.35, 0.4, 0.5, 0.6, 0.7)
 
