@@ -59,11 +59,12 @@ MAP_DURATIONS = (0.15, 0.2, 0.3, 0.5, 1.0)
 SIDEWAYS = [(90, 20), (90, 24), (90, 28), (90, 32), (45, 20), (45, 24), (45, 28), (45, 32), (30, 20), (30, 24), (30, 26),
             (30, 28), (30, 32)]  # (direction [deg], force [N]), 0.2 s
 JOINTS = ("hip_yaw", "hip", "hip_roll", "knee", "ankle", "ankle_roll")
+ONSET = 1.0  # every push's onset [s]
 
 
 def run(scenario, models, engine, force, duration, overrides, angle=0.0):
     a = np.radians(angle)
-    push, push_y = (PushProfile.from_segments([PushSegment("pulse", t=1.0, force=float(f), duration=duration, rise=0.05)])
+    push, push_y = (PushProfile.from_segments([PushSegment("pulse", t=ONSET, force=float(f), duration=duration, rise=0.05)])
                     for f in (force * np.cos(a), force * np.sin(a)))
     sc = dataclasses.replace(scenario, controller_model="3d", push=push, stop_time=6.0,
                              **({"push_y": push_y} if angle else {}))
@@ -199,7 +200,6 @@ def main(argv=None) -> int:
 
 
 LANDING_FORCES = range(8, 21, 2)
-ONSET = 1.0  # run()'s push onset [s]
 
 
 def landing_times(scenario, models, engine, extra, settings) -> int:
