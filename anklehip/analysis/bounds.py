@@ -879,6 +879,7 @@ if __name__ == "__main__":      # pragma: no cover - prints the doc's tables
     p = bounds_parameters_of(Models.load(fmu_dir, plant_model="3d"), Scenario("bounds", None, plant_model="3d"))
     print("\n" + nominal_tables_3d(p, p.get("theta_ankle_erect", 0.0), p.get("theta_hip_erect", 0.0)))
     print("\n" + optimum_table())          # the cached flat-footed optimum (section 8)
-    print("\n" + n_step_table(bounds_parameters(plant.start_values(), plant_header(plant.unzipdir))))   # section 9
-    print("\n" + side_step_table(bounds_parameters(plant.start_values(), plant_header(plant.unzipdir))))   # 9.1
-    print("\n" + step_timing_table(bounds_parameters(plant.start_values(), plant_header(plant.unzipdir))))   # 9.2
+    sagittal = bounds_parameters(plant.start_values(), plant_header(plant.unzipdir))
+    print("\n" + n_step_table(sagittal))        # section 9
+    print("\n" + side_step_table(sagittal))     # 9.1
+    print("\n" + step_timing_table(sagittal))   # 9.2
