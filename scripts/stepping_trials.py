@@ -9,8 +9,9 @@ paper_five_pushes_3d's base, run with the 3D controller:
    robot stood. The pushes that stand keep the capture point inside the soles: the evidence for
    the decision's thresholds (and the trunk's largest forward lean, for step_trigger_lean's);
 2. stepping on, the layer's defaults (or --set NAME=VALUE ...): the outcome, the steps landed, where
-   the first step landed against where it was sent, and the fastest joint set point rate asked of
-   the servos during the swing (Hoap2Plant3D's vel_max is 5 rad/s);
+   the first step landed against where it was sent, the fastest joint set point rate asked of the
+   servos during the swing (Hoap2Plant3D's vel_max is 5 rad/s), and how long the swing knee's set
+   point stays straight from the swing's start (the foot lifts off then);
 3. side (90 deg) and diagonal (45 and 30 deg: back and left) pushes, stepping on and flat-footed
    (stepping on, its thresholds out of reach, the lean rule off): the outcome and the steps landed.
 
@@ -19,6 +20,7 @@ paper_five_pushes_3d's base, run with the 3D controller:
     .venv/bin/python scripts/stepping_trials.py --map [--set ...]
     .venv/bin/python scripts/stepping_trials.py --map --sweep NAME=V1,V2,... [--set ...]
     .venv/bin/python scripts/stepping_trials.py --landing [--set ...]
+    .venv/bin/python scripts/stepping_trials.py --touchdown [--set ...]
 
 --map: the boundary (the largest force below which every 1 N step stands) of back pushes of each
 duration, flat-footed (the 3D controller's defaults, stepping off) and with stepping, and their ratio.
@@ -33,6 +35,10 @@ under the flat-footed ones.
 landed, after the push onset, against the LIP's one-step bound for a first step landing then
 (docs/capability.md §9.2: anklehip.analysis.bounds.n_step_force_limit with dt_first); then the same
 with the decision set 100 ms after the onset (step_trigger_time), whatever the layer's rules.
+
+--touchdown: what the first landing does to the robot, over back pushes around the stepping boundary
+of each duration: the time no sole touches the ground after it, the largest sole load within 0.3 s of
+it, and the largest change of a joint set point in one tick after it.
 
 Runs on the native engine in well under a minute.
 """
@@ -60,6 +66,8 @@ SIDEWAYS = [(90, 20), (90, 24), (90, 28), (90, 32), (45, 20), (45, 24), (45, 28)
             (30, 28), (30, 32)]  # (direction [deg], force [N]), 0.2 s
 JOINTS = ("hip_yaw", "hip", "hip_roll", "knee", "ankle", "ankle_roll")
 ONSET = 1.0  # every push's onset [s]
+# --touchdown: per duration [s], the forces [N] from the flat-footed boundary to past the stepping one
+TOUCHDOWN_FORCES = {0.15: (28, 44), 0.2: (20, 32), 0.3: (15, 21), 0.5: (11, 14), 1.0: (10, 12)}
 
 
 def run(scenario, models, engine, force, duration, overrides, angle=0.0):
@@ -95,6 +103,9 @@ def main(argv=None) -> int:
     ap.add_argument("--landing", action="store_true",
                     help="1 s back pushes: the decision's and the first landing's time against the one-step bound "
                          "(nothing else runs)")
+    ap.add_argument("--touchdown", action="store_true",
+                    help="pushes around the stepping boundary: flight, load and set-point steps after the first "
+                         "landing (nothing else runs)")
     ap.add_argument("--map", action="store_true",
                     help="the boundaries of back pushes per duration, flat-footed and with stepping (nothing else runs)")
     args = ap.parse_args(argv)
@@ -113,6 +124,8 @@ def main(argv=None) -> int:
 
     if args.landing:
         return landing_times(scenario, models, engine, extra, args.set)
+    if args.touchdown:
+        return touchdowns(scenario, models, engine, extra, args.set)
     if args.map and args.sweep:
         name, _, values = args.sweep.partition("=")
         print("back pushes (50 ms ramps): the boundary, the largest force [N] below which every 1 N step stands, "
@@ -161,8 +174,9 @@ def main(argv=None) -> int:
 
     print("\n2. stepping on" + (f" ({', '.join(args.set)})" if args.set else " (the layer's defaults)"))
     print("| push [N] | duration [s] | outcome | steps | first landing x, sent -> landed [mm] | "
-          "fastest set point rate in the swing [rad/s] (joint) |")
-    print("|---|---|---|---|---|---|")
+          "fastest set point rate in the swing [rad/s] (joint) | swing knee straight from the swing's start [ms] "
+          "(its sole's largest load [N]) |")
+    print("|---|---|---|---|---|---|---|")
     for force, duration in STEPPING:
         r = run(scenario, models, engine, force, duration, {"stepping_enabled": 1, **extra})
         d = r.data
@@ -186,7 +200,7 @@ def main(argv=None) -> int:
                 if rate.size and rate.max() > fastest:
                     fastest, which = float(rate.max()), f"{side} {joint}"
         print(f"| {force:+d} | {duration:g} | {outcome(r)} | {int(col(d, 'steps')[-1])} | "
-              f"{1e3 * sent:.0f} -> {1e3 * landed:.0f} | {fastest:.1f} ({which}) |")
+              f"{1e3 * sent:.0f} -> {1e3 * landed:.0f} | {fastest:.1f} ({which}) | {straight_swing(d)} |")
 
     print("\n3. side and diagonal pushes (0.2 s), stepping on" + (f" ({', '.join(args.set)})" if args.set else "")
           + " and flat-footed")
@@ -235,6 +249,61 @@ def landing_table(scenario, models, engine, overrides, robot, l_max, dt_s):
         ahead = f"{1000 * col(r.data, 'landing_x')[landed[0]]:.0f}" if landed.size else "-"
         zmp = f"{1000 * col(r.data, 'zmp_x')[swing].mean():.0f}" if swing.any() else "-"
         print(f"| {force} | {outcome(r)} | {cells[0]} | {cells[1]} | {bound} | {ahead} | {zmp} |")
+
+
+def straight_swing(d) -> str:
+    """How long the first swing's knee set point stays straight (< 0.01 rad) from the swing's start
+    [ms], and the largest load its sole carries meanwhile [N]."""
+    phase = col(d, "step_phase")
+    swing = np.flatnonzero(phase == 2)
+    if not swing.size:
+        return "-"
+    k0 = k = int(swing[0])
+    side = "left" if col(d, "swing_side")[k0] == 0 else "right"
+    knee, load = set_point(d, side, "knee"), col(d, f"fz_{side}")
+    while phase[k] == 2 and knee[k] < 0.01:
+        k += 1
+    return f"{1000 * (d['time'][k] - d['time'][k0]):.0f} ({float(np.max(load[k0:k], initial=0.0)):.0f})"
+
+
+def after_landing(d):
+    """After the first landing of a run that stepped (None if none landed): the longest time [s] no
+    sole touches the ground, the largest sole load [N] within 0.3 s, the largest change of a joint
+    set point in one tick [rad] (while the step goes on)."""
+    steps, phase, t = col(d, "steps"), col(d, "step_phase"), d["time"]
+    if steps[-1] < 1:
+        return None
+    k = int(np.argmax(steps >= 1))
+    dt = float(t[1] - t[0])
+    air = np.concatenate(([0], (col(d, "contacts")[k:] == 0).astype(int), [0]))
+    edges = np.flatnonzero(np.diff(air))
+    flight = float(np.max(edges[1::2] - edges[::2], initial=0)) * dt
+    load = float(np.max(np.maximum(col(d, "fz_left"), col(d, "fz_right"))[k:k + int(round(0.3 / dt))]))
+    stepping = phase[k:] != 0
+    jump = max(float(np.max(np.abs(np.diff(set_point(d, side, joint)[k:]))[stepping[1:]], initial=0.0))
+               for side in ("left", "right") for joint in JOINTS)
+    return flight, load, jump
+
+
+def touchdowns(scenario, models, engine, extra, settings) -> int:
+    print("back pushes (50 ms ramps) around the stepping boundary, stepping on" + (f" ({', '.join(settings)})" if settings else "")
+          + ": after the first landing, the longest time no sole touches the ground, the largest sole load within 0.3 s, "
+            "the largest change of a joint set point in one tick")
+    print("| duration [s] | pushes [N] | stepped | stood | off the ground > 5 ms | longest off the ground [ms] "
+          "| sole load, median / largest [N] | set-point change in a tick, median / largest [rad] |")
+    print("|---|---|---|---|---|---|---|---|")
+    for duration, (lo, hi) in TOUCHDOWN_FORCES.items():
+        rows = []
+        for force in range(lo, hi + 1):
+            r = run(scenario, models, engine, force, duration, {"stepping_enabled": 1, **extra})
+            a = after_landing(r.data)
+            if a:
+                rows.append((r.outcome == "completed", *a))
+        stood, flight, load, jump = (np.array(c) for c in zip(*rows))
+        print(f"| {duration:g} | {lo}-{hi} | {len(rows)} | {int(stood.sum())} | {int((flight > 0.005).sum())} | "
+              f"{1000 * flight.max():.0f} | {np.median(load):.0f} / {load.max():.0f} | "
+              f"{np.median(jump):.3f} / {jump.max():.3f} |")
+    return 0
 
 
 def outcome(r) -> str:
