@@ -61,6 +61,23 @@ def test_with_stepping_the_robot_stands_erect_after_the_designed_sequence(runs):
     assert int(d["swing_side"][np.argmax(phase == 4)]) != int(d["swing_side"][np.argmax(phase == 2)])
 
 
+def test_the_landing_keeps_the_robot_on_the_ground(runs):
+    """After the recovery step lands, a sole touches the ground at every output point (no more than
+    5 ms without: before the pelvis was lowered at once at a landing, the landed leg was driven
+    straight and threw the robot off the ground for 55 ms in step_recovery_3d), and no joint set point
+    changes by more than 0.05 rad in a tick (0.19 rad then) — docs/controller.md §12.4, step 8,
+    `scripts/stepping_trials.py --touchdown`."""
+    import importlib.util
+    from conftest import REPO_ROOT
+    spec = importlib.util.spec_from_file_location("stepping_trials", REPO_ROOT / "scripts" / "stepping_trials.py")
+    trials = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(trials)
+    _, on, _ = runs
+    flight, _, jump = trials.after_landing(on.data)
+    assert flight <= 0.005, f"no sole on the ground for {1000 * flight:.0f} ms after the landing"
+    assert jump <= 0.05, f"a joint set point changed by {jump:.3f} rad in a tick after the landing"
+
+
 def test_the_recovery_is_the_same_on_the_native_engine(runs):
     from anklehip.running import native
     sc, on, _ = runs

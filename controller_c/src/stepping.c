@@ -83,7 +83,7 @@ static const ahc_param_info k_stable[] = {
     SD(step_hip_hike, "rad", 0.0, 0.5, "The pelvis rolls the swing hip up by this at mid-swing"),
     SD(step_lead_max, "rad", 0.0, 1.0, "The servo lead adds at most this to a joint reference"),
     SD(step_touchdown_after, "1", 0.0, 1.0, "A load on the swing sole counts as the landing after this fraction of the swing"),
-    SD(step_pelvis_rate, "m/s", 0.001, 10.0, "The hips' planned height moves at most this fast"),
+    SD(step_pelvis_rate, "m/s", 0.001, 10.0, "The hips' planned height rises at most this fast (it lowers at once)"),
     SD(step_touchdown_tol, "m", 0.0, 1.0, "A loaded swing sole counts as landed only this close to its landing point"),
     SD(step_lead_tau, "s", 0.0, 1.0, "Low-pass time constant of the reference rate the servo lead multiplies"),
     SD(step_shift_inset, "m", 0.0, 0.05, "The weight shift moves the capture point to this far inside of the stance ankle (toward the other foot)"),
@@ -659,12 +659,11 @@ static void plan_joints(ahc_stepper *c, const double r[2], double leg, double ro
                  (P[1] + hip[1] - ankle[s][1]) * (P[1] + hip[1] - ankle[s][1]);
             z = fmin(z, ankle[s][2] + sqrt(fmax(leg * leg - h2, 0.25 * leg * leg)) - hip[2]);
         }
-        /* continuous: the height moves at most step_pelvis_rate (a foot leaving or joining the support
-         * changes the constraint at once) */
-        if (c->pelvis_z_valid) {
-            const double dz = c->p.step_pelvis_rate * c->dt;
-            z = clampd(z, c->pelvis_z - dz, c->pelvis_z + dz);
-        }
+        /* the height rises at most step_pelvis_rate (a foot leaving the support raises the constraint
+         * at once) and lowers at once: a landed foot far ahead is within its leg's reach from the
+         * landing on (lowered at the rate, the landed leg was driven straight into the ground and
+         * threw the robot off it; the landing's jump is blended out, docs/controller.md §12.4) */
+        if (c->pelvis_z_valid) z = fmin(z, c->pelvis_z + c->p.step_pelvis_rate * c->dt);
         c->pelvis_z = z;
         c->pelvis_z_valid = 1;
         P[2] = z;
