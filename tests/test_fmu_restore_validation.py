@@ -23,7 +23,9 @@ the checksum catches accidents, not forgeries. What this establishes, through th
 - the sagittal plant refuses snapshots a simulation cannot have, each of which made the next step
   fail with fmi2Error before (a negative or denormal ERK step, a speed of 1e300 or 1e5 rad/s), a
   state whose time is past its stop time, and a servo velocity gain of 5e-324 (kp / kd overflowed
-  and the right-hand side was NaN): found by 18 000 re-signed random forgeries;
+  and the right-hand side was NaN): found by 18 000 re-signed random forgeries; and a rocking foot's
+  pivot off the ground, far away, or away from the contact edge (a pivot 1e175 m away overflowed
+  the constraint's stabilization: found by the deep fuzzer in CI's 60 s run);
 - the 3D controller (AnkleHipController3D) holds the same instance rules: a state with its time
   moved, or with a parameter variable other than the controller's copy (frontal or sagittal), is
   refused (before: accepted), while its genuine states before, during and after a run are accepted
@@ -280,6 +282,46 @@ def test_plant_snapshot_a_simulation_cannot_have_is_refused(raw_plant, field, va
     assert blob.f64(blob.model + _T) == pytest.approx(0.03)
     pos = {"h_next": _H_NEXT, "y": _Y + 8 * 7, "y9": _Y + 8 * 9}[field]
     blob.set_f64(blob.model + pos, value)
+    _refused(raw_plant, blob, "invalid plant snapshot")
+
+
+_PIVOT = 124  # pivot[0]; pivot[1] follows
+
+
+def _rocking_plant_blob(raw):
+    """A state of the plant rocking on its toe (contact_mode 1), pushed on the back."""
+    inst = _running(raw)
+    inst.set_real({"push_force": 40.0})
+    for k in range(400):
+        assert inst.fmi2DoStep(k * 1e-3, 1e-3, 0) == fmi2OK
+        if inst.get_integer(["contact_mode"])[1][0] == 1 and k > 20:
+            break
+    assert inst.get_integer(["contact_mode"])[1][0] == 1, "the push did not rock the foot onto its toe"
+    blob = Blob(raw, _snapshot_bytes(inst))
+    inst.free()
+    return blob
+
+
+@pytest.mark.parametrize("offset, value", [(0, 1e175), (8, 0.5)])
+def test_plant_pivot_off_the_ground_or_far_is_refused(raw_plant, offset, value):
+    """The pivot of the rocking modes is a ground point (y = 0) within reach: a forged one made the
+    next step's right-hand side overflow and fail (the fuzzer's finding, fmu/fuzz/corpus/
+    found_hoap2plant_forged_pivot.bin)."""
+    blob = _plant_blob(raw_plant)
+    blob.set_f64(blob.model + _PIVOT + offset, value)
+    _refused(raw_plant, blob, "invalid plant snapshot")
+
+
+def test_plant_rocking_pivot_must_be_at_the_contact_edge(raw_plant):
+    """Rocking on the toe, the genuine state (pivot within micrometres of the toe) is accepted and
+    steps; the pivot moved 1 cm along the ground, which the integrator never leaves it, is refused."""
+    blob = _rocking_plant_blob(raw_plant)
+    victim = _running(raw_plant, name="victim")
+    assert _restore_bytes(victim, bytes(blob)) == fmi2OK
+    t = blob.f64(blob.model + _T)
+    assert victim.fmi2DoStep(t, 1e-3, 0) == fmi2OK
+    victim.free()
+    blob.set_f64(blob.model + _PIVOT, blob.f64(blob.model + _PIVOT) + 0.01)
     _refused(raw_plant, blob, "invalid plant snapshot")
 
 

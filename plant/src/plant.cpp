@@ -666,6 +666,16 @@ bool Plant::restore(const Snapshot& s) {
   }
   for (double x : s.impulse)
     if (!(std::fabs(x) <= 1e12)) return false;
+  // the pivot is a ground point (y = 0) that a rocking foot's contact edge holds to within the
+  // Baumgarte drift (micrometres): a forged one far from it made the constraint's stabilization,
+  // a^2 (edge - pivot), overflow and the next step's right-hand side fail (found by the fuzzer);
+  // outside the rocking modes it is the last one's, within 1 km as the foot
+  if (!(s.pivot[1] == 0.0 && std::fabs(s.pivot[0]) <= 1e3)) return false;
+  if (s.mode == static_cast<int>(ContactMode::Toe) || s.mode == static_cast<int>(ContactMode::Heel)) {
+    const Vec5 q = Eigen::Map<const Vec5>(s.y);
+    const Vec2 edge = s.mode == static_cast<int>(ContactMode::Toe) ? model_.toe(q) : model_.heel(q);
+    if (!((edge - Vec2(s.pivot[0], s.pivot[1])).norm() <= 1e-3)) return false;
+  }
   for (double x : s.inputs)
     if (!std::isfinite(x)) return false;
   // ERK's proposed step: 0 (estimate one) or a step that advances the time, at most 1e3 s (forged
