@@ -52,6 +52,8 @@ void ahc_step_params_default(ahc_step_params *p)
     p->step_close_wait = 1.0;
     p->step_close_inset = 0.01;
     p->step_trigger_time = 0.0;
+    p->step_push_estimate = 0;
+    p->step_observer_gain = 50.0;
 }
 
 #define SD(field, unit, lo, hi, desc) \
@@ -99,6 +101,8 @@ static const ahc_param_info k_stable[] = {
     SD(step_close_wait, "s", 0.0, 10.0, "The closing step waits for rest at most this long after SETTLE's planned time"),
     SD(step_close_inset, "m", 0.0, 0.05, "The closing step's weight shift moves the capture point this far inside of the landed ankle (toward the other foot)"),
     SD(step_trigger_time, "s", 0.0, 1e6, "A step starts at the first tick at or after this time (ticks x sample_period from the start) whatever the decision rules, if the robot stands then: experiments on the decision's timing; 0: off"),
+    SI(step_push_estimate, 0.0, 1.0, "1: the estimated external pitching moment (push_moment) enters the step's plan: the decision, the landing point and the CoM reference; 0: the plan ignores it"),
+    SD(step_observer_gain, "1/s", 1.0, 500.0, "The momentum observer's gain: push_moment follows the external moment as a first-order lag of this bandwidth"),
 };
 #define STABLE_LEN (sizeof k_stable / sizeof k_stable[0])
 
@@ -170,30 +174,53 @@ static double hip_offset_y(const ahc_stepper *c, int side) { return side == AHC_
 
 /* ---- the lumped model's CoM ----------------------------------------------------------------- */
 
-/* The CoM for the pelvis centre P, trunk attitude R, both ankles (world) and feet at Rfw (world). */
-static void com_of(const ahc_stepper *c, const double P[3], const double R[9], double ankle[2][3],
-                   double Rfw[2][9], double com[3])
+/* The lumped model's bodies: link 2, each leg's link-1 part, each foot. */
+enum { BODY_TRUNK = 0, BODY_LEG = 1, BODY_FOOT = 3, BODIES = 5 };
+
+static double body_mass(const ahc_stepper *c, int b)
+{
+    return b == BODY_TRUNK ? c->m2 : b < BODY_FOOT ? 0.5 * c->m1 : 0.5 * c->feet_mass;
+}
+
+/* The bodies' CoMs for the pelvis centre P, trunk attitude R, both ankles (world) and feet at Rfw
+ * (world); also each leg's hip. */
+static void bodies_of(const ahc_stepper *c, const double P[3], const double R[9], double ankle[2][3],
+                      double Rfw[2][9], double pts[BODIES][3], double hips[2][3])
 {
     const double k1 = c->lg1 / c->l1;
-    double sum[3] = {0, 0, 0}, v[3], w[3];
+    double v[3], w[3];
     int s, i;
     /* link 2: its CoM lg2 up the trunk, link2_com_x ahead */
     v[0] = c->link2_com_x; v[1] = 0.0; v[2] = c->lg2;
     mv(R, v, w);
-    for (i = 0; i < 3; ++i) sum[i] += c->m2 * (P[i] + w[i]);
+    for (i = 0; i < 3; ++i) pts[BODY_TRUNK][i] = P[i] + w[i];
     for (s = 0; s < 2; ++s) {
-        double hip[3];
         v[0] = 0.0; v[1] = hip_offset_y(c, s); v[2] = 0.0;
         mv(R, v, w);
-        for (i = 0; i < 3; ++i) hip[i] = P[i] + w[i];
+        for (i = 0; i < 3; ++i) hips[s][i] = P[i] + w[i];
         /* each leg's link-1 part: lg1 up the ankle-hip line */
-        for (i = 0; i < 3; ++i) sum[i] += 0.5 * c->m1 * (ankle[s][i] + k1 * (hip[i] - ankle[s][i]));
+        for (i = 0; i < 3; ++i) pts[BODY_LEG + s][i] = ankle[s][i] + k1 * (hips[s][i] - ankle[s][i]);
         /* each foot */
         v[0] = c->feet_com_x; v[1] = 0.0; v[2] = c->feet_com_z - c->ankle_height;
         mv(Rfw[s], v, w);
-        for (i = 0; i < 3; ++i) sum[i] += 0.5 * c->feet_mass * (ankle[s][i] + w[i]);
+        for (i = 0; i < 3; ++i) pts[BODY_FOOT + s][i] = ankle[s][i] + w[i];
     }
-    for (i = 0; i < 3; ++i) com[i] = sum[i] / c->mass;
+}
+
+/* The CoM for the pelvis centre P, trunk attitude R, both ankles (world) and feet at Rfw (world). */
+static void com_of(const ahc_stepper *c, const double P[3], const double R[9], double ankle[2][3],
+                   double Rfw[2][9], double com[3])
+{
+    /* summed link 2, then each leg with its foot */
+    static const int order[BODIES] = {BODY_TRUNK, BODY_LEG, BODY_FOOT, BODY_LEG + 1, BODY_FOOT + 1};
+    double pts[BODIES][3], hips[2][3];
+    int b, i;
+    bodies_of(c, P, R, ankle, Rfw, pts, hips);
+    for (i = 0; i < 3; ++i) {
+        double sum = 0.0;
+        for (b = 0; b < BODIES; ++b) sum += body_mass(c, order[b]) * pts[order[b]][i];
+        com[i] = sum / c->mass;
+    }
 }
 
 /* The measured configuration: both ankles and the pelvis relative to the anchor's ankle at `at`
@@ -250,6 +277,8 @@ int ahc_step_init(ahc_stepper *c, const ahc_step_params *p, const ahc_params *sp
     c->lg1 = sp->lg1;
     c->lg2 = sp->lg2;
     c->link2_com_x = sp->link2_com_x;
+    c->I1 = sp->I1;
+    c->I2 = sp->I2;
     c->feet_mass = sp->feet_mass;
     c->feet_com_x = sp->feet_com_x;
     c->feet_com_z = sp->feet_com_z;
@@ -352,6 +381,63 @@ static void estimate(const ahc_stepper *c, const ahc_step_sensors *s, double P[3
     }
 }
 
+/* The momentum observer: the external pitching moment about the ground (a push), from the sagittal
+ * angular momentum balance of the whole robot about the frame's origin O on the ground (x forward,
+ * z up, + pitching forward):
+ *     dH/dt = m g c_x - p f_z + M_ext,   H = sum_b m_b (z_b x_b' - x_b z_b') + I2 pitch' + I1/2 sum legs' pitch',
+ * p and f_z the measured ZMP and load, the bodies' motion the measured configuration's finite
+ * differences. The residual r = K (H - integral of (m g c_x - p f_z + r)) follows M_ext as a
+ * first-order lag of bandwidth K (step_observer_gain), with no second derivative of a measurement
+ * (the generalized-momentum observer of De Luca and Mattone 2003, here for the whole robot). */
+static void observe_push(ahc_stepper *c, const ahc_step_sensors *s, const double P[3], double ankle[2][3],
+                         double Rfw[2][9], const double com[3])
+{
+    double R[9], pts[BODIES][3], hips[2][3], leg[2], H = 0.0, torque, fz, px;
+    int b, i, finite = 1;
+    rot_trunk(s->imu_roll, s->imu_pitch, R);
+    bodies_of(c, P, R, ankle, Rfw, pts, hips);
+    for (b = 0; b < 2; ++b) leg[b] = atan2(hips[b][0] - ankle[b][0], hips[b][2] - ankle[b][2]);
+    fz = s->fz_left + s->fz_right;
+    /* the measured ZMP is from the ankles' mid-point (the plant's feet frame) */
+    px = s->zmp_x + 0.5 * (ankle[AHC_LEFT][0] + ankle[AHC_RIGHT][0]);
+    for (b = 0; b < BODIES; ++b)
+        for (i = 0; i < 3; ++i) finite = finite && isfinite(pts[b][i]);
+    finite = finite && isfinite(leg[0]) && isfinite(leg[1]) && isfinite(fz) && isfinite(px) && isfinite(com[0]) &&
+             isfinite(s->imu_pitch);
+    if (!finite) return; /* a non-finite reading: the estimate holds */
+    if (c->obs_valid) {
+        for (b = 0; b < BODIES; ++b) {
+            const double vx = (pts[b][0] - c->obs_body_prev[b][0]) / c->dt, vz = (pts[b][2] - c->obs_body_prev[b][2]) / c->dt;
+            H += body_mass(c, b) * (pts[b][2] * vx - pts[b][0] * vz);
+        }
+        H += (c->I2 * (s->imu_pitch - c->obs_pitch_prev) +
+              0.5 * c->I1 * ((leg[0] - c->obs_leg_prev[0]) + (leg[1] - c->obs_leg_prev[1]))) / c->dt;
+        torque = c->mass * c->g * com[0] - px * fz;
+        if (c->obs_valid == 1) {
+            /* (re)start: the prediction where the estimate is */
+            c->obs_pred = H - c->push_moment / c->p.step_observer_gain;
+            c->obs_valid = 2;
+        } else {
+            c->obs_pred += (torque + c->push_moment) * c->dt;
+        }
+        c->push_moment = c->p.step_observer_gain * (H - c->obs_pred);
+    } else {
+        c->obs_valid = 1;
+    }
+    for (b = 0; b < BODIES; ++b)
+        for (i = 0; i < 3; ++i) c->obs_body_prev[b][i] = pts[b][i];
+    c->obs_leg_prev[0] = leg[0];
+    c->obs_leg_prev[1] = leg[1];
+    c->obs_pitch_prev = s->imu_pitch;
+}
+
+/* The external moment as the ZMP offset it asks for, u = M / (m g): the pendulum under a push moves
+ * as c'' = omega^2 (c - p + u) (0 unless step_push_estimate). */
+static double push_offset(const ahc_stepper *c)
+{
+    return c->p.step_push_estimate ? c->push_moment / (c->mass * c->g) : 0.0;
+}
+
 /* ---- the plan --------------------------------------------------------------------------------- */
 
 static double smooth01(double s)
@@ -379,7 +465,7 @@ static void reference(const ahc_stepper *c, double t, double r[2], double v[2], 
     for (i = 0; i < 2; ++i) {
         r[i] = c->cref[i];
         v[i] = c->vref[i];
-        a[i] = c->omega * c->omega * (r[i] - c->zmp[i]);
+        a[i] = c->omega * c->omega * (r[i] - c->zmp[i] + (i == 0 ? push_offset(c) : 0.0));
     }
 }
 
@@ -399,7 +485,10 @@ static void begin_phase(ahc_stepper *c, int phase, double duration)
 }
 
 /* The capture point of the reference at the phase's start. */
-static double xi0(const ahc_stepper *c, int i) { return c->c0[i] + c->v0[i] / c->omega; }
+static double xi0(const ahc_stepper *c, int i)
+{
+    return c->c0[i] + c->v0[i] / c->omega + (i == 0 ? push_offset(c) : 0.0);
+}
 
 /* A phase on one foot: the ZMP holds the capture point over the stance sole, or at the sole's edge. */
 static void plan_one_foot(ahc_stepper *c)
@@ -608,11 +697,14 @@ static void pendulum_tick(ahc_stepper *c, const double xi_meas[2], double p_out[
         support_box(c, lo, hi);
     }
     for (i = 0; i < 2; ++i) {
-        const double xi_ref = c->cref[i] + c->vref[i] / c->omega;
+        /* the push as estimated: the reference moves as the pushed pendulum, its capture point the
+         * pushed one (xi_meas too) */
+        const double u = i == 0 ? push_offset(c) : 0.0;
+        const double xi_ref = c->cref[i] + c->vref[i] / c->omega + u;
         const double fb = c->p.step_dcm_feedback ? (1.0 + c->p.step_dcm_gain / c->omega) * (xi_meas[i] - xi_ref) : 0.0;
         const double plan = hold ? hold[i] + 2.0 * (xi_ref - hold[i]) : c->zmp[i];
         const double p = clampd(plan + fb, lo[i], hi[i]);
-        c->vref[i] += c->omega * c->omega * (c->cref[i] - p) * c->dt;
+        c->vref[i] += c->omega * c->omega * (c->cref[i] - p + u) * c->dt;
         c->cref[i] += c->vref[i] * c->dt;
         p_out[i] = p;
     }
@@ -779,7 +871,7 @@ static void next_phase_after_shift(ahc_stepper *c, const double xi_meas[2])
 void ahc_step_step(ahc_stepper *c, const ahc_step_sensors *s, const double flat_q[2][AHC_LEG_JOINTS],
                    ahc_step_outputs *out)
 {
-    double P[3], ankle[2][3], Rfw[2][9], com[3], xi[2];
+    double P[3], ankle[2][3], Rfw[2][9], com[3], xi[2], xi_push[2];
     int i, side, j;
     memset(out, 0, sizeof *out);
     out->swing_side = -1;
@@ -806,6 +898,10 @@ void ahc_step_step(ahc_stepper *c, const ahc_step_sensors *s, const double flat_
         c->pitch_prev = s->imu_pitch;
     }
     for (i = 0; i < 2; ++i) xi[i] = c->com_prev[i] + c->com_rate[i] / c->omega;
+    observe_push(c, s, P, ankle, Rfw, com);
+    /* the capture point under the push as estimated: where the feet's ZMP must come to hold it */
+    xi_push[0] = xi[0] + push_offset(c);
+    xi_push[1] = xi[1];
     c->tick++;
     {
         /* an impact: the capture point moves faster than twice what any ZMP on the feet could
@@ -849,7 +945,7 @@ void ahc_step_step(ahc_stepper *c, const ahc_step_sensors *s, const double flat_
             ahc_quintic_init(&c->pitch_plan, c->pitch_prev, c->pitch_rate, 0.0, c->pitch_erect, 0.0, 0.0,
                              c->p.step_pitch_time);
             c->pitch_time = 0.0;
-            start_step(c, c->com_prev, xi); /* the estimate (held through a non-finite reading) */
+            start_step(c, c->com_prev, xi_push); /* the estimate (held through a non-finite reading) */
             c->q_prev_valid = 0;
             c->pelvis_z_valid = 0;
             c->blend_from_flat = 1;
@@ -872,7 +968,7 @@ void ahc_step_step(ahc_stepper *c, const ahc_step_sensors *s, const double flat_
                     c->swing_side = stance_of(c); /* the other foot swings */
                     start_swing(c, AHC_STEP_CLOSE, target, c->p.step_close_swing_time);
                 } else {
-                    next_phase_after_shift(c, xi);
+                    next_phase_after_shift(c, xi_push);
                 }
             }
             break;
@@ -889,7 +985,7 @@ void ahc_step_step(ahc_stepper *c, const ahc_step_sensors *s, const double flat_
                 sole_box(c, stance_of(c), b);
                 for (i = 0; i < 2; ++i) {
                     const double p = c->zmp[i];
-                    xi_T[i] = p + (xi[i] - p) * exp(c->omega * (Tsw - c->phase_time));
+                    xi_T[i] = p + (xi_push[i] - p) * exp(c->omega * (Tsw - c->phase_time));
                 }
                 landing_point(c, xi_T, L);
                 if (fabs(L[0] - c->landing[0]) > 1e-4 || fabs(L[1] - c->landing[1]) > 1e-4)
@@ -946,6 +1042,11 @@ void ahc_step_step(ahc_stepper *c, const ahc_step_sensors *s, const double flat_
                 c->com_prev[1] -= my;
                 c->xi_prev[0] -= mx; /* the new frame is not an impact */
                 c->xi_prev[1] -= my;
+                for (i = 0; i < BODIES; ++i) {
+                    c->obs_body_prev[i][0] -= mx;
+                    c->obs_body_prev[i][1] -= my;
+                }
+                if (c->obs_valid) c->obs_valid = 1; /* the observer restarts about the new origin */
                 c->phase = AHC_STEP_STAND;
                 c->swing_side = -1;
                 c->close_stage = 0;
@@ -968,12 +1069,13 @@ void ahc_step_step(ahc_stepper *c, const ahc_step_sensors *s, const double flat_
         out->capture[i] = xi[i];
         out->landing[i] = c->landing[i];
     }
+    out->push_moment = c->push_moment;
     if (c->phase != AHC_STEP_STAND) {
         double r[2], v[2], a[2], q[2][AHC_LEG_JOINTS], z, pitch, roll = 0.0, swing_z = c->ankle_height, lead_alpha;
         /* the supporting legs' length (drop_knee); the hips' height follows from the legs' lean */
         double knee = drop_knee(c);
         double p_cmd[2];
-        pendulum_tick(c, xi, p_cmd);
+        pendulum_tick(c, xi_push, p_cmd);
         reference(c, c->phase_time, r, v, a);
         ahc_quintic_eval(&c->pitch_plan, c->pitch_time, &pitch, NULL, NULL);
         c->pitch_time += c->dt;
@@ -1070,7 +1172,7 @@ int ahc_step_state_consistent(const ahc_stepper *c, const ahc_params *sp, const 
         const struct { const char *name; double a, b; } v[] = {
             {"g", c->g, fresh.g}, {"mass", c->mass, fresh.mass}, {"m1", c->m1, fresh.m1}, {"m2", c->m2, fresh.m2},
             {"lg1", c->lg1, fresh.lg1}, {"l1", c->l1, fresh.l1}, {"lg2", c->lg2, fresh.lg2},
-            {"link2_com_x", c->link2_com_x, fresh.link2_com_x}, {"feet_mass", c->feet_mass, fresh.feet_mass},
+            {"link2_com_x", c->link2_com_x, fresh.link2_com_x}, {"I1", c->I1, fresh.I1}, {"I2", c->I2, fresh.I2}, {"feet_mass", c->feet_mass, fresh.feet_mass},
             {"feet_com_x", c->feet_com_x, fresh.feet_com_x}, {"feet_com_z", c->feet_com_z, fresh.feet_com_z},
             {"ankle_height", c->ankle_height, fresh.ankle_height}, {"toe_x", c->toe_x, fresh.toe_x},
             {"heel_x", c->heel_x, fresh.heel_x}, {"sole_width", c->sole_width, fresh.sole_width},
@@ -1102,6 +1204,7 @@ int ahc_step_state_validate(const ahc_stepper *c, char *msg, size_t msg_size)
     if (c->steps < 0 || c->est_valid < 0 || c->est_valid > 1 || c->q_prev_valid < 0 || c->q_prev_valid > 1 ||
         c->tilt_valid < 0 || c->tilt_valid > 1 || c->pelvis_z_valid < 0 || c->pelvis_z_valid > 1 ||
         c->blend_from_flat < 0 || c->blend_from_flat > 1 || c->close_stage < 0 || c->close_stage > 3 ||
+        c->obs_valid < 0 || c->obs_valid > 2 ||
         (c->close_stage != 0 && c->phase == AHC_STEP_STAND))
         return ahc_rows_fail(msg, msg_size, AHC_ERR_INCONSISTENT, "stepping counters or flags corrupt");
     if (!(c->swing_time >= 0.0 && c->swing_time <= 2.0) || ((c->phase == AHC_STEP_SWING || c->phase == AHC_STEP_CLOSE) && !(c->swing_time > 0.0)))
@@ -1112,7 +1215,8 @@ int ahc_step_state_validate(const ahc_stepper *c, char *msg, size_t msg_size)
                             c->knee_settle, c->com_prev[0], c->com_prev[1], c->com_rate[0], c->com_rate[1], c->c0[0],
                             c->c0[1], c->v0[0], c->v0[1], c->cref[0], c->cref[1], c->vref[0], c->vref[1], c->zmp[0], c->zmp[1],
                             c->settle_mid[0], c->settle_mid[1], c->settle_capture_time, c->tilt[0], c->tilt[1],
-                            c->pelvis_z, c->knee_settle, c->feet[0][0], c->feet[0][1],
+                            c->pelvis_z, c->knee_settle, c->feet[0][0], c->feet[0][1], c->obs_pred, c->push_moment,
+                            c->obs_pitch_prev, c->obs_leg_prev[0], c->obs_leg_prev[1],
                             c->feet[1][0], c->feet[1][1], c->landing[0], c->landing[1], c->swing_pos[0],
                             c->swing_pos[1]};
         for (i = 0; i < (int)(sizeof v / sizeof v[0]); ++i)
@@ -1122,5 +1226,9 @@ int ahc_step_state_validate(const ahc_stepper *c, char *msg, size_t msg_size)
         for (j = 0; j < AHC_LEG_JOINTS; ++j)
             if (!isfinite(c->q_out[side][j]) || !isfinite(c->q_prev[side][j]) || isinf(c->blend_from[side][j]))
                 return ahc_rows_fail(msg, msg_size, AHC_ERR_NONFINITE, "stepping joint reference not finite");
+    for (i = 0; i < BODIES; ++i)
+        for (j = 0; j < 3; ++j)
+            if (!isfinite(c->obs_body_prev[i][j]))
+                return ahc_rows_fail(msg, msg_size, AHC_ERR_NONFINITE, "stepping observer state not finite");
     return AHC_OK;
 }

@@ -502,8 +502,53 @@ static void test_triggers(void)
     }
 }
 
+/* The momentum observer (push_moment) on a robot standing still: with the measured ZMP where the
+ * static balance puts it, no moment; with the ZMP moved so that p f_z = m g c_x + M (the balance of
+ * a standing robot under an external moment M), the estimate follows M as a first-order lag of
+ * bandwidth step_observer_gain. */
+static double observed_moment(double M, double gain, int ticks)
+{
+    ahc_params sp;
+    ahc_frontal_params fp;
+    ahc_step_params st;
+    static ahc_stepper c;
+    ahc_step_sensors s;
+    ahc_step_outputs out;
+    const double flat[2][AHC_LEG_JOINTS] = {{0}};
+    double mass, fz;
+    int k;
+    defaults(&sp, &fp, &st);
+    st.step_trigger_x = 1.0;    /* no rule fires: the layer only estimates */
+    st.step_trigger_lean = 0.0;
+    st.step_observer_gain = gain;
+    CHECK(ahc_step_init(&c, &st, &sp, &fp) == AHC_OK, "init");
+    mass = sp.m1 + sp.m2 + sp.feet_mass;
+    fz = mass * sp.g;
+    memset(&s, 0, sizeof s); /* legs straight, trunk upright, feet flat */
+    s.fz_left = s.fz_right = 0.5 * fz;
+    ahc_step_step(&c, &s, flat, &out);
+    /* the ankles' mid-point is the frame's origin: p = (m g c_x + M) / f_z */
+    s.zmp_x = (mass * sp.g * out.com[0] + M) / fz;
+    for (k = 0; k < ticks; ++k) ahc_step_step(&c, &s, flat, &out);
+    return out.push_moment;
+}
+
+static void test_push_observer(void)
+{
+    const double M = 2.0, K = 50.0;
+    const double lag = observed_moment(M, K, 20); /* 1 / K after the observer starts (2 ticks) */
+    CHECK(fabs(observed_moment(0.0, K, 300)) < 1e-9, "at rest in static balance: no moment (%g N m)",
+          observed_moment(0.0, K, 300));
+    CHECK(fabs(observed_moment(M, K, 300) - M) < 1e-4 * M, "a standing robot under %g N m: the estimate %g N m", M,
+          observed_moment(M, K, 300));
+    CHECK(lag > 0.55 * M && lag < 0.7 * M, "after 1/K the estimate is about 1 - 1/e of the moment (%g of %g)", lag, M);
+    CHECK(observed_moment(M, 2.0 * K, 10) > 0.55 * M && observed_moment(M, 2.0 * K, 10) < 0.7 * M,
+          "twice the gain: the same fraction in half the time");
+}
+
 int main(void)
 {
+    test_push_observer();
     test_triggers();
     test_close_rest();
     test_close_inset();

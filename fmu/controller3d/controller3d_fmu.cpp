@@ -44,7 +44,7 @@ enum : fmi2ValueReference {
   disturbance_moment_y = 67, k_w_y = 68, com_y_desired = 69, fault_y = 70,
   // the stepping layer
   step_phase = 71, swing_side = 72, steps = 73, capture_point_x = 74, capture_point_y = 75, landing_x = 76,
-  landing_y = 77, com_ref_x = 78, com_ref_y = 79, zmp_plan_x = 92, zmp_plan_y = 93,
+  landing_y = 77, com_ref_x = 78, com_ref_y = 79, zmp_plan_x = 92, zmp_plan_y = 93, push_moment = 94,
   first_joint_ref = 80,  // q_<side>_<joint>_ref: 80 + 6 side + joint
   first_param = 100,     // row i of ahc_param_table()
   first_frontal_param = 400,  // row i of ahc_frontal_param_table()
@@ -165,6 +165,9 @@ ModelInfo makeInfo() {
   out("com_ref_y", vr::com_ref_y, Type::Real, "m", "The stepping layer's CoM reference y while a step runs");
   out("zmp_plan_x", vr::zmp_plan_x, Type::Real, "m", "The ZMP the step's CoM reference plans in this phase, x");
   out("zmp_plan_y", vr::zmp_plan_y, Type::Real, "m", "The ZMP the step's CoM reference plans in this phase, y");
+  out("push_moment", vr::push_moment, Type::Real, "N.m",
+      "The stepping layer's estimate of the external pitching moment about the ground (+ tips the robot forward: a push "
+      "on the back), from its momentum observer; 0 with stepping off");
   for (int s = 0; s < 2; ++s)
     for (int j = 0; j < AHC_LEG_JOINTS; ++j)
       out(std::string("q_") + kSide[s] + "_" + kJoint[j] + "_ref", jointVr(vr::first_joint_ref, s, j), Type::Real,
@@ -531,6 +534,7 @@ class Controller3DModel final : public Model {
     ctx.set_real(vr::com_ref_y, o.step.com_ref[1]);
     ctx.set_real(vr::zmp_plan_x, o.step.zmp_plan[0]);
     ctx.set_real(vr::zmp_plan_y, o.step.zmp_plan[1]);
+    ctx.set_real(vr::push_moment, o.step.push_moment);
     for (int s = 0; s < 2; ++s)
       for (int j = 0; j < AHC_LEG_JOINTS; ++j) ctx.set_real(jointVr(vr::first_joint_ref, s, j), o.q_ref_offset[s][j]);
   }

@@ -36,6 +36,10 @@
  * carries that CoM and of the feet, plus each servo's lead (its kd/kp) times the reference's rate.
  * Every switch blends the references with a quintic weight (eqs. 23-24's) over step_blend_time.
  *
+ * The push, estimated (docs/controller.md §12.5): a momentum observer on the whole robot's angular
+ * momentum about the ground gives the external pitching moment (push_moment); with
+ * step_push_estimate the plan uses it (off by default: it made every boundary worse).
+ *
  * Frame: the ground frame fixed when the step is decided, its origin the mid-point between the
  * ankles' ground projections, x forward, y left, z up; the feet flat in it.
  * C99, no heap, no globals, one POD struct.
@@ -118,6 +122,10 @@ typedef struct {
     double step_trigger_time;  /* a step starts at the first tick at or after this time since the
                                   start (tick x sample_period), whatever the rules, if standing then:
                                   experiments on the decision's timing; 0: off [s]               */
+    int step_push_estimate;    /* 1: the external moment estimate (a momentum observer) enters the
+                                  plan: the decision, the landing point and the CoM reference    */
+    double step_observer_gain; /* the momentum observer's gain: the estimate follows the external
+                                  moment with this bandwidth [1/s]                               */
 } ahc_step_params;
 
 /* HOAP-2 defaults (docs/controller.md §12): stepping off. */
@@ -150,6 +158,8 @@ typedef struct {
     double com_ref[2];           /* the CoM reference while active [m]                             */
     double zmp_plan[2];          /* the ZMP the reference's pendulum plans in this phase [m]        */
     double landing[2];           /* the swing foot's landing point (ankle) while active [m]        */
+    double push_moment;          /* the external pitching moment about the ground, estimated (+ tips
+                                    the robot forward: a push on the back) [N m]                  */
 } ahc_step_outputs;
 
 /* Instance: plain old data (snapshot = memcpy). Fields are private. */
@@ -159,6 +169,7 @@ typedef struct {
     /* the robot, from the sagittal and frontal parameters */
     double g, mass, m1, m2, lg1, l1, lg2, link2_com_x, feet_mass, feet_com_x, feet_com_z, ankle_height;
     double toe_x, heel_x, sole_width, hip_y, ankle_y, omega, z_com;
+    double I1, I2;              /* link 1's (both legs) and link 2's pitch inertia about their CoMs */
     ahc_leg_geometry legs;
     double dt;
     unsigned long long tick;
@@ -202,6 +213,14 @@ typedef struct {
     double blend_time;
     int blend_from_flat;        /* the pending blend starts from the flat-footed layers' set points
                                    (the decision), else from the step's last ones (a landing)     */
+    /* the momentum observer (push_moment): the sagittal angular momentum about the frame's origin
+     * from the lumped bodies' finite-difference motion, and its prediction from the known moments */
+    int obs_valid;
+    double obs_body_prev[5][3]; /* the lumped bodies' CoMs last tick (link 2, legs, feet) [m]       */
+    double obs_leg_prev[2];     /* each leg's link-1 pitch last tick [rad]                          */
+    double obs_pitch_prev;      /* the trunk's pitch last tick [rad]                                */
+    double obs_pred;            /* the angular momentum the known moments predict [N m s]          */
+    double push_moment;         /* the estimate [N m]                                               */
 } ahc_stepper;
 
 int ahc_step_init(ahc_stepper *c, const ahc_step_params *p, const ahc_params *sp, const ahc_frontal_params *fp);
