@@ -413,6 +413,29 @@ static void observe_push(ahc_stepper *c, const ahc_step_sensors *s, const double
         H += (c->I2 * (s->imu_pitch - c->obs_pitch_prev) +
               0.5 * c->I1 * ((leg[0] - c->obs_leg_prev[0]) + (leg[1] - c->obs_leg_prev[1]))) / c->dt;
         torque = c->mass * c->g * com[0] - px * fz;
+        if (c->obs_valid == 1) c->obs_Hn = 0;
+        {
+            /* the median of the last five ticks' H: a jump of the estimate (a sole unloading, the foot's
+             * rocking edge changing) moves the bodies by a millimetre in a tick, and their finite
+             * differences would put a spike of some 50 N m into the estimate for a tick or two */
+            double h5[5], Hm = H;
+            int n = c->obs_Hn, k, j;
+            if (n == 4) {
+                h5[0] = H;
+                for (k = 0; k < 4; ++k) h5[k + 1] = c->obs_H[k];
+                for (k = 1; k < 5; ++k)
+                    for (j = k; j > 0 && h5[j - 1] > h5[j]; --j) {
+                        const double tmp = h5[j];
+                        h5[j] = h5[j - 1];
+                        h5[j - 1] = tmp;
+                    }
+                Hm = h5[2];
+            }
+            for (k = (n < 4 ? n : 3); k > 0; --k) c->obs_H[k] = c->obs_H[k - 1];
+            c->obs_H[0] = H;
+            if (n < 4) c->obs_Hn = n + 1;
+            H = Hm;
+        }
         if (c->obs_valid == 1) {
             /* (re)start: the prediction where the estimate is */
             c->obs_pred = H - c->push_moment / c->p.step_observer_gain;
@@ -1204,7 +1227,7 @@ int ahc_step_state_validate(const ahc_stepper *c, char *msg, size_t msg_size)
     if (c->steps < 0 || c->est_valid < 0 || c->est_valid > 1 || c->q_prev_valid < 0 || c->q_prev_valid > 1 ||
         c->tilt_valid < 0 || c->tilt_valid > 1 || c->pelvis_z_valid < 0 || c->pelvis_z_valid > 1 ||
         c->blend_from_flat < 0 || c->blend_from_flat > 1 || c->close_stage < 0 || c->close_stage > 3 ||
-        c->obs_valid < 0 || c->obs_valid > 2 ||
+        c->obs_valid < 0 || c->obs_valid > 2 || c->obs_Hn < 0 || c->obs_Hn > 4 ||
         (c->close_stage != 0 && c->phase == AHC_STEP_STAND))
         return ahc_rows_fail(msg, msg_size, AHC_ERR_INCONSISTENT, "stepping counters or flags corrupt");
     if (!(c->swing_time >= 0.0 && c->swing_time <= 2.0) || ((c->phase == AHC_STEP_SWING || c->phase == AHC_STEP_CLOSE) && !(c->swing_time > 0.0)))
@@ -1216,7 +1239,8 @@ int ahc_step_state_validate(const ahc_stepper *c, char *msg, size_t msg_size)
                             c->c0[1], c->v0[0], c->v0[1], c->cref[0], c->cref[1], c->vref[0], c->vref[1], c->zmp[0], c->zmp[1],
                             c->settle_mid[0], c->settle_mid[1], c->settle_capture_time, c->tilt[0], c->tilt[1],
                             c->pelvis_z, c->knee_settle, c->feet[0][0], c->feet[0][1], c->obs_pred, c->push_moment,
-                            c->obs_pitch_prev, c->obs_leg_prev[0], c->obs_leg_prev[1],
+                            c->obs_pitch_prev, c->obs_leg_prev[0], c->obs_leg_prev[1], c->obs_H[0], c->obs_H[1],
+                            c->obs_H[2], c->obs_H[3],
                             c->feet[1][0], c->feet[1][1], c->landing[0], c->landing[1], c->swing_pos[0],
                             c->swing_pos[1]};
         for (i = 0; i < (int)(sizeof v / sizeof v[0]); ++i)

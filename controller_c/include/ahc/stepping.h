@@ -220,6 +220,8 @@ typedef struct {
     double obs_leg_prev[2];     /* each leg's link-1 pitch last tick [rad]                          */
     double obs_pitch_prev;      /* the trunk's pitch last tick [rad]                                */
     double obs_pred;            /* the angular momentum the known moments predict [N m s]          */
+    double obs_H[4];            /* the last four ticks' angular momentum (the median of five) [N m s] */
+    int obs_Hn;                 /* how many of them are held                                        */
     double push_moment;         /* the estimate [N m]                                               */
 } ahc_stepper;
 
