@@ -30,7 +30,9 @@ the checksum catches accidents, not forgeries. What this establishes, through th
   moved, or with a parameter variable other than the controller's copy (frontal or sagittal), is
   refused (before: accepted), while its genuine states before, during and after a run are accepted
   (one taken before initialization after a set-up with start 5 s was refused before) and continue
-  bit for bit.
+  bit for bit;
+- a genuine state in the shortest legal transition (T_ah = 2 ms, quintic coefficients near 1e14)
+  is accepted (a bound of 1e9 on every coefficient refused it: found by the deep fuzzer).
 """
 from __future__ import annotations
 
@@ -234,6 +236,24 @@ def test_genuine_states_of_every_kind_are_accepted(raw_controller):
     _round_trip(raw_controller, inst)
     assert inst.fmi2Terminate() == fmi2OK
     _round_trip(raw_controller, inst)                        # terminated
+    inst.free()
+
+
+def test_state_of_the_shortest_transition_is_accepted(raw_controller):
+    """At the least legal T_ah (2 ms) the transition's quintics have coefficients near 1e14; a
+    bound of 1e9 on every coefficient refused this genuine state (found by the deep fuzzer once
+    it ran 16 times faster; fmu/fuzz/corpus/found_controller_short_transition_state.bin)."""
+    inst = raw_controller.instance()
+    assert inst.fmi2SetupExperiment(0, 0.0, 0.0, 0, 0.0) == fmi2OK
+    assert inst.fmi2EnterInitializationMode() == fmi2OK
+    inst.set_real({"T_ah": 0.002})
+    assert inst.fmi2ExitInitializationMode() == fmi2OK
+    for k in range(600):
+        _drive(inst, k * 1e-3, 1)  # one 1 ms step of the ramping ZMP
+        if inst.get_integer(["phase"])[1] == [1]:
+            break
+    assert inst.get_integer(["phase"])[1] == [1], "no ankle-to-hip transition"
+    _round_trip(raw_controller, inst)
     inst.free()
 
 

@@ -145,6 +145,27 @@ int main(void)
         CHECK(ahc_state_validate_for(&in_phase[0], NULL, 0, msg, sizeof msg) == AHC_ERR_NULL, "NULL params");
     }
 
+    /* the shortest legal transition: its splines' higher coefficients are about 1e14 (a bound of
+     * +-1e9 on every coefficient refused this genuine state; found by the deep fuzzer) */
+    {
+        ahc_params q = p;
+        ahc_controller run;
+        int in_transition = 0;
+        q.T_ah = ahc_param_find("T_ah")->min;
+        CHECK(ahc_init(&run, &q) == AHC_OK, "init with T_ah = %g", q.T_ah);
+        for (n = 0; n < 2000 && !in_transition; ++n) {
+            ahc_sensors s = { 0.0, 0.0, n < 300 ? 0.045 : -0.005, 70.0 };
+            ahc_step(&run, &s, &o);
+            in_transition = o.phase == AHC_PHASE_ANKLE_TO_HIP;
+        }
+        CHECK(in_transition && fabs(run.kw_spline.c[5]) > 1e9, "T_ah = %g: phase 1 with k_w's t^5 coefficient %g",
+              q.T_ah, run.kw_spline.c[5]);
+        CHECK(accepted(&run, msg, sizeof msg), "T_ah = %g in phase 1: %s", q.T_ah, msg);
+        c = run;
+        REFUSED(bad.rxd_spline.c[0], 1e12, "rxd_spline coefficient 0");
+        REFUSED(bad.kw_spline.c[5], INFINITY, "spline coefficient 5");
+    }
+
     /* a refused state is what ahc_step would turn into non-finite outputs: the guard matters */
     bad = c;
     bad.valid = 0;

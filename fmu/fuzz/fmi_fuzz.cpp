@@ -111,7 +111,7 @@ struct ShallowProgram {
   Slot slot[2];
   std::vector<std::vector<std::uint8_t>> blobs;  // serialized states seen so far
   const fmuglue::ModelInfo& info = fmuglue::modelInfo();
-  const std::string guid = fmuglue::modelGuid(info);
+  const std::string& guid = fmuglue::thisModelGuid();
 
   fmi2ValueReference vr(Bytes& in) {
     const std::uint8_t b = in.u8();
@@ -514,7 +514,7 @@ bool has_bounds(const fmuglue::Variable& v) { return !std::isnan(v.min) && !std:
 
 struct DeepProgram {
   const fmuglue::ModelInfo& info = fmuglue::modelInfo();
-  const std::string guid = fmuglue::modelGuid(info);
+  const std::string& guid = fmuglue::thisModelGuid();
   std::vector<const fmuglue::Variable*> params, tunables, inputs, outputs;
   Api a, b;              // b: where states are restored and compared
   double t = 0.0, start = 0.0;

@@ -30,7 +30,7 @@ Instance::Instance(const ModelInfo& inf, std::string nm, std::string res,
                    const fmi2CallbackFunctions* functions, bool loggingOn)
     : info(inf), name(std::move(nm)), resources(std::move(res)), ctx(*this) {
   if (functions) callbacks = *functions;
-  guid = modelGuid(info);
+  guid = &info == &modelInfo() ? thisModelGuid() : modelGuid(info);
   fmi2ValueReference maxVr = 0;
   for (const auto& v : info.variables) maxVr = v.vr > maxVr ? v.vr : maxVr;
   vrIndex_.assign(info.variables.empty() ? 0 : static_cast<size_t>(maxVr) + 1, -1);

@@ -635,6 +635,11 @@ std::string modelGuid(const ModelInfo& info) {
   return buf;
 }
 
+const std::string& thisModelGuid() {
+  static const std::string guid = modelGuid(modelInfo());
+  return guid;
+}
+
 std::string modelDescriptionXml(const ModelInfo& info, const std::vector<std::string>& source_files) {
   return xmlWithGuid(info, modelGuid(info), source_files, generationDateAndTime());
 }

@@ -413,6 +413,9 @@ std::vector<double> initialKey(const Context& ctx);
 std::string validateModelInfo(const ModelInfo& info);
 // Deterministic GUID derived from the whole ModelInfo (any change in the table changes it).
 std::string modelGuid(const ModelInfo& info);
+// modelGuid(modelInfo()), computed once per binary: hashing the whole description took more than
+// half of each fmi2Instantiate (profiled under the fuzzer, docs/reliability.md section 3).
+const std::string& thisModelGuid();
 // The complete modelDescription.xml text. source_files: a source FMU's compiled files, listed in
 // <CoSimulation><SourceFiles> (FMI 2.0 section 4.3.1); they do not enter the GUID, which the
 // binary computes from its ModelInfo alone.
