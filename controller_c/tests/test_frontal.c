@@ -14,7 +14,10 @@
  *   - the frontal controller at rest stays at rest; under a constant lateral disturbance the
  *     lateral ankle strategy (F11) settles at phi = d_y / Ka_y, leaning with the push (as eq. 11);
  *     a ZMP beyond zmp_limit_y runs phases 0 -> 1 -> 2, and the psi reference leans with the push
- *     while phi compensates so that the reference CoM goes to r_y_d = 0.
+ *     while phi compensates so that the reference CoM goes to r_y_d = 0;
+ *   - a restored frontal state keeps the law's invariants: forged transition quintics (k_w's
+ *     coefficient 80 -> -80, which put k_w below 0 on the next tick; r_y_d's; their durations) are
+ *     refused, every genuine state of phases 0 -> 1 -> 2 -> 3 -> 0 is accepted.
  */
 #include <math.h>
 #include <stdio.h>
@@ -219,6 +222,76 @@ static void test_frontal_law(void)
         ahc_frontal_com(&f, &sp, c.phi, c.psi, &ry, NULL);
         CHECK(fabs(ry) < 1e-3, "the reference CoM back over the mid-plane: %g", ry);
         CHECK(o.phi_ref < 0.0, "the legs compensate (phi < 0): %g", o.phi_ref);
+    }
+}
+
+/* A restored frontal state keeps the invariants the law keeps (issue 33, finding 2, for the 3D
+ * controller's frontal plane): in the lateral ankle-to-hip transition the k_w and r_y_d quintics
+ * follow from T_ah_y and their start. Before, their coefficients were not checked at all: a k_w
+ * coefficient forged from 80 to -80 was accepted and the next tick's k_w was outside [0, 1]. */
+static void test_frontal_state_invariants(void)
+{
+    ahc_params sp;
+    ahc_frontal_params f;
+    ahc_frontal c, bad;
+    ahc_frontal_sensors s;
+    ahc_frontal_outputs o;
+    char msg[256];
+    int i;
+    const double d = 2.5; /* beyond zmp_limit_y: phases 0 -> 1 */
+    double ry, m;
+    ahc_params_default(&sp);
+    ahc_frontal_params_paper(&f);
+    f.T_ah_y = 0.5;
+    m = sp.m1 + sp.m2;
+    CHECK(ahc_frontal_init(&c, &f, &sp) == AHC_OK, "init");
+    memset(&s, 0, sizeof s);
+    s.fz = 70.0;
+    s.fz_left = s.fz_right = 35.0;
+    for (i = 0; i < 1500 && !(c.phase == AHC_PHASE_ANKLE_TO_HIP && c.phase_time > 0.05); ++i) {
+        s.phi = c.phi;
+        s.psi = c.psi;
+        ahc_frontal_com(&f, &sp, s.phi, s.psi, &ry, NULL);
+        s.zmp_y = ry + d / (m * sp.g);
+        ahc_frontal_step(&c, &s, &o);
+    }
+    CHECK(c.phase == AHC_PHASE_ANKLE_TO_HIP, "in the lateral transition (phase %d)", c.phase);
+    CHECK(ahc_frontal_state_validate(&c, msg, sizeof msg) == AHC_OK, "genuine transition state: %s", msg);
+    CHECK(c.kw_spline.c[3] == 80.0, "T_ah_y = 0.5 s: k_w's t^3 coefficient is 80 (%g)", c.kw_spline.c[3]);
+#define FORGED(field_expr, value, name)                                                              \
+    do {                                                                                             \
+        bad = c;                                                                                     \
+        field_expr = value;                                                                          \
+        CHECK(ahc_frontal_state_validate(&bad, msg, sizeof msg) != AHC_OK && strstr(msg, name) != NULL, \
+              "forged %s = %g: %s", name, (double)(value), msg);                                     \
+    } while (0)
+    FORGED(bad.kw_spline.c[3], -80.0, "kw_spline coefficient 3");
+    FORGED(bad.kw_spline.c[0], NAN, "spline coefficient 0");
+    FORGED(bad.ryd_spline.c[4], bad.ryd_spline.c[4] + 1.0, "ryd_spline coefficient 4");
+    FORGED(bad.ryd_spline.c[0], 1e12, "ryd_spline coefficient 0");
+    FORGED(bad.ryd_spline.T, 0.7, "spline durations");
+    FORGED(bad.kw_spline.T, 0.7, "spline durations");
+#undef FORGED
+    /* what the forged k_w spline did: k_w outside [0, 1] on the next tick */
+    bad = c;
+    bad.kw_spline.c[3] = -80.0;
+    ahc_frontal_step(&bad, &s, &o);
+    CHECK(o.k_w < 0.0, "the forgery the check refuses is one that breaks k_w: %g", o.k_w);
+    /* every genuine state of a push and its end validates: phases 0 -> 1 -> 2 -> 3 -> 0 */
+    {
+        int seen = 0, refused = 0;
+        CHECK(ahc_frontal_init(&c, &f, &sp) == AHC_OK, "init");
+        for (i = 0; i < 8000; ++i) {
+            s.phi = c.phi;
+            s.psi = c.psi;
+            ahc_frontal_com(&f, &sp, s.phi, s.psi, &ry, NULL);
+            s.zmp_y = ry + (i < 1500 ? d : 0.0) / (m * sp.g);
+            ahc_frontal_step(&c, &s, &o);
+            seen |= 1 << c.phase;
+            if (ahc_frontal_state_validate(&c, msg, sizeof msg) != AHC_OK && !refused++)
+                CHECK(0, "tick %d (phase %d) refused: %s", i, c.phase, msg);
+        }
+        CHECK(seen == 0xF && c.phase == AHC_PHASE_ANKLE, "all four phases and back (mask 0x%x, now %d)", seen, c.phase);
     }
 }
 
@@ -462,5 +535,6 @@ int main(void)
     test_pendulum_capture_bound();
     test_controller3d_zero_offsets();
     test_frontal_fault_string();
+    test_frontal_state_invariants();
     TEST_MAIN_END();
 }
