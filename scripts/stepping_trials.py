@@ -33,8 +33,10 @@ under the flat-footed ones.
 
 --landing: 1 s back pushes of 8-20 N with stepping: when the layer decided and when its first step
 landed, after the push onset, against the LIP's one-step bound for a first step landing then
-(docs/capability.md §9.2: anklehip.analysis.bounds.n_step_force_limit with dt_first); then the same
-with the decision set 100 ms after the onset (step_trigger_time), whatever the layer's rules.
+(docs/capability.md §9.2: anklehip.analysis.bounds.n_step_force_limit with dt_first), and how far
+the pushed pendulum's capture point (the plant's CoM, xi = c + c'/omega, plus u = F h_push / (m g))
+lay beyond the landed sole's toe at the landing; then
+the same with the decision set 100 ms after the onset (step_trigger_time), whatever the layer's rules.
 
 --touchdown: what the first landing does to the robot, over back pushes around the stepping boundary
 of each duration: the time no sole touches the ground after it, the largest sole load within 0.3 s of
@@ -236,8 +238,9 @@ def landing_times(scenario, models, engine, extra, settings) -> int:
 def landing_table(scenario, models, engine, overrides, robot, l_max, dt_s):
     from anklehip.analysis import bounds as B
     print(f"| push [N] | outcome | decision | first step lands | one-step bound for that landing [N] | landed ahead [mm] "
-          f"| stance ZMP in the swing, mean [mm] (toe {1000 * robot.x_toe:.0f}) |")
-    print("|---|---|---|---|---|---|---|")
+          f"| stance ZMP in the swing, mean [mm] (toe {1000 * robot.x_toe:.0f}) "
+          f"| capture point under the push at the landing, beyond the front toe [mm] |")
+    print("|---|---|---|---|---|---|---|---|")
     for force in LANDING_FORCES:
         r = run(scenario, models, engine, force, 1.0, overrides)
         t, phase, steps = r.data["time"], col(r.data, "step_phase"), col(r.data, "steps")
@@ -248,7 +251,23 @@ def landing_table(scenario, models, engine, overrides, robot, l_max, dt_s):
         swing = (phase == 2) & (steps == 0)
         ahead = f"{1000 * col(r.data, 'landing_x')[landed[0]]:.0f}" if landed.size else "-"
         zmp = f"{1000 * col(r.data, 'zmp_x')[swing].mean():.0f}" if swing.any() else "-"
-        print(f"| {force} | {outcome(r)} | {cells[0]} | {cells[1]} | {bound} | {ahead} | {zmp} |")
+        # the pushed pendulum's capture point xi + u the tick before the layer counts the landing,
+        # from the plant's truth (its CoM, the push it applies at h_push; the layer's estimates are
+        # jolted when a sole touches down): xi = c + c'/omega (omega from the CoM's height above the
+        # ankles), u = F
+        # h_push / (m g), where the front sole's ZMP must be to hold it; the front toe is the
+        # landing point plus the sole's toe
+        beyond = "-"
+        if landed.size:
+            k, n = landed[0] - 1, 10
+            # the plant's com_x is from the ankles' mid-point, which moves with the swing foot; the
+            # step frame's origin is that mid-point (feet_x, world) when the step was decided
+            c = r.data["com_x"] + r.data["feet_x"] - r.data["feet_x"][decided[0]]
+            z = r.data["com_z"]
+            xi = c[k] + (c[k] - c[k - n]) / (t[k] - t[k - n]) / np.sqrt(robot.g / z[k])
+            u = r.data["push_force"][k] * r.plant_parameters["h_push"] / r.data["fz"][0]
+            beyond = f"{1000 * (xi + u - col(r.data, 'landing_x')[landed[0]] - robot.x_toe):+.0f}"
+        print(f"| {force} | {outcome(r)} | {cells[0]} | {cells[1]} | {bound} | {ahead} | {zmp} | {beyond} |")
 
 
 def straight_swing(d) -> str:
