@@ -166,6 +166,18 @@ static void test_frontal_model(void)
     }
 }
 
+/* One tick of a quasi-static robot under a lateral moment d [N m] about the ankles: the measured
+ * frontal angles are the references, the ZMP where the moment balance puts it. */
+static void quasi_static_tick(ahc_frontal *c, ahc_frontal_sensors *s, ahc_frontal_outputs *o, double d)
+{
+    double ry;
+    s->phi = c->phi;
+    s->psi = c->psi;
+    ahc_frontal_com(&c->f, &c->sp, s->phi, s->psi, &ry, NULL);
+    s->zmp_y = ry + d / ((c->sp.m1 + c->sp.m2) * c->sp.g);
+    ahc_frontal_step(c, s, o);
+}
+
 static void test_frontal_law(void)
 {
     ahc_params sp;
@@ -189,15 +201,8 @@ static void test_frontal_law(void)
      * measured angles follow the reference, and the ZMP moves with the CoM) */
     {
         const double d = 0.8;   /* N m: 12 mm of p_y - r_y */
-        double ry, m = sp.m1 + sp.m2;
         CHECK(ahc_frontal_init(&c, &f, &sp) == AHC_OK, "init");
-        for (i = 0; i < 5000; ++i) {
-            s.phi = c.phi;
-            s.psi = c.psi;
-            ahc_frontal_com(&f, &sp, s.phi, s.psi, &ry, NULL);
-            s.zmp_y = ry + d / (m * sp.g);
-            ahc_frontal_step(&c, &s, &o);
-        }
+        for (i = 0; i < 5000; ++i) quasi_static_tick(&c, &s, &o, d);
         CHECK(o.phase == 0, "phase 0 below the trigger (zmp_y %g)", s.zmp_y);
         CHECK_NEAR(o.phi_ref, d / f.Ka_y, 1e-6, "static lean phi = d_y / Ka_y");
         CHECK(o.phi_ref > 0.0, "leans with a push toward +y");
@@ -205,15 +210,11 @@ static void test_frontal_law(void)
     /* beyond the trigger: 0 -> 1 -> 2, psi leans with the push, the reference CoM goes back to 0 */
     {
         const double d = 2.5;   /* 39 mm of p_y - r_y: beyond zmp_limit_y = 35 mm */
-        double ry, m = sp.m1 + sp.m2;
+        double ry;
         int seen1 = 0, seen2 = 0;
         CHECK(ahc_frontal_init(&c, &f, &sp) == AHC_OK, "init");
         for (i = 0; i < 1500; ++i) {
-            s.phi = c.phi;
-            s.psi = c.psi;
-            ahc_frontal_com(&f, &sp, s.phi, s.psi, &ry, NULL);
-            s.zmp_y = ry + d / (m * sp.g);
-            ahc_frontal_step(&c, &s, &o);
+            quasi_static_tick(&c, &s, &o, d);
             seen1 |= o.phase == 1;
             seen2 |= o.phase == 2;
         }
@@ -239,21 +240,15 @@ static void test_frontal_state_invariants(void)
     char msg[256];
     int i;
     const double d = 2.5; /* beyond zmp_limit_y: phases 0 -> 1 */
-    double ry, m;
     ahc_params_default(&sp);
     ahc_frontal_params_paper(&f);
     f.T_ah_y = 0.5;
-    m = sp.m1 + sp.m2;
     CHECK(ahc_frontal_init(&c, &f, &sp) == AHC_OK, "init");
     memset(&s, 0, sizeof s);
     s.fz = 70.0;
     s.fz_left = s.fz_right = 35.0;
     for (i = 0; i < 1500 && !(c.phase == AHC_PHASE_ANKLE_TO_HIP && c.phase_time > 0.05); ++i) {
-        s.phi = c.phi;
-        s.psi = c.psi;
-        ahc_frontal_com(&f, &sp, s.phi, s.psi, &ry, NULL);
-        s.zmp_y = ry + d / (m * sp.g);
-        ahc_frontal_step(&c, &s, &o);
+        quasi_static_tick(&c, &s, &o, d);
     }
     CHECK(c.phase == AHC_PHASE_ANKLE_TO_HIP, "in the lateral transition (phase %d)", c.phase);
     CHECK(ahc_frontal_state_validate(&c, msg, sizeof msg) == AHC_OK, "genuine transition state: %s", msg);
@@ -282,11 +277,7 @@ static void test_frontal_state_invariants(void)
         int seen = 0, refused = 0;
         CHECK(ahc_frontal_init(&c, &f, &sp) == AHC_OK, "init");
         for (i = 0; i < 8000; ++i) {
-            s.phi = c.phi;
-            s.psi = c.psi;
-            ahc_frontal_com(&f, &sp, s.phi, s.psi, &ry, NULL);
-            s.zmp_y = ry + (i < 1500 ? d : 0.0) / (m * sp.g);
-            ahc_frontal_step(&c, &s, &o);
+            quasi_static_tick(&c, &s, &o, i < 1500 ? d : 0.0);
             seen |= 1 << c.phase;
             if (ahc_frontal_state_validate(&c, msg, sizeof msg) != AHC_OK && !refused++)
                 CHECK(0, "tick %d (phase %d) refused: %s", i, c.phase, msg);

@@ -8,7 +8,8 @@ fuzzer starts from deep states instead of discovering the call protocol byte by 
 The first byte chooses the decoder (fmi_fuzz.cpp): 0 a shallow program (ShallowProgram: opcodes
 in the low 5 bits, bit 7 the second instance), 1 or 3 a deep program through FMI 2.0, 2 through
 FMI 3.0 (DeepProgram: an initialization, then operations, mostly steps with plausible inputs), 6
-through FMI 3.0 Scheduled Execution where the model has a clock.
+through FMI 3.0 Scheduled Execution where the model has a clock; bit 3 (9, 10, 14) with compact
+inputs (a step's inputs in one byte: below 128 all held, below 224 one new, else all new).
 """
 from __future__ import annotations
 
@@ -72,10 +73,20 @@ def steps(n: int, size: int = 0, wiggle: int = 126) -> list[int]:
     return out
 
 
-def deep(fmi: int, body: list[int], init: list[int] = INIT_DEFAULTS, scheduled: bool = False) -> list[int]:
+def compact_steps(n: int, size: int = 0) -> list[int]:
+    """n single steps in compact form: the inputs held, every eighth step one input new."""
+    out = []
+    for k in range(n):
+        out += [STEP, size] + ([128 + k % 64, (126 + 7 * k) % 250] if k % 8 == 7 else [k % 128])
+    return out
+
+
+def deep(fmi: int, body: list[int], init: list[int] = INIT_DEFAULTS, scheduled: bool = False,
+         compact: bool = False) -> list[int]:
     """scheduled: decoder byte 6 (6 % 4 == 2, bit 2 set): an FMI 3.0 program through Scheduled
-    Execution for a model with a clock (the controller), an ordinary FMI 3.0 one for the others."""
-    return [1 if fmi == 2 else 6 if scheduled else 2] + init + body
+    Execution for a model with a clock (the controller), an ordinary FMI 3.0 one for the others.
+    compact: bit 3 set, a step's inputs in one byte (compact_steps)."""
+    return [(1 if fmi == 2 else 6 if scheduled else 2) | (8 if compact else 0)] + init + body
 
 
 DEEP = {
@@ -91,6 +102,11 @@ DEEP = {
     "deep_run_fmi3_se": deep(3, steps(60) + [RUN, 31] + [120] * 160 + steps(40), scheduled=True),
     "deep_states_fmi3_se": deep(3, steps(30) + [GET] + steps(20) + [COMPARE, 15, 0] + [120] * 64 + [SET, 0]
                                 + steps(20), scheduled=True),
+    # compact inputs: long runs of steps, restores compared and a forgery among them
+    "deep_run_compact": deep(2, compact_steps(120) + [COMPARE, 15, 0, 0, 5, 0, 9, 0] + compact_steps(60)
+                             + [FORGE, 0x10, 0x00, 0, 1, 200] + compact_steps(40), compact=True),
+    "deep_run_compact_fmi3": deep(3, compact_steps(120) + [COMPARE, 15, 0, 0, 5, 0, 9, 0] + compact_steps(60),
+                                  compact=True),
     # forged-but-re-signed states at several places, between steps
     "deep_forged": deep(2, steps(25) + [FORGE, 0x10, 0x00, 0, 1, 200] + steps(5) + [FORGE, 0x80, 0x01, 0, 0, 13]
                         + steps(5) + [FORGE, 0x33, 0x02, 0, 17, 64] + steps(10)),
