@@ -1254,5 +1254,25 @@ int ahc_step_state_validate(const ahc_stepper *c, char *msg, size_t msg_size)
         for (j = 0; j < 3; ++j)
             if (!isfinite(c->obs_body_prev[i][j]))
                 return ahc_rows_fail(msg, msg_size, AHC_ERR_NONFINITE, "stepping observer state not finite");
+    {
+        /* the swing foot's and the trunk's quintics: T within the parameters' longest (5 s), every
+         * coefficient finite, and sum |c_k| T^k (a bound on |x(t)| over [0, T]) below 1e9 (m, rad),
+         * far beyond any plan's (tens at most) but short of overflow: a forged NaN coefficient was
+         * accepted before and made the next tick's joint references NaN */
+        const ahc_quintic *q[3] = {&c->swing[0], &c->swing[1], &c->pitch_plan};
+        for (i = 0; i < 3; ++i) {
+            double bound = 0.0, Tk = 1.0;
+            if (!(q[i]->T >= 0.0 && q[i]->T <= 5.0))
+                return ahc_rows_fail(msg, msg_size, AHC_ERR_RANGE, "stepping quintic %d: duration %g outside [0, 5] s", i, q[i]->T);
+            for (j = 0; j < 6; ++j) {
+                if (!isfinite(q[i]->c[j]))
+                    return ahc_rows_fail(msg, msg_size, AHC_ERR_NONFINITE, "stepping quintic %d: coefficient %d not finite", i, j);
+                bound += fabs(q[i]->c[j]) * Tk;
+                Tk *= q[i]->T;
+            }
+            if (!(bound <= 1e9))
+                return ahc_rows_fail(msg, msg_size, AHC_ERR_RANGE, "stepping quintic %d: values up to %g", i, bound);
+        }
+    }
     return AHC_OK;
 }

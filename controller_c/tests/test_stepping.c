@@ -2,6 +2,9 @@
  * test_stepping.c — the stepping layer (stepping.h, docs/controller.md §12) on a kinematic robot
  * that follows its joint references exactly: the estimate and the plan agree, the swing foot lands
  * where it was sent, the phases run in order, and the references are continuous across every switch.
+ * A restored state is validated: forged phases, flags, references and quintics (the swing foot's and
+ * the trunk's: a NaN coefficient was accepted before and made the references NaN) are refused, every
+ * genuine state of a step accepted.
  */
 #include <math.h>
 #include <stdio.h>
@@ -367,6 +370,51 @@ static void test_state_validate(void)
     f = c;
     f.c0[0] = INFINITY;
     CHECK(ahc_step_state_validate(&f, msg, sizeof msg) != AHC_OK, "a non-finite reference refused");
+    {
+        /* mid-swing: the swing foot's and the trunk's quintics are state too (before, a NaN or 1e308
+         * coefficient was accepted and the next tick's joint references were not finite) */
+        static ahc_stepper run;
+        ahc_step_params go = st;
+        ahc_step_sensors s;
+        ahc_step_outputs out;
+        const double flat[2][AHC_LEG_JOINTS] = {{0}};
+        static ahc_stepper swing;
+        int k, side, j, finite = 1, have_swing = 0, refused = 0;
+        go.step_trigger_x = -0.05; /* steps at once */
+        CHECK(ahc_step_init(&run, &go, &sp, &fp) == AHC_OK, "init");
+        memset(&s, 0, sizeof s);
+        s.fz_left = s.fz_right = 35.0;
+        for (k = 0; k < 3000; ++k) { /* every genuine state of a step is accepted */
+            ahc_step_step(&run, &s, flat, &out);
+            if (ahc_step_state_validate(&run, msg, sizeof msg) != AHC_OK && !refused++)
+                CHECK(0, "tick %d (phase %d) refused: %s", k, run.phase, msg);
+            if (!have_swing && run.phase == AHC_STEP_SWING && run.phase_time > 0.02) {
+                swing = run;
+                have_swing = 1;
+            }
+        }
+        CHECK(have_swing && run.steps >= 1, "a step ran (%d)", run.steps);
+        run = swing;
+        f = run;
+        f.swing[0].c[3] = NAN;
+        CHECK(ahc_step_state_validate(&f, msg, sizeof msg) != AHC_OK, "a NaN swing coefficient refused");
+        f = run;
+        f.swing[1].c[5] = 1e308;
+        CHECK(ahc_step_state_validate(&f, msg, sizeof msg) != AHC_OK, "a 1e308 swing coefficient refused");
+        f = run;
+        f.pitch_plan.T = -1.0;
+        CHECK(ahc_step_state_validate(&f, msg, sizeof msg) != AHC_OK, "a negative pitch plan duration refused");
+        f = run;
+        f.pitch_plan.c[0] = INFINITY;
+        CHECK(ahc_step_state_validate(&f, msg, sizeof msg) != AHC_OK, "an infinite pitch plan refused");
+        /* what such a state did: the next tick's references not finite */
+        f = run;
+        f.swing[0].c[3] = NAN;
+        ahc_step_step(&f, &s, flat, &out);
+        for (side = 0; side < 2; ++side)
+            for (j = 0; j < AHC_LEG_JOINTS; ++j) finite = finite && isfinite(out.q_ref[side][j]);
+        CHECK(!finite, "the refused forgery is one that breaks the references");
+    }
     CHECK(ahc_step_state_consistent(&c, &sp, &fp, msg, sizeof msg) == AHC_OK, "consistent with its parameters: %s", msg);
     f = c;
     f.g = 9.0;
