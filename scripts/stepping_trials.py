@@ -35,8 +35,8 @@ under the flat-footed ones.
 landed, after the push onset, against the LIP's one-step bound for a first step landing then
 (docs/capability.md §9.2: anklehip.analysis.bounds.n_step_force_limit with dt_first), and how far
 the pushed pendulum's capture point (the plant's CoM, xi = c + c'/omega, plus u = F h_push / (m g))
-lay beyond the landed sole's toe at the landing; then
-the same with the decision set 100 ms after the onset (step_trigger_time), whatever the layer's rules.
+lay beyond the landed sole's toe at the landing; then the same with the decision set 100 ms after
+the onset (step_trigger_time), whatever the layer's rules.
 
 --touchdown: what the first landing does to the robot, over back pushes around the stepping boundary
 of each duration: the time no sole touches the ground after it, the largest sole load within 0.3 s of
@@ -252,18 +252,17 @@ def landing_table(scenario, models, engine, overrides, robot, l_max, dt_s):
         ahead = f"{1000 * col(r.data, 'landing_x')[landed[0]]:.0f}" if landed.size else "-"
         zmp = f"{1000 * col(r.data, 'zmp_x')[swing].mean():.0f}" if swing.any() else "-"
         # the pushed pendulum's capture point xi + u the tick before the layer counts the landing,
-        # from the plant's truth (its CoM, the push it applies at h_push; the layer's estimates are
-        # jolted when a sole touches down): xi = c + c'/omega (omega from the CoM's height above the
-        # ankles), u = F
-        # h_push / (m g), where the front sole's ZMP must be to hold it; the front toe is the
-        # landing point plus the sole's toe
+        # from the plant's truth (its CoM and the push it applies at h_push; the layer's estimates are
+        # jolted when a sole touches down): xi = c + c'/omega, omega from the CoM's height above the
+        # ground, u = F h_push / (m g), where the front sole's ZMP must be to hold it; the front toe
+        # is the landing point plus the sole's toe
         beyond = "-"
         if landed.size:
             k, n = landed[0] - 1, 10
             # the plant's com_x is from the ankles' mid-point, which moves with the swing foot; the
             # step frame's origin is that mid-point (feet_x, world) when the step was decided
             c = r.data["com_x"] + r.data["feet_x"] - r.data["feet_x"][decided[0]]
-            z = r.data["com_z"]
+            z = r.data["com_z"] + r.controller_parameters["ankle_height"]  # com_z: above the ankles
             xi = c[k] + (c[k] - c[k - n]) / (t[k] - t[k - n]) / np.sqrt(robot.g / z[k])
             u = r.data["push_force"][k] * r.plant_parameters["h_push"] / r.data["fz"][0]
             beyond = f"{1000 * (xi + u - col(r.data, 'landing_x')[landed[0]] - robot.x_toe):+.0f}"
