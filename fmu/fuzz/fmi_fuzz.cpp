@@ -28,6 +28,7 @@
 // a finding. At exit the harness prints the number of deep programs and their successful steps.
 //
 // Seeds: fmu/fuzz/make_seeds.py writes them in this format.
+#include <algorithm>
 #include <cmath>
 #include <cstdarg>
 #include <cstdint>
@@ -565,7 +566,9 @@ struct DeepProgram {
       case 14: x = k & 0x10 ? hi + (1.0 + hi - lo) * (0.01 + u) : lo - (1.0 + hi - lo) * (0.01 + u); break;  // outside
       default: x = in.real(); break;  // anything (NaN, denormals, 1e308 ...)
     }
-    if (v.type == fmuglue::Type::Integer) return std::isfinite(x) ? std::round(x) : 0.0;
+    // an Integer's value as fmi2SetInteger can carry it (an "outside" value beyond int32 was clamped
+    // by set_param into a range that ends at INT32_MAX, then counted as accepted outside it)
+    if (v.type == fmuglue::Type::Integer) return std::isfinite(x) ? std::clamp(std::round(x), -2147483648.0, 2147483647.0) : 0.0;
     return x;
   }
   static bool allowed(const fmuglue::Variable& v, double x) {
@@ -574,7 +577,7 @@ struct DeepProgram {
   int set_param(Api& api, const fmuglue::Variable& v, double x) {
     if (v.type == fmuglue::Type::Real) return api.set_real(v.vr, x);
     if (v.type == fmuglue::Type::Integer)
-      return api.set_int(v.vr, x > 2147483647.0 ? 2147483647 : x < -2147483648.0 ? -2147483647 - 1 : int(x));
+      return api.set_int(v.vr, static_cast<int>(x));  // param_value: integral, within int32
     if (v.type == fmuglue::Type::Boolean) return api.set_bool(v.vr, int(x));
     return fmi2OK;
   }
