@@ -17,6 +17,7 @@
 #include "ahc/frontal.h"
 #include "frontal_pose.h"
 #include "param_rows.h"
+#include "transition_splines.h"
 
 
 static double clampd(double v, double lo, double hi) { return v < lo ? lo : (v > hi ? hi : v); }
@@ -780,37 +781,11 @@ int ahc_frontal_state_validate(const ahc_frontal *c, char *msg, size_t msg_size)
             if (!isfinite(v[i])) return ahc_rows_fail(msg, msg_size, AHC_ERR_NONFINITE, "state value %u is not finite", (unsigned)i);
     }
     if (c->k_w < 0.0 || c->k_w > 1.0) return ahc_rows_fail(msg, msg_size, AHC_ERR_RANGE, "k_w = %g outside [0, 1]", c->k_w);
-    {
-        /* the invariants the law keeps (as ahc_state_validate's for the sagittal plane): both quintics
-         * are built together over T_ah_y, k_w from 0 to 1 and r_y_d from (r_y, v0, 0) to rest, so
-         * every coefficient follows from T_ah_y and the start (a forged k_w coefficient put k_w
-         * outside [0, 1] on the next tick); k_w is 0 in phase 0 and 1 in phases 2-3 */
-        ahc_quintic q;
-        int i;
-        for (i = 0; i < 2; ++i)
-            if (!(fabs(c->ryd_spline.c[i]) <= 1e9))
-                return ahc_rows_fail(msg, msg_size, AHC_ERR_RANGE, "ryd_spline coefficient %d is not finite or beyond +-1e9", i);
-        for (i = 0; i < 6; ++i)
-            if (!isfinite(c->kw_spline.c[i]) || !isfinite(c->ryd_spline.c[i]))
-                return ahc_rows_fail(msg, msg_size, AHC_ERR_NONFINITE, "spline coefficient %d is not finite", i);
-        if (c->kw_spline.T != c->f.T_ah_y || c->ryd_spline.T != c->f.T_ah_y)
-            return ahc_rows_fail(msg, msg_size, AHC_ERR_INCONSISTENT, "spline durations %g and %g are not T_ah_y = %g",
-                                 c->kw_spline.T, c->ryd_spline.T, c->f.T_ah_y);
-        ahc_quintic_init(&q, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, c->f.T_ah_y);
-        for (i = 0; i < 6; ++i)
-            if (q.c[i] != c->kw_spline.c[i])
-                return ahc_rows_fail(msg, msg_size, AHC_ERR_INCONSISTENT, "kw_spline coefficient %d = %g is not the 0 -> 1 quintic's %g",
-                                     i, c->kw_spline.c[i], q.c[i]);
-        ahc_quintic_init(&q, c->ryd_spline.c[0], c->ryd_spline.c[1], 0.0, 0.0, 0.0, 0.0, c->f.T_ah_y);
-        for (i = 0; i < 6; ++i)
-            if (q.c[i] != c->ryd_spline.c[i])
-                return ahc_rows_fail(msg, msg_size, AHC_ERR_INCONSISTENT,
-                                     "ryd_spline coefficient %d = %g is not the quintic from its start to rest (%g)", i,
-                                     c->ryd_spline.c[i], q.c[i]);
-        if ((c->phase == AHC_PHASE_ANKLE && c->k_w != 0.0) ||
-            ((c->phase == AHC_PHASE_HIP || c->phase == AHC_PHASE_HIP_TO_ANKLE) && c->k_w != 1.0))
-            return ahc_rows_fail(msg, msg_size, AHC_ERR_INCONSISTENT, "k_w = %g does not belong to phase %d", c->k_w, c->phase);
-    }
+    /* eqs. 23-24's splines over T_ah_y, from T and the start (a forged k_w coefficient put k_w
+     * outside [0, 1] on the next tick); k_w by phase */
+    rc = ahc_transition_splines_check(&c->kw_spline, &c->ryd_spline, "ryd_spline", c->f.T_ah_y, c->phase, c->k_w, msg,
+                                      msg_size);
+    if (rc != AHC_OK) return rc;
     if (c->flat_time < 0.0) return ahc_rows_fail(msg, msg_size, AHC_ERR_RANGE, "flat_time = %g must be >= 0", c->flat_time);
     if (fabs(c->phi) > c->f.ankle_roll_max || fabs(c->psi) > 1.5)
         return ahc_rows_fail(msg, msg_size, AHC_ERR_RANGE, "frontal reference outside the legs' range");
