@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import ctypes
 import os
+import signal
 import zipfile
 from pathlib import Path
 
@@ -17,6 +18,18 @@ import pytest
 from anklehip.files.paths import SHIPPED  # noqa: F401  (the FMUs every FMI check covers; re-exported)
 
 REPO_ROOT = Path(__file__).resolve().parent.parent
+
+
+@pytest.fixture(scope="session", autouse=True)
+def _sigint_as_in_a_terminal():
+    """The tests that Ctrl-C a command stand in for a terminal's foreground process, whose SIGINT
+    does the default. A test session started in the background of a non-interactive shell (`cmd &`)
+    inherits SIGINT ignored, and an ignored signal stays ignored across exec: the sweep of
+    test_sweep_dask then ran on to the end after the test's SIGINT (exit 0, not 130). A handler here
+    is reset to the default in every child the tests start."""
+    if signal.getsignal(signal.SIGINT) is signal.SIG_IGN:
+        signal.signal(signal.SIGINT, signal.default_int_handler)
+    yield
 
 
 def _nominal() -> dict[str, float]:

@@ -154,7 +154,7 @@ def test_ctrl_c_stops_cleanly_and_keeps_the_finished_points(full_table, tmp_path
     _wait_for_rows(p, out, 3)
     p.send_signal(signal.SIGINT)
     _, err = p.communicate(timeout=60)
-    assert p.returncode == 130
+    assert p.returncode == 130, err
     assert "Traceback" not in err and "Task exception" not in err and "WARNING" not in err, err
     assert len(err.splitlines()) <= 20, err
     assert "run the same command again" in err
