@@ -165,6 +165,23 @@ def test_ctrl_c_stops_cleanly_and_keeps_the_finished_points(full_table, tmp_path
     assert not (out / "sweep.incomplete.csv").exists()
 
 
+def test_two_sweeps_at_once_print_no_port_warning(tmp_path):
+    """A local cluster's scheduler serves HTTP (its health routes) on a free port, not Dask's
+    default 8787: with 8787 taken (by another sweep, here a socket), a sweep printed "UserWarning:
+    Port 8787 is already in use" on stderr."""
+    with socket.socket() as s:
+        try:
+            s.bind(("127.0.0.1", 8787))
+            s.listen()
+        except OSError:
+            pass            # taken already: the case under test
+        r = subprocess.run([ANKLEHIP, "sweep", SCENARIO, "--forces", "7,9", "--variant", "full", "--workers", "2",
+                            "--engine", "native", "--out", str(tmp_path / "out")],
+                           capture_output=True, text=True, timeout=300)
+    assert r.returncode == 0, r.stderr
+    assert "8787" not in r.stderr and "Warning" not in r.stderr, r.stderr
+
+
 def test_a_failing_point_is_recorded_and_the_others_run(tmp_path):
     """h_push below the hip passes the parameter's range but not the plant's own check at
     initialization: those points are errors in the table, the variant next to it runs."""

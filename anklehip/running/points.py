@@ -250,7 +250,10 @@ def dask_client(workers: int, scheduler: str | None, worker_timeout: float | Non
     old_env = os.environ.get("DASK_LOGGING__DISTRIBUTED")
     os.environ["DASK_LOGGING__DISTRIBUTED"] = "critical"
     try:
-        cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None)
+        # no dashboard; the scheduler's HTTP server (always on, for its health routes) on a free port:
+        # on its default 8787, a second sweep at the same time printed a UserWarning on stderr
+        cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None,
+                               scheduler_kwargs={"dashboard_address": "127.0.0.1:0"})
     finally:
         signal.signal(signal.SIGINT, old)
         if old_env is None:
