@@ -33,7 +33,9 @@ under the flat-footed ones.
 
 --landing: 1 s back pushes of 8-20 N with stepping: when the layer decided and when its first step
 landed, after the push onset, against the LIP's one-step bound for a first step landing then
-(docs/capability.md §9.2: anklehip.analysis.bounds.n_step_force_limit with dt_first), and how far
+(docs/capability.md §9.2: anklehip.analysis.bounds.n_step_force_limit with dt_first), where the
+centre of pressure lay against the bound's (at the toe: the feet's before the decision, the stance
+sole's alone in the swing, and how long its heel carried nothing), and how far
 the pushed pendulum's capture point (the plant's CoM, xi = c + c'/omega, plus u = F h_push / (m g))
 lay beyond the landed sole's toe at the landing; then the same with the decision set 100 ms after
 the onset (step_trigger_time), whatever the layer's rules.
@@ -238,9 +240,11 @@ def landing_times(scenario, models, engine, extra, settings) -> int:
 def landing_table(scenario, models, engine, overrides, robot, l_max, dt_s):
     from anklehip.analysis import bounds as B
     print(f"| push [N] | outcome | decision | first step lands | one-step bound for that landing [N] | landed ahead [mm] "
-          f"| stance ZMP in the swing, mean [mm] (toe {1000 * robot.x_toe:.0f}) "
+          f"| before the decision: the feet's CoP within 2.5 mm of the toes [%] "
+          f"| stance sole alone: its CoP from its ankle, mean [mm] (toe {1000 * robot.x_toe:.0f}) "
+          f"| stance sole alone: its heel unloaded [%] "
           f"| capture point under the push at the landing, beyond the front toe [mm] |")
-    print("|---|---|---|---|---|---|---|---|")
+    print("|---|---|---|---|---|---|---|---|---|---|")
     for force in LANDING_FORCES:
         r = run(scenario, models, engine, force, 1.0, overrides)
         t, phase, steps = r.data["time"], col(r.data, "step_phase"), col(r.data, "steps")
@@ -250,7 +254,11 @@ def landing_table(scenario, models, engine, overrides, robot, l_max, dt_s):
                  if landed.size else "-")
         swing = (phase == 2) & (steps == 0)
         ahead = f"{1000 * col(r.data, 'landing_x')[landed[0]]:.0f}" if landed.size else "-"
-        zmp = f"{1000 * col(r.data, 'zmp_x')[swing].mean():.0f}" if swing.any() else "-"
+        zmp, heel = stance_sole_alone(r.data, swing, decided)
+        # the LIP bound's ZMP is at the toe from the onset: how much of the flat-footed time before the
+        # decision the feet's CoP (zmp_x, from the ankles side by side) was there
+        before = (t >= ONSET) & (t < t[decided[0]]) if decided.size else (t >= ONSET) & (t < ONSET + 1.0)
+        at_toe = f"{100 * np.mean(col(r.data, 'zmp_x')[before] > robot.x_toe - 0.0025):.0f}" if decided.size else "-"
         # the pushed pendulum's capture point xi + u the tick before the layer counts the landing,
         # from the plant's truth (its CoM and the push it applies at h_push; the layer's estimates are
         # jolted when a sole touches down): xi = c + c'/omega, omega from the CoM's height above the
@@ -266,7 +274,25 @@ def landing_table(scenario, models, engine, overrides, robot, l_max, dt_s):
             xi = c[k] + (c[k] - c[k - n]) / (t[k] - t[k - n]) / np.sqrt(robot.g / z[k])
             u = r.data["push_force"][k] * r.plant_parameters["h_push"] / r.data["fz"][0]
             beyond = f"{1000 * (xi + u - col(r.data, 'landing_x')[landed[0]] - robot.x_toe):+.0f}"
-        print(f"| {force} | {outcome(r)} | {cells[0]} | {cells[1]} | {bound} | {ahead} | {zmp} | {beyond} |")
+        print(f"| {force} | {outcome(r)} | {cells[0]} | {cells[1]} | {bound} | {ahead} | {at_toe} | {zmp} | {heel} | {beyond} |")
+
+
+def stance_sole_alone(d, swing, decided) -> tuple[str, str]:
+    """In the first swing, while the swing sole carries nothing (< 1 N): the stance sole's centre of
+    pressure from its own ankle, mean [mm], and the share of that time its heel cells carry nothing
+    (< 1 N: the sole on its toe edge) [%]. The plant's zmp_x is from the ankles' mid-point, which
+    moves with the swing foot; the stance ankle stays where the mid-point was at the decision (the
+    feet side by side)."""
+    if not swing.any():
+        return "-", "-"
+    swing_side = "left" if col(d, "swing_side")[np.flatnonzero(swing)[0]] == 0 else "right"
+    stance = "right" if swing_side == "left" else "left"
+    alone = swing & (col(d, f"fz_{swing_side}") < 1.0)
+    if not alone.any():
+        return "-", "-"
+    cop = col(d, "zmp_x") + col(d, "feet_x") - col(d, "feet_x")[decided[0]]
+    heel = col(d, f"f_{stance}_rear_left") + col(d, f"f_{stance}_rear_right")
+    return f"{1000 * cop[alone].mean():.0f}", f"{100 * np.mean(heel[alone] < 1.0):.0f}"
 
 
 def straight_swing(d) -> str:
