@@ -11,6 +11,8 @@
 #include <limits>
 #include <string>
 #include <tuple>
+#include <utility>
+#include <vector>
 
 #include "ahcfmu/param_vars.hpp"
 #include "ahc/controller3d.h"
@@ -448,6 +450,7 @@ class Controller3DModel final : public Model {
         err = "controller state rejected: " + why;
         return false;
       }
+      if (!outputsMatch(ctx, c, o, ticks, p, err)) return false;
     } else if (ctx.initialized() != (c.sag.valid != 0)) {
       err = ctx.initialized() ? "controller state rejected: the state is not initialized (valid = 0)"
                               : "controller state rejected: an instance that is not initialized holds no controller "
@@ -481,11 +484,12 @@ class Controller3DModel final : public Model {
     ahcfmu::readParamVariables(ctx, t, n, vr::first_step_param, &st);
   }
 
-  // Before the first tick: the sagittal outputs as the sagittal FMU's, the frontal ones at rest.
-  static void writeInitialOutputs(Context& ctx, const ahc_params& p) {
+  // Before the first tick: the sagittal outputs as the sagittal FMU's (the measured posture held,
+  // rates 0), the frontal ones at rest.
+  static ahc3d_outputs initialOutputs(const ahc_params& p, double theta_ankle, double theta_hip) {
     auto fin = [](double x) { return std::isfinite(x) ? x : 0.0; };
-    const double th1 = fin(ctx.real(vr::theta_ankle)), th2 = fin(ctx.real(vr::theta_hip));
-    double rx = 0.0, rz = 0.0, e1 = 0.0, e2 = 0.0;
+    const double th1 = fin(theta_ankle), th2 = fin(theta_hip);
+    double rx = 0.0, rz = 0.0;
     ahc_com(&p, th1, th2, &rx, &rz);
     ahc3d_outputs o;
     std::memset(&o, 0, sizeof o);
@@ -494,49 +498,100 @@ class Controller3DModel final : public Model {
     o.sag.theta_hip_ref = th2;
     o.sag.com_x = o.sag.com_x_desired = fin(rx);
     o.sag.com_z = fin(rz);
-    writeOutputs(ctx, o);
+    return o;
+  }
+  static void writeInitialOutputs(Context& ctx, const ahc_params& p) {
+    writeOutputs(ctx, initialOutputs(p, ctx.real(vr::theta_ankle), ctx.real(vr::theta_hip)));
+    double e1 = 0.0, e2 = 0.0;
     ahc_erect_posture(&p, &e1, &e2);
     ctx.set_real(vr::theta_ankle_erect, e1);
     ctx.set_real(vr::theta_hip_erect, e2);
   }
 
-  static void writeOutputs(Context& ctx, const ahc3d_outputs& o) {
-    ctx.set_real(vr::theta_ankle_ref, o.sag.theta_ankle_ref);
-    ctx.set_real(vr::theta_hip_ref, o.sag.theta_hip_ref);
-    ctx.set_real(vr::dtheta_ankle_ref, o.sag.dtheta_ankle_ref);
-    ctx.set_real(vr::dtheta_hip_ref, o.sag.dtheta_hip_ref);
-    ctx.set_integer(vr::phase, o.sag.phase);
-    ctx.set_real(vr::com_x, o.sag.com_x);
-    ctx.set_real(vr::com_z, o.sag.com_z);
-    ctx.set_real(vr::disturbance_moment, o.sag.disturbance_moment);
-    ctx.set_real(vr::k_w, o.sag.k_w);
-    ctx.set_real(vr::com_x_desired, o.sag.com_x_desired);
-    ctx.set_integer(vr::fault, static_cast<int>(o.sag.fault));
-    ctx.set_real(vr::phi_ref, o.frontal.phi_ref);
-    ctx.set_real(vr::psi_ref, o.frontal.psi_ref);
-    ctx.set_real(vr::dphi_ref, o.frontal.dphi_ref);
-    ctx.set_real(vr::dpsi_ref, o.frontal.dpsi_ref);
-    ctx.set_integer(vr::phase_y, o.frontal.phase);
-    ctx.set_real(vr::com_y, o.frontal.com_y);
-    ctx.set_real(vr::com_z_frontal, o.frontal.com_z);
-    ctx.set_real(vr::disturbance_moment_y, o.frontal.disturbance_moment);
-    ctx.set_real(vr::k_w_y, o.frontal.k_w);
-    ctx.set_real(vr::com_y_desired, o.frontal.com_y_desired);
-    ctx.set_integer(vr::fault_y, static_cast<int>(o.frontal.fault));
-    ctx.set_integer(vr::step_phase, o.step.phase);
-    ctx.set_integer(vr::swing_side, o.step.swing_side);
-    ctx.set_integer(vr::steps, o.step.steps);
-    ctx.set_real(vr::capture_point_x, o.step.capture[0]);
-    ctx.set_real(vr::capture_point_y, o.step.capture[1]);
-    ctx.set_real(vr::landing_x, o.step.landing[0]);
-    ctx.set_real(vr::landing_y, o.step.landing[1]);
-    ctx.set_real(vr::com_ref_x, o.step.com_ref[0]);
-    ctx.set_real(vr::com_ref_y, o.step.com_ref[1]);
-    ctx.set_real(vr::zmp_plan_x, o.step.zmp_plan[0]);
-    ctx.set_real(vr::zmp_plan_y, o.step.zmp_plan[1]);
-    ctx.set_real(vr::push_moment, o.step.push_moment);
+  // The output variables' values for o, in one table (written by writeOutputs, compared by outputsMatch).
+  static std::vector<std::pair<fmi2ValueReference, double>> outputValues(const ahc3d_outputs& o) {
+    std::vector<std::pair<fmi2ValueReference, double>> v = {
+        {vr::theta_ankle_ref, o.sag.theta_ankle_ref}, {vr::theta_hip_ref, o.sag.theta_hip_ref},
+        {vr::dtheta_ankle_ref, o.sag.dtheta_ankle_ref}, {vr::dtheta_hip_ref, o.sag.dtheta_hip_ref},
+        {vr::phase, o.sag.phase}, {vr::com_x, o.sag.com_x}, {vr::com_z, o.sag.com_z},
+        {vr::disturbance_moment, o.sag.disturbance_moment}, {vr::k_w, o.sag.k_w},
+        {vr::com_x_desired, o.sag.com_x_desired}, {vr::fault, o.sag.fault},
+        {vr::phi_ref, o.frontal.phi_ref}, {vr::psi_ref, o.frontal.psi_ref}, {vr::dphi_ref, o.frontal.dphi_ref},
+        {vr::dpsi_ref, o.frontal.dpsi_ref}, {vr::phase_y, o.frontal.phase}, {vr::com_y, o.frontal.com_y},
+        {vr::com_z_frontal, o.frontal.com_z}, {vr::disturbance_moment_y, o.frontal.disturbance_moment},
+        {vr::k_w_y, o.frontal.k_w}, {vr::com_y_desired, o.frontal.com_y_desired}, {vr::fault_y, o.frontal.fault},
+        {vr::step_phase, o.step.phase}, {vr::swing_side, o.step.swing_side}, {vr::steps, o.step.steps},
+        {vr::capture_point_x, o.step.capture[0]}, {vr::capture_point_y, o.step.capture[1]},
+        {vr::landing_x, o.step.landing[0]}, {vr::landing_y, o.step.landing[1]},
+        {vr::com_ref_x, o.step.com_ref[0]}, {vr::com_ref_y, o.step.com_ref[1]},
+        {vr::zmp_plan_x, o.step.zmp_plan[0]}, {vr::zmp_plan_y, o.step.zmp_plan[1]},
+        {vr::push_moment, o.step.push_moment}};
     for (int s = 0; s < 2; ++s)
-      for (int j = 0; j < AHC_LEG_JOINTS; ++j) ctx.set_real(jointVr(vr::first_joint_ref, s, j), o.q_ref_offset[s][j]);
+      for (int j = 0; j < AHC_LEG_JOINTS; ++j) v.emplace_back(jointVr(vr::first_joint_ref, s, j), o.q_ref_offset[s][j]);
+    return v;
+  }
+  static bool isInteger(fmi2ValueReference r) {
+    return r == vr::phase || r == vr::fault || r == vr::phase_y || r == vr::fault_y || r == vr::step_phase ||
+           r == vr::swing_side || r == vr::steps;
+  }
+
+  static void writeOutputs(Context& ctx, const ahc3d_outputs& o) {
+    for (const auto& [r, v] : outputValues(o)) {
+      if (isInteger(r)) ctx.set_integer(r, static_cast<int>(v));
+      else ctx.set_real(r, v);
+    }
+  }
+
+  // Whether a restored state's outputs are those its controller implies. Before the first tick: the
+  // initial ones of the held posture. After: the stored last outputs o, which must be the
+  // controller's — its stepping layer's phase, swing side and steps, and while no step drives the
+  // legs (o.step.active 0) both planes' last outputs — and the output variables must be o's; the
+  // erect posture the parameters'.
+  static bool outputsMatch(const Context& ctx, const ahc3d& c, const ahc3d_outputs& stored, unsigned long long ticks,
+                           const ahc_params& p, std::string& err) {
+    const ahc3d_outputs o =
+        ticks > 0 ? stored : initialOutputs(p, ctx.real(vr::theta_ankle_ref), ctx.real(vr::theta_hip_ref));
+    if (ticks > 0) {
+      const bool stepping = c.step.valid && c.step.p.stepping_enabled;
+      const bool step_ok = stepping ? o.step.phase == c.step.phase && o.step.swing_side == c.step.swing_side &&
+                                          o.step.steps == c.step.steps && (o.step.active == 0 || o.step.active == 1)
+                                    : o.step.phase == 0 && o.step.swing_side == -1 && o.step.active == 0;
+      const ahc_outputs& a = c.sag.last_out;
+      const ahc_frontal_outputs& b = c.frontal.last_out;
+      const bool flat_ok =
+          o.step.active ||
+          (o.sag.theta_ankle_ref == a.theta_ankle_ref && o.sag.theta_hip_ref == a.theta_hip_ref &&
+           o.sag.dtheta_ankle_ref == a.dtheta_ankle_ref && o.sag.dtheta_hip_ref == a.dtheta_hip_ref &&
+           o.sag.phase == a.phase && o.sag.com_x == a.com_x && o.sag.com_z == a.com_z &&
+           o.sag.disturbance_moment == a.disturbance_moment && o.sag.k_w == a.k_w &&
+           o.sag.com_x_desired == a.com_x_desired && o.sag.fault == a.fault && o.frontal.phi_ref == b.phi_ref &&
+           o.frontal.psi_ref == b.psi_ref && o.frontal.dphi_ref == b.dphi_ref && o.frontal.dpsi_ref == b.dpsi_ref &&
+           o.frontal.phase == b.phase && o.frontal.com_y == b.com_y && o.frontal.com_z == b.com_z &&
+           o.frontal.disturbance_moment == b.disturbance_moment && o.frontal.k_w == b.k_w &&
+           o.frontal.com_y_desired == b.com_y_desired && o.frontal.fault == b.fault);
+      if (!step_ok || !flat_ok) {
+        err = std::string("controller state rejected: the stored last outputs are not the controller's (") +
+              (step_ok ? "the flat-footed layers' last outputs" : "the stepping layer's phase, swing side or steps") +
+              ")";
+        return false;
+      }
+    }
+    double e1 = 0.0, e2 = 0.0;
+    ahc_erect_posture(&p, &e1, &e2);
+    auto values = outputValues(o);
+    values.emplace_back(vr::theta_ankle_erect, e1);
+    values.emplace_back(vr::theta_hip_erect, e2);
+    for (const auto& [r, v] : values) {
+      const double restored = isInteger(r) ? ctx.integer(r) : ctx.real(r);
+      if (restored != v) {
+        char buf[200];
+        std::snprintf(buf, sizeof buf, "controller state rejected: output %u = %.17g, the controller's state gives %.17g",
+                      r, restored, v);
+        err = buf;
+        return false;
+      }
+    }
+    return true;
   }
 
   ahc3d ctl_{};
