@@ -385,15 +385,10 @@ class ControllerModel final : public Model {
     auto values = outputValues(o);
     values.emplace_back(vr::theta_ankle_erect, e1);
     values.emplace_back(vr::theta_hip_erect, e2);
-    for (const auto& [r, v] : values) {
-      const double stored = isInteger(r) ? ctx.integer(r) : ctx.real(r);
-      if (stored != v) {
-        char buf[200];
-        std::snprintf(buf, sizeof buf, "controller state rejected: output %u = %.17g, the controller's state gives %.17g",
-                      r, stored, v);
-        err = buf;
-        return false;
-      }
+    const std::string why = ahcfmu::firstDifferingOutput(ctx, values, isInteger);
+    if (!why.empty()) {
+      err = "controller state rejected: " + why;
+      return false;
     }
     return true;
   }

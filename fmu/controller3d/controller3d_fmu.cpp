@@ -581,15 +581,10 @@ class Controller3DModel final : public Model {
     auto values = outputValues(o);
     values.emplace_back(vr::theta_ankle_erect, e1);
     values.emplace_back(vr::theta_hip_erect, e2);
-    for (const auto& [r, v] : values) {
-      const double restored = isInteger(r) ? ctx.integer(r) : ctx.real(r);
-      if (restored != v) {
-        char buf[200];
-        std::snprintf(buf, sizeof buf, "controller state rejected: output %u = %.17g, the controller's state gives %.17g",
-                      r, restored, v);
-        err = buf;
-        return false;
-      }
+    const std::string why = ahcfmu::firstDifferingOutput(ctx, values, isInteger);
+    if (!why.empty()) {
+      err = "controller state rejected: " + why;
+      return false;
     }
     return true;
   }

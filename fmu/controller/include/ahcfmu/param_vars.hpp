@@ -1,7 +1,8 @@
 // The parameters of a controller FMU from one of the C library's parameter tables (ahc_param_info
 // rows: ahc_param_table, ahc_frontal_param_table): one variable per row, value reference
 // first + row index, start value from the defaults struct, range from the row; and reading them
-// back into a struct. Shared by AnkleHipController.fmu and AnkleHipController3D.fmu.
+// back into a struct; and the checks of a restored state against the variables. Shared by
+// AnkleHipController.fmu and AnkleHipController3D.fmu.
 #pragma once
 
 #include <cmath>
@@ -9,6 +10,8 @@
 #include <cstdlib>
 #include <cstring>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "ahc/controller.h"
 #include "fmuglue/glue.hpp"
@@ -110,6 +113,24 @@ inline std::string firstDifferingParam(const ahc_param_info* table, size_t count
       std::snprintf(line, sizeof line, "%s = %.17g in the state, %.17g in the instance", table[i].name, x, y);
     }
     return line;
+  }
+  return "";
+}
+
+// The first output variable whose restored value differs from the one the controller's state gives
+// (expected: value reference and value, Integer where isInteger), as "output VR = x, the controller's
+// state gives y"; "" if none.
+template <class IsInteger>
+std::string firstDifferingOutput(const fmuglue::Context& ctx,
+                                 const std::vector<std::pair<fmi2ValueReference, double>>& expected,
+                                 IsInteger isInteger) {
+  for (const auto& [r, v] : expected) {
+    const double restored = isInteger(r) ? ctx.integer(r) : ctx.real(r);
+    if (restored != v) {
+      char line[200];
+      std::snprintf(line, sizeof line, "output %u = %.17g, the controller's state gives %.17g", r, restored, v);
+      return line;
+    }
   }
   return "";
 }
