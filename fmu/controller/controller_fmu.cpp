@@ -380,17 +380,8 @@ class ControllerModel final : public Model {
   static bool outputsMatch(const Context& ctx, const ahc_controller& c, const ahc_params& p, std::string& err) {
     const ahc_outputs o = c.tick > 0 ? c.last_out
                                      : initialOutputs(p, ctx.real(vr::theta_ankle_ref), ctx.real(vr::theta_hip_ref));
-    double e1 = 0.0, e2 = 0.0;
-    ahc_erect_posture(&p, &e1, &e2);
-    auto values = outputValues(o);
-    values.emplace_back(vr::theta_ankle_erect, e1);
-    values.emplace_back(vr::theta_hip_erect, e2);
-    const std::string why = ahcfmu::firstDifferingOutput(ctx, values, isInteger);
-    if (!why.empty()) {
-      err = "controller state rejected: " + why;
-      return false;
-    }
-    return true;
+    return ahcfmu::restoredOutputsAre(ctx, outputValues(o), p, vr::theta_ankle_erect, vr::theta_hip_erect, isInteger,
+                                      err);
   }
 
   ahc_controller ctl_{};

@@ -576,17 +576,8 @@ class Controller3DModel final : public Model {
         return false;
       }
     }
-    double e1 = 0.0, e2 = 0.0;
-    ahc_erect_posture(&p, &e1, &e2);
-    auto values = outputValues(o);
-    values.emplace_back(vr::theta_ankle_erect, e1);
-    values.emplace_back(vr::theta_hip_erect, e2);
-    const std::string why = ahcfmu::firstDifferingOutput(ctx, values, isInteger);
-    if (!why.empty()) {
-      err = "controller state rejected: " + why;
-      return false;
-    }
-    return true;
+    return ahcfmu::restoredOutputsAre(ctx, outputValues(o), p, vr::theta_ankle_erect, vr::theta_hip_erect, isInteger,
+                                      err);
   }
 
   ahc3d ctl_{};

@@ -117,22 +117,28 @@ inline std::string firstDifferingParam(const ahc_param_info* table, size_t count
   return "";
 }
 
-// The first output variable whose restored value differs from the one the controller's state gives
-// (expected: value reference and value, Integer where isInteger), as "output VR = x, the controller's
-// state gives y"; "" if none.
+// Whether a restored state's output variables are `expected` (value reference and value, Integer
+// where isInteger) plus the erect posture of p at its two value references; if not, err names the
+// first that differs ("controller state rejected: output VR = x, the controller's state gives y").
 template <class IsInteger>
-std::string firstDifferingOutput(const fmuglue::Context& ctx,
-                                 const std::vector<std::pair<fmi2ValueReference, double>>& expected,
-                                 IsInteger isInteger) {
+bool restoredOutputsAre(const fmuglue::Context& ctx, std::vector<std::pair<fmi2ValueReference, double>> expected,
+                        const ahc_params& p, fmi2ValueReference ankle_erect, fmi2ValueReference hip_erect,
+                        IsInteger isInteger, std::string& err) {
+  double e1 = 0.0, e2 = 0.0;
+  ahc_erect_posture(&p, &e1, &e2);
+  expected.emplace_back(ankle_erect, e1);
+  expected.emplace_back(hip_erect, e2);
   for (const auto& [r, v] : expected) {
     const double restored = isInteger(r) ? ctx.integer(r) : ctx.real(r);
     if (restored != v) {
       char line[200];
-      std::snprintf(line, sizeof line, "output %u = %.17g, the controller's state gives %.17g", r, restored, v);
-      return line;
+      std::snprintf(line, sizeof line, "controller state rejected: output %u = %.17g, the controller's state gives %.17g",
+                    r, restored, v);
+      err = line;
+      return false;
     }
   }
-  return "";
+  return true;
 }
 
 // The enumeration "Phase" of both controllers' phase outputs (AHC_PHASE_*).
