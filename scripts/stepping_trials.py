@@ -257,8 +257,10 @@ def landing_table(scenario, models, engine, overrides, robot, l_max, dt_s):
         zmp, heel = stance_sole_alone(r.data, swing, decided)
         # the LIP bound's ZMP is at the toe from the onset: how much of the flat-footed time before the
         # decision the feet's CoP (zmp_x, from the ankles side by side) was there
-        before = (t >= ONSET) & (t < t[decided[0]]) if decided.size else (t >= ONSET) & (t < ONSET + 1.0)
-        at_toe = f"{100 * np.mean(col(r.data, 'zmp_x')[before] > robot.x_toe - 0.0025):.0f}" if decided.size else "-"
+        at_toe = "-"
+        if decided.size:
+            before = (t >= ONSET) & (t < t[decided[0]])
+            at_toe = f"{100 * np.mean(col(r.data, 'zmp_x')[before] > robot.x_toe - 0.0025):.0f}"
         # the pushed pendulum's capture point xi + u the tick before the layer counts the landing,
         # from the plant's truth (its CoM and the push it applies at h_push; the layer's estimates are
         # jolted when a sole touches down): xi = c + c'/omega, omega from the CoM's height above the
