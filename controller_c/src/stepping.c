@@ -101,7 +101,7 @@ static const ahc_param_info k_stable[] = {
     SD(step_close_wait, "s", 0.0, 10.0, "The closing step waits for rest at most this long after SETTLE's planned time"),
     SD(step_close_inset, "m", 0.0, 0.05, "The closing step's weight shift moves the capture point this far inside of the landed ankle (toward the other foot)"),
     SD(step_trigger_time, "s", 0.0, 1e6, "A step starts at the first tick at or after this time (ticks x sample_period from the start) whatever the decision rules, if the robot stands then: experiments on the decision's timing; 0: off"),
-    SI(step_push_estimate, 0.0, 1.0, "1: the estimated external pitching moment (push_moment) enters the step's plan: the decision, the landing point and the CoM reference; 0: the plan ignores it"),
+    SI(step_push_estimate, 0.0, 2.0, "The estimated external pitching moment (push_moment) in the step: 1 in its plan (the weight shift, the landing point, the CoM reference); 2 in the decision too (the capture point beyond the feet is xi + u, u = push_moment / (m g)); 0 nowhere"),
     SD(step_observer_gain, "1/s", 1.0, 500.0, "The momentum observer's gain: push_moment follows the external moment as a first-order lag of this bandwidth"),
 };
 #define STABLE_LEN (sizeof k_stable / sizeof k_stable[0])
@@ -956,7 +956,9 @@ void ahc_step_step(ahc_stepper *c, const ahc_step_sensors *s, const double flat_
                              ((s->zmp_x > x_front - m && lean > c->p.step_trigger_lean) ||
                               (s->zmp_x < x_back + m && lean < -c->p.step_trigger_lean));
         /* the capture point beyond an edge of the feet by step_trigger_x or _y */
-        const int beyond = xi[0] > x_front + c->p.step_trigger_x || xi[0] < x_back - c->p.step_trigger_x ||
+        /* (step_push_estimate 2: the pushed pendulum's capture point, xi + u) */
+        const double xi_x = c->p.step_push_estimate == 2 ? xi_push[0] : xi[0];
+        const int beyond = xi_x > x_front + c->p.step_trigger_x || xi_x < x_back - c->p.step_trigger_x ||
                            xi[1] > c->feet[AHC_LEFT][1] + w2 + c->p.step_trigger_y ||
                            xi[1] < c->feet[AHC_RIGHT][1] - w2 - c->p.step_trigger_y;
         /* a step at a set time (step_trigger_time), whatever the rules and the impact hold */

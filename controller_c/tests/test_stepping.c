@@ -550,11 +550,12 @@ static void test_triggers(void)
     }
 }
 
-/* The momentum observer (push_moment) on a robot standing still: with the measured ZMP where the
- * static balance puts it, no moment; with the ZMP moved so that p f_z = m g c_x + M (the balance of
- * a standing robot under an external moment M), the estimate follows M as a first-order lag of
- * bandwidth step_observer_gain. */
-static double observed_moment(double M, double gain, int ticks)
+/* A robot standing still under an external moment M: the measured ZMP where the balance of a
+ * standing robot under M puts it, p f_z = m g c_x + M (M = 0: the static balance). Runs `ticks`
+ * ticks (or to the first step) with the observer at `gain`, the capture-point rule at trigger_x
+ * (the lean rule off) and step_push_estimate `estimate`; returns the tick the first step started
+ * (-1: none) and the last estimate in *moment. */
+static int standing_under_moment(double M, double gain, int ticks, double trigger_x, int estimate, double *moment)
 {
     ahc_params sp;
     ahc_frontal_params fp;
@@ -566,9 +567,10 @@ static double observed_moment(double M, double gain, int ticks)
     double mass, fz;
     int k;
     defaults(&sp, &fp, &st);
-    st.step_trigger_x = 1.0;    /* no rule fires: the layer only estimates */
+    st.step_trigger_x = trigger_x;
     st.step_trigger_lean = 0.0;
     st.step_observer_gain = gain;
+    st.step_push_estimate = estimate;
     CHECK(ahc_step_init(&c, &st, &sp, &fp) == AHC_OK, "init");
     mass = sp.m1 + sp.m2 + sp.feet_mass;
     fz = mass * sp.g;
@@ -577,8 +579,21 @@ static double observed_moment(double M, double gain, int ticks)
     ahc_step_step(&c, &s, flat, &out);
     /* the ankles' mid-point is the frame's origin: p = (m g c_x + M) / f_z */
     s.zmp_x = (mass * sp.g * out.com[0] + M) / fz;
-    for (k = 0; k < ticks; ++k) ahc_step_step(&c, &s, flat, &out);
-    return out.push_moment;
+    for (k = 2; k <= ticks + 1; ++k) {
+        ahc_step_step(&c, &s, flat, &out);
+        *moment = out.push_moment;
+        if (out.phase != AHC_STEP_STAND) return k;
+    }
+    return -1;
+}
+
+/* The momentum observer (push_moment): the estimate follows M as a first-order lag of bandwidth
+ * step_observer_gain (no rule fires: the layer only estimates). */
+static double observed_moment(double M, double gain, int ticks)
+{
+    double moment = NAN;
+    CHECK(standing_under_moment(M, gain, ticks, 1.0, 0, &moment) < 0, "no step");
+    return moment;
 }
 
 static void test_push_observer(void)
@@ -594,9 +609,29 @@ static void test_push_observer(void)
           "twice the gain: the same fraction in half the time");
 }
 
+/* step_push_estimate 2 decides on the pushed pendulum's capture point xi + u: a robot standing still
+ * under a moment whose u = M / (m g) lies beyond the toe steps once the estimate gets there
+ * (u reaches the toe when 1 - e^(-K t) = toe m g / M); with 1 (and 0) the decision reads xi, which
+ * stays at rest, and no step starts; nor with 2 under a moment whose u stays inside the sole. (The
+ * 1 s pushes of docs/controller.md §12.5 run this rule on the plant.) */
+static void test_push_decision(void)
+{
+    const double K = 20.0, /* the toe reached after the layer's first 20 ticks, when it may step */ mg = (HOAP2_TOTAL_MASS) * HOAP2_G, M = 2.0 * HOAP2_TOE_X * mg;
+    const int expected = 2 + (int)ceil(-log(1.0 - 0.5) / K / HOAP2_SAMPLE_PERIOD);
+    double moment;
+    const int k2 = standing_under_moment(M, K, 300, 0.0, 2, &moment);
+    CHECK(k2 >= expected - 2 && k2 <= expected + 2, "u = twice the toe, step_push_estimate 2: a step on tick %d "
+          "(the estimate reaches the toe on tick %d), the estimate %g N m", k2, expected, moment);
+    CHECK(standing_under_moment(M, K, 300, 0.0, 1, &moment) < 0, "... 1: no step");
+    CHECK(standing_under_moment(M, K, 300, 0.0, 0, &moment) < 0, "... 0: no step");
+    CHECK(standing_under_moment(0.8 * HOAP2_TOE_X * mg, K, 300, 0.0, 2, &moment) < 0,
+          "u = 0.8 toe, step_push_estimate 2: no step");
+}
+
 int main(void)
 {
     test_push_observer();
+    test_push_decision();
     test_triggers();
     test_close_rest();
     test_close_inset();

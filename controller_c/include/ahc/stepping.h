@@ -38,7 +38,8 @@
  *
  * The push, estimated (docs/controller.md §12.5): a momentum observer on the whole robot's angular
  * momentum about the ground gives the external pitching moment (push_moment); with
- * step_push_estimate the plan uses it (off by default: it made every boundary worse).
+ * step_push_estimate the plan uses it, and the decision too (off by default: both made every
+ * boundary worse).
  *
  * Frame: the ground frame fixed when the step is decided, its origin the mid-point between the
  * ankles' ground projections, x forward, y left, z up; the feet flat in it.
@@ -122,8 +123,9 @@ typedef struct {
     double step_trigger_time;  /* a step starts at the first tick at or after this time since the
                                   start (tick x sample_period), whatever the rules, if standing then:
                                   experiments on the decision's timing; 0: off [s]               */
-    int step_push_estimate;    /* 1: the external moment estimate (a momentum observer) enters the
-                                  plan: the decision, the landing point and the CoM reference    */
+    int step_push_estimate;    /* the external moment estimate (a momentum observer) in the step:
+                                  1 in the plan (the weight shift, the landing point, the CoM
+                                  reference); 2 in the decision too (xi + u); 0 nowhere          */
     double step_observer_gain; /* the momentum observer's gain: the estimate follows the external
                                   moment with this bandwidth [1/s]                               */
 } ahc_step_params;
