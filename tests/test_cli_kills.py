@@ -12,7 +12,10 @@ in a subprocess and sends it a signal; what each establishes:
 - SIGTERM while the closed loop runs keeps the data so far as <name>.incomplete.csv with a summary
   whose outcome is "interrupted", as Ctrl-C does;
 - hidden temporary files and staging folders a killed run left (.<name>.csv.*.tmp, SIGKILL during
-  a write) are removed by the next run into the folder.
+  a write) are removed by the next run into the folder;
+- a SIGTERM or Ctrl-C that lands in a finalizer (a __del__) still ends the command (exit 130, its
+  one-line message, no traceback). Before, Python printed it as "Exception ignored in ..." with a
+  traceback and the command went on to the end as if never interrupted.
 """
 from __future__ import annotations
 
@@ -25,6 +28,9 @@ import time
 from pathlib import Path
 
 import pytest
+
+from anklehip import cli
+from anklehip.cli import commands
 
 NAME = "hip_saves_push"
 
@@ -116,3 +122,27 @@ def test_stale_hidden_files_are_removed_by_the_next_run(tmp_path, fmu_dir):
     assert not any(f.exists() for f in stale) and not (out / f".{NAME}.staging-abc").exists()
     assert other.exists()
     _consistent(out)
+
+
+@pytest.mark.parametrize("sig, message", [(signal.SIGTERM, "terminated by SIGTERM"), (signal.SIGINT, "interrupted")])
+def test_a_kill_that_lands_in_a_finalizer_still_ends_the_command(monkeypatch, capsys, sig, message):
+    went_on = []
+
+    class Finalized:
+        def __del__(self):
+            os.kill(os.getpid(), sig)
+            for _ in range(1000):      # the handler runs here, inside the finalizer
+                pass
+
+    def command(a):
+        Finalized()                    # collected at once: the signal lands in its __del__
+        time.sleep(0.5)                # the command's own flow, where the interrupt must arrive
+        went_on.append(True)
+        return 0
+
+    monkeypatch.setattr(commands, "cmd_list", command)
+    assert cli.main(["list"]) == 130
+    err = capsys.readouterr().err
+    assert not went_on, "the command went on after the signal"
+    assert "Traceback" not in err and "Exception ignored" not in err, err
+    assert err.strip() == message, err

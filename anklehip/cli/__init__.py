@@ -36,20 +36,57 @@ def _terminate(signum, frame):
     raise Terminated(signal.Signals(signum).name)
 
 
+_swallowed: BaseException | None = None   # an interrupt a finalizer could not pass on (_redeliver)
+
+
+def _redeliver(previous):
+    """An unraisable-exception hook: a Ctrl-C or a kill whose KeyboardInterrupt is raised inside a
+    finalizer (a __del__, a file the garbage collector closes) cannot leave it; Python prints it as
+    "Exception ignored in ..." with a traceback and the command goes on as if never interrupted. This
+    hook keeps it and raises it again 1 ms later from SIGALRM, in the command's own flow (again, if
+    that lands in a finalizer too); every other unraisable exception goes to `previous`."""
+    def hook(u):
+        global _swallowed
+        if u.exc_type is not None and issubclass(u.exc_type, KeyboardInterrupt):
+            _swallowed = u.exc_value if u.exc_value is not None else u.exc_type()
+            signal.setitimer(signal.ITIMER_REAL, 0.001)
+        else:
+            previous(u)
+    return hook
+
+
+def _raise_swallowed(signum, frame):
+    global _swallowed
+    e, _swallowed = _swallowed, None
+    if e is not None:
+        raise e
+
+
 @contextlib.contextmanager
 def _ending_signals_interrupt():
     """SIGTERM and SIGHUP raise Terminated (a KeyboardInterrupt) in the main thread while a command
     runs, so a kill ends a run as Ctrl-C does (the data so far as <name>.incomplete.csv, no half
-    result that looks complete); the previous handlers afterwards."""
+    result that looks complete), also when it lands in a finalizer (_redeliver); the previous
+    handlers afterwards."""
     import threading
+    global _swallowed
     names = [n for n in ("SIGTERM", "SIGHUP") if hasattr(signal, n)]
     if threading.current_thread() is not threading.main_thread():
         yield
         return
     old = {n: signal.signal(getattr(signal, n), _terminate) for n in names}
+    redeliver = hasattr(signal, "setitimer")          # not on Windows
+    if redeliver:
+        old_hook, old_alarm = sys.unraisablehook, signal.signal(signal.SIGALRM, _raise_swallowed)
+        sys.unraisablehook = _redeliver(old_hook)
     try:
         yield
     finally:
+        if redeliver:      # the command is over: an interrupt still held comes after its work
+            _swallowed = None
+            signal.setitimer(signal.ITIMER_REAL, 0)
+            sys.unraisablehook = old_hook
+            signal.signal(signal.SIGALRM, old_alarm)
         for n, h in old.items():
             signal.signal(getattr(signal, n), h)
 
