@@ -955,8 +955,8 @@ void ahc_step_step(ahc_stepper *c, const ahc_step_sensors *s, const double flat_
         const int at_limit = c->p.step_trigger_lean > 0.0 && fabs(xi[1] - feet_mid_y(c)) < inner &&
                              ((s->zmp_x > x_front - m && lean > c->p.step_trigger_lean) ||
                               (s->zmp_x < x_back + m && lean < -c->p.step_trigger_lean));
-        /* the capture point beyond an edge of the feet by step_trigger_x or _y */
-        /* (step_push_estimate 2: the pushed pendulum's capture point, xi + u) */
+        /* the capture point beyond an edge of the feet by step_trigger_x or _y (forward and back,
+         * with step_push_estimate 2, the pushed pendulum's: xi + u) */
         const double xi_x = c->p.step_push_estimate == 2 ? xi_push[0] : xi[0];
         const int beyond = xi_x > x_front + c->p.step_trigger_x || xi_x < x_back - c->p.step_trigger_x ||
                            xi[1] > c->feet[AHC_LEFT][1] + w2 + c->p.step_trigger_y ||
