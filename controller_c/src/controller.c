@@ -14,11 +14,10 @@
  * kinematics (r_x, r_z, C1, C12) use the measured angles unless kinematics_source says otherwise.
  */
 #include <math.h>
-#include <stdarg.h>
-#include <stdio.h>
 #include <string.h>
 
 #include "ahc/controller.h"
+#include "fail_message.h"
 #include "transition_splines.h"
 
 static double clampd(double v, double lo, double hi) { return v < lo ? lo : (v > hi ? hi : v); }
@@ -698,19 +697,10 @@ void ahc_step(ahc_controller *c, const ahc_sensors *s, ahc_outputs *out)
 
 static int in_range(double x, double lo, double hi) { return isfinite(x) && x >= lo && x <= hi; }
 
-#define STATE_FAIL(...) (snprintf_msg(msg, msg_size, __VA_ARGS__), AHC_ERR_INCONSISTENT)
+#define STATE_FAIL(...) ahc_fail_message(msg, msg_size, AHC_ERR_INCONSISTENT, __VA_ARGS__)
 
 static int state_invariants(const ahc_controller *c, char *msg, size_t msg_size);
 
-static void snprintf_msg(char *msg, size_t n, const char *fmt, ...)
-{
-    if (msg && n > 0) {
-        va_list ap;
-        va_start(ap, fmt);
-        vsnprintf(msg, n, fmt, ap);
-        va_end(ap);
-    }
-}
 
 int ahc_state_validate(const ahc_controller *c, char *msg, size_t msg_size)
 {

@@ -178,40 +178,40 @@ int ahc_frontal_params_validate(const ahc_frontal_params *f, const ahc_params *s
     double h, edge;
     int rc;
     if (msg && msg_size > 0) msg[0] = '\0';
-    if (!f || !sp) return ahc_rows_fail(msg, msg_size, AHC_ERR_NULL, "params pointer is NULL");
+    if (!f || !sp) return ahc_fail_message(msg, msg_size, AHC_ERR_NULL, "params pointer is NULL");
     rc = ahc_params_validate(sp, msg, msg_size);
     if (rc != AHC_OK) return rc;
     rc = ahc_rows_check(k_ftable, FTABLE_LEN, f, msg, msg_size);
     if (rc != AHC_OK) return rc;
     if (!(fabs(f->thigh + f->shank - sp->l1) <= 1e-6 * sp->l1))
-        return ahc_rows_fail(msg, msg_size, AHC_ERR_INCONSISTENT,
+        return ahc_fail_message(msg, msg_size, AHC_ERR_INCONSISTENT,
                     "thigh + shank = %.6g must equal l1 = %.6g (the straight leg)", f->thigh + f->shank, sp->l1);
     edge = f->ankle_y + 0.5 * f->sole_width;
     if (!(f->zmp_limit_y < edge))
-        return ahc_rows_fail(msg, msg_size, AHC_ERR_INCONSISTENT,
+        return ahc_fail_message(msg, msg_size, AHC_ERR_INCONSISTENT,
                     "zmp_limit_y = %.6g lies outside the soles (outer edges at +-%.6g)", f->zmp_limit_y, edge);
     if (!(f->lean_margin_y < edge))
-        return ahc_rows_fail(msg, msg_size, AHC_ERR_INCONSISTENT,
+        return ahc_fail_message(msg, msg_size, AHC_ERR_INCONSISTENT,
                     "lean_margin_y = %.6g must be < the soles' outer edge %.6g (the lean range must hold 0)",
                     f->lean_margin_y, edge);
     if (!(f->lean_zmp_margin_y < edge))
-        return ahc_rows_fail(msg, msg_size, AHC_ERR_INCONSISTENT,
+        return ahc_fail_message(msg, msg_size, AHC_ERR_INCONSISTENT,
                     "lean_zmp_margin_y = %.6g must be < the soles' outer edge %.6g", f->lean_zmp_margin_y, edge);
     if (!(f->rz_band_low_y < f->rz_band_high_y))
-        return ahc_rows_fail(msg, msg_size, AHC_ERR_INCONSISTENT, "rz_band_low_y = %.6g must be < rz_band_high_y = %.6g",
+        return ahc_fail_message(msg, msg_size, AHC_ERR_INCONSISTENT, "rz_band_low_y = %.6g must be < rz_band_high_y = %.6g",
                     f->rz_band_low_y, f->rz_band_high_y);
     h = sp->sample_period;
     if (!(f->T_ah_y >= 2.0 * h))
-        return ahc_rows_fail(msg, msg_size, AHC_ERR_INCONSISTENT,
+        return ahc_fail_message(msg, msg_size, AHC_ERR_INCONSISTENT,
                     "T_ah_y = %.6g must be at least two sample periods (sample_period = %.6g)", f->T_ah_y, h);
     {
         const double Jphi = ahc_frontal_ankle_inertia(f, sp), Jpsi = ahc_frontal_hip_inertia(f, sp);
         if (!(Jphi > 0.0) || !symplectic_stable(h, f->Ka_y / Jphi, f->Ca_y / Jphi))
-            return ahc_rows_fail(msg, msg_size, AHC_ERR_INCONSISTENT,
+            return ahc_fail_message(msg, msg_size, AHC_ERR_INCONSISTENT,
                         "sample_period = %.6g too large for the lateral ankle law (Ka_y = %.6g, Ca_y = %.6g): "
                         "semi-implicit Euler unstable", h, f->Ka_y, f->Ca_y);
         if (!(Jpsi > 0.0) || !symplectic_stable(h, f->Kh_y / Jpsi, f->Ch_y / Jpsi))
-            return ahc_rows_fail(msg, msg_size, AHC_ERR_INCONSISTENT,
+            return ahc_fail_message(msg, msg_size, AHC_ERR_INCONSISTENT,
                         "sample_period = %.6g too large for the lateral hip law (Kh_y = %.6g, Ch_y = %.6g): "
                         "semi-implicit Euler unstable", h, f->Kh_y, f->Ch_y);
     }
@@ -222,16 +222,16 @@ int ahc_frontal_params_validate(const ahc_frontal_params *f, const ahc_params *s
         {
             const double w = sqrt(sp->g / (rz + sp->ankle_height)), k = f->lean_capture_gain_y;
             if (!symplectic_stable(h, k * w * w, (1.0 + k) * w))
-                return ahc_rows_fail(msg, msg_size, AHC_ERR_INCONSISTENT,
+                return ahc_fail_message(msg, msg_size, AHC_ERR_INCONSISTENT,
                             "sample_period = %.6g too large for the pendulum lean (lean_capture_gain_y = %.6g): "
                             "semi-implicit Euler unstable", h, k);
         }
     }
     if (!(h * f->Kp_psi < 1.0))
-        return ahc_rows_fail(msg, msg_size, AHC_ERR_INCONSISTENT,
+        return ahc_fail_message(msg, msg_size, AHC_ERR_INCONSISTENT,
                     "Kp_psi = %.6g too large for sample_period = %.6g (need Kp_psi * h < 1)", f->Kp_psi, h);
     if (!(h * f->Kpr_y < 1.0))
-        return ahc_rows_fail(msg, msg_size, AHC_ERR_INCONSISTENT,
+        return ahc_fail_message(msg, msg_size, AHC_ERR_INCONSISTENT,
                     "Kpr_y = %.6g too large for sample_period = %.6g (need Kpr_y * h < 1)", f->Kpr_y, h);
     return AHC_OK;
 }
@@ -752,8 +752,8 @@ int ahc_frontal_state_validate(const ahc_frontal *c, char *msg, size_t msg_size)
     int rc;
     ahc_frontal fresh;
     if (msg && msg_size > 0) msg[0] = '\0';
-    if (!c) return ahc_rows_fail(msg, msg_size, AHC_ERR_NULL, "state pointer is NULL");
-    if (c->valid != 0 && c->valid != 1) return ahc_rows_fail(msg, msg_size, AHC_ERR_RANGE, "valid = %d must be 0 or 1", c->valid);
+    if (!c) return ahc_fail_message(msg, msg_size, AHC_ERR_NULL, "state pointer is NULL");
+    if (c->valid != 0 && c->valid != 1) return ahc_fail_message(msg, msg_size, AHC_ERR_RANGE, "valid = %d must be 0 or 1", c->valid);
     if (!c->valid) return AHC_OK;
     rc = ahc_frontal_params_validate(&c->f, &c->sp, msg, msg_size);
     if (rc != AHC_OK) return rc;
@@ -765,31 +765,31 @@ int ahc_frontal_state_validate(const ahc_frontal *c, char *msg, size_t msg_size)
     if (fresh.m != c->m || fresh.km != c->km || fresh.Jphi != c->Jphi || fresh.Jpsi != c->Jpsi ||
         fresh.rz_erect != c->rz_erect || fresh.zmp_alpha != c->zmp_alpha || fresh.lean_alpha != c->lean_alpha ||
         fresh.omega_y != c->omega_y)
-        return ahc_rows_fail(msg, msg_size, AHC_ERR_INCONSISTENT, "derived constants do not match the parameters");
+        return ahc_fail_message(msg, msg_size, AHC_ERR_INCONSISTENT, "derived constants do not match the parameters");
     if (c->phase < AHC_PHASE_ANKLE || c->phase > AHC_PHASE_HIP_TO_ANKLE)
-        return ahc_rows_fail(msg, msg_size, AHC_ERR_RANGE, "phase = %d", c->phase);
-    if (c->push_sign != 1 && c->push_sign != -1) return ahc_rows_fail(msg, msg_size, AHC_ERR_RANGE, "push_sign = %d", c->push_sign);
+        return ahc_fail_message(msg, msg_size, AHC_ERR_RANGE, "phase = %d", c->phase);
+    if (c->push_sign != 1 && c->push_sign != -1) return ahc_fail_message(msg, msg_size, AHC_ERR_RANGE, "push_sign = %d", c->push_sign);
     if ((c->started != 0 && c->started != 1) || (c->holding != 0 && c->holding != 1) ||
         (c->zmp_f_valid != 0 && c->zmp_f_valid != 1) || c->hist_n < 0 || c->hist_n > 2)
-        return ahc_rows_fail(msg, msg_size, AHC_ERR_RANGE, "a flag is not 0 or 1");
+        return ahc_fail_message(msg, msg_size, AHC_ERR_RANGE, "a flag is not 0 or 1");
     {
         const double v[] = {c->phi, c->dphi, c->psi, c->dpsi, c->psi_bump, c->phase_time, c->fallback_timer,
                             c->k_w, c->ryd, c->dryd, c->zmp_f, c->last_phi, c->last_psi, c->lean_f1, c->lean_f,
                             c->lean, c->lean_rate, c->lean_p, c->phi_plan, c->dphi_plan, c->flat_time};
         size_t i;
         for (i = 0; i < sizeof v / sizeof v[0]; ++i)
-            if (!isfinite(v[i])) return ahc_rows_fail(msg, msg_size, AHC_ERR_NONFINITE, "state value %u is not finite", (unsigned)i);
+            if (!isfinite(v[i])) return ahc_fail_message(msg, msg_size, AHC_ERR_NONFINITE, "state value %u is not finite", (unsigned)i);
     }
-    if (c->k_w < 0.0 || c->k_w > 1.0) return ahc_rows_fail(msg, msg_size, AHC_ERR_RANGE, "k_w = %g outside [0, 1]", c->k_w);
+    if (c->k_w < 0.0 || c->k_w > 1.0) return ahc_fail_message(msg, msg_size, AHC_ERR_RANGE, "k_w = %g outside [0, 1]", c->k_w);
     /* eqs. 23-24's splines over T_ah_y, from T and the start (a forged k_w coefficient put k_w
      * outside [0, 1] on the next tick); k_w by phase */
     rc = ahc_transition_splines_check(&c->kw_spline, &c->ryd_spline, "ryd_spline", c->f.T_ah_y, c->phase, c->k_w, msg,
                                       msg_size);
     if (rc != AHC_OK) return rc;
-    if (c->flat_time < 0.0) return ahc_rows_fail(msg, msg_size, AHC_ERR_RANGE, "flat_time = %g must be >= 0", c->flat_time);
+    if (c->flat_time < 0.0) return ahc_fail_message(msg, msg_size, AHC_ERR_RANGE, "flat_time = %g must be >= 0", c->flat_time);
     if (fabs(c->phi) > c->f.ankle_roll_max || fabs(c->psi) > 1.5)
-        return ahc_rows_fail(msg, msg_size, AHC_ERR_RANGE, "frontal reference outside the legs' range");
+        return ahc_fail_message(msg, msg_size, AHC_ERR_RANGE, "frontal reference outside the legs' range");
     if ((c->fault & ~(unsigned)AHC_FFAULT_ALL_MASK) != 0)
-        return ahc_rows_fail(msg, msg_size, AHC_ERR_RANGE, "fault = %u has undefined bits", c->fault);
+        return ahc_fail_message(msg, msg_size, AHC_ERR_RANGE, "fault = %u has undefined bits", c->fault);
     return AHC_OK;
 }

@@ -7,6 +7,7 @@
 #include <stdio.h>
 
 #include "ahc/controller.h"
+#include "fail_message.h"
 #include "transition_splines.h"
 
 /* The CoM offsets d1, d2 enter only when set, so that the paper's model (both 0) computes exactly
@@ -106,7 +107,7 @@ void ahc_quintic_eval(const ahc_quintic *q, double t, double *x, double *v, doub
     if (a) *a = 2.0 * c[2] + t * (6.0 * c[3] + t * (12.0 * c[4] + t * 20.0 * c[5]));
 }
 
-static int spline_fail(char *msg, size_t n, const char *fmt, ...)
+int ahc_fail_message(char *msg, size_t n, int code, const char *fmt, ...)
 {
     if (msg && n > 0) {
         va_list ap;
@@ -114,7 +115,7 @@ static int spline_fail(char *msg, size_t n, const char *fmt, ...)
         vsnprintf(msg, n, fmt, ap);
         va_end(ap);
     }
-    return AHC_ERR_INCONSISTENT;
+    return code;
 }
 
 int ahc_transition_splines_check(const ahc_quintic *kw, const ahc_quintic *rd, const char *rd_name, double T,
@@ -124,25 +125,25 @@ int ahc_transition_splines_check(const ahc_quintic *kw, const ahc_quintic *rd, c
     int i;
     for (i = 0; i < 2; ++i)
         if (!(fabs(rd->c[i]) <= 1e9))
-            return spline_fail(msg, msg_size, "%s coefficient %d = %g is not finite or beyond +-1e9", rd_name, i,
+            return ahc_fail_message(msg, msg_size, AHC_ERR_INCONSISTENT, "%s coefficient %d = %g is not finite or beyond +-1e9", rd_name, i,
                                rd->c[i]);
     for (i = 0; i < 6; ++i)
         if (!isfinite(kw->c[i]) || !isfinite(rd->c[i]))
-            return spline_fail(msg, msg_size, "spline coefficient %d is not finite", i);
+            return ahc_fail_message(msg, msg_size, AHC_ERR_INCONSISTENT, "spline coefficient %d is not finite", i);
     if (kw->T != T || rd->T != T)
-        return spline_fail(msg, msg_size, "spline durations %g and %g are not the transition's %g", kw->T, rd->T, T);
+        return ahc_fail_message(msg, msg_size, AHC_ERR_INCONSISTENT, "spline durations %g and %g are not the transition's %g", kw->T, rd->T, T);
     ahc_quintic_init(&q, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, T);
     for (i = 0; i < 6; ++i)
         if (q.c[i] != kw->c[i])
-            return spline_fail(msg, msg_size, "kw_spline coefficient %d = %g is not the 0 -> 1 quintic's %g", i,
+            return ahc_fail_message(msg, msg_size, AHC_ERR_INCONSISTENT, "kw_spline coefficient %d = %g is not the 0 -> 1 quintic's %g", i,
                                kw->c[i], q.c[i]);
     ahc_quintic_init(&q, rd->c[0], rd->c[1], 0.0, 0.0, 0.0, 0.0, T);
     for (i = 0; i < 6; ++i)
         if (q.c[i] != rd->c[i])
-            return spline_fail(msg, msg_size, "%s coefficient %d = %g is not the quintic from its start to rest (%g)",
+            return ahc_fail_message(msg, msg_size, AHC_ERR_INCONSISTENT, "%s coefficient %d = %g is not the quintic from its start to rest (%g)",
                                rd_name, i, rd->c[i], q.c[i]);
     if ((phase == AHC_PHASE_ANKLE && k_w != 0.0) ||
         ((phase == AHC_PHASE_HIP || phase == AHC_PHASE_HIP_TO_ANKLE) && k_w != 1.0))
-        return spline_fail(msg, msg_size, "k_w = %g does not belong to phase %d", k_w, phase);
+        return ahc_fail_message(msg, msg_size, AHC_ERR_INCONSISTENT, "k_w = %g does not belong to phase %d", k_w, phase);
     return AHC_OK;
 }

@@ -7,23 +7,11 @@
 #define AHC_PARAM_ROWS_H
 
 #include <math.h>
-#include <stdarg.h>
-#include <stdio.h>
 #include <string.h>
 
 #include "ahc/controller.h"
+#include "fail_message.h"
 
-/* Writes the message (if msg) and returns code. */
-static int ahc_rows_fail(char *msg, size_t n, int code, const char *fmt, ...)
-{
-    if (msg && n > 0) {
-        va_list ap;
-        va_start(ap, fmt);
-        vsnprintf(msg, n, fmt, ap);
-        va_end(ap);
-    }
-    return code;
-}
 
 /* The field row e describes in the struct at base, as a double. */
 static double ahc_rows_value(const void *base, const ahc_param_info *e)
@@ -57,11 +45,11 @@ static int ahc_rows_check(const ahc_param_info *t, size_t n, const void *base, c
     for (i = 0; i < n; ++i) {
         const ahc_param_info *e = &t[i];
         const double v = ahc_rows_value(base, e);
-        if (!isfinite(v)) return ahc_rows_fail(msg, msg_size, AHC_ERR_NONFINITE, "%s = %g must be finite", e->name, v);
+        if (!isfinite(v)) return ahc_fail_message(msg, msg_size, AHC_ERR_NONFINITE, "%s = %g must be finite", e->name, v);
         if (v < e->min)
-            return ahc_rows_fail(msg, msg_size, AHC_ERR_RANGE, "%s = %.6g must be >= %.6g", e->name, v, e->min);
+            return ahc_fail_message(msg, msg_size, AHC_ERR_RANGE, "%s = %.6g must be >= %.6g", e->name, v, e->min);
         if (v > e->max)
-            return ahc_rows_fail(msg, msg_size, AHC_ERR_RANGE, "%s = %.6g must be <= %.6g", e->name, v, e->max);
+            return ahc_fail_message(msg, msg_size, AHC_ERR_RANGE, "%s = %.6g must be <= %.6g", e->name, v, e->max);
     }
     return AHC_OK;
 }

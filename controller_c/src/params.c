@@ -3,12 +3,12 @@
  * parameter variables), validation, and name helpers.
  */
 #include <math.h>
-#include <stdarg.h>
 #include <stdio.h>
 #include <string.h>
 
 #include "ahc/controller.h"
 #include "ahc/frontal.h"
+#include "fail_message.h"
 
 void ahc_params_default(ahc_params *p)
 {
@@ -255,16 +255,6 @@ const ahc_param_info *ahc_param_find(const char *name)
 
 /* ------------------------------------------------------------------------------------------- */
 
-static int fail(char *msg, size_t n, int code, const char *fmt, ...)
-{
-    if (msg && n > 0) {
-        va_list ap;
-        va_start(ap, fmt);
-        vsnprintf(msg, n, fmt, ap);
-        va_end(ap);
-    }
-    return code;
-}
 
 static double field_value(const ahc_params *p, const ahc_param_info *e)
 {
@@ -293,76 +283,76 @@ int ahc_params_validate(const ahc_params *p, char *msg, size_t msg_size)
     size_t i;
     double h, Jmin;
     if (msg && msg_size > 0) msg[0] = '\0';
-    if (!p) return fail(msg, msg_size, AHC_ERR_NULL, "params pointer is NULL");
+    if (!p) return ahc_fail_message(msg, msg_size, AHC_ERR_NULL, "params pointer is NULL");
 
     for (i = 0; i < TABLE_LEN; ++i) {
         const ahc_param_info *e = &k_table[i];
         const double v = field_value(p, e);
         if (!isfinite(v))
-            return fail(msg, msg_size, AHC_ERR_NONFINITE, "%s = %g must be finite", e->name, v);
+            return ahc_fail_message(msg, msg_size, AHC_ERR_NONFINITE, "%s = %g must be finite", e->name, v);
         if (v < e->min)
-            return fail(msg, msg_size, AHC_ERR_RANGE, "%s = %.6g must be >= %.6g", e->name, v, e->min);
+            return ahc_fail_message(msg, msg_size, AHC_ERR_RANGE, "%s = %.6g must be >= %.6g", e->name, v, e->min);
         if (v > e->max)
-            return fail(msg, msg_size, AHC_ERR_RANGE, "%s = %.6g must be <= %.6g", e->name, v, e->max);
+            return ahc_fail_message(msg, msg_size, AHC_ERR_RANGE, "%s = %.6g must be <= %.6g", e->name, v, e->max);
     }
 
     if (!(p->heel_x < 0.0))
-        return fail(msg, msg_size, AHC_ERR_RANGE, "heel_x = %.6g must be < 0", p->heel_x);
+        return ahc_fail_message(msg, msg_size, AHC_ERR_RANGE, "heel_x = %.6g must be < 0", p->heel_x);
     if (!(p->zmp_limit_back < 0.0))
-        return fail(msg, msg_size, AHC_ERR_RANGE,
+        return ahc_fail_message(msg, msg_size, AHC_ERR_RANGE,
                     "zmp_limit_back = %.6g must be < 0 (x coordinate on the heel side)",
                     p->zmp_limit_back);
     if (!(p->zmp_limit_front < p->toe_x))
-        return fail(msg, msg_size, AHC_ERR_INCONSISTENT,
+        return ahc_fail_message(msg, msg_size, AHC_ERR_INCONSISTENT,
                     "zmp_limit_front = %.6g lies outside the foot (toe at %.6g)",
                     p->zmp_limit_front, p->toe_x);
     if (!(p->zmp_limit_back > p->heel_x))
-        return fail(msg, msg_size, AHC_ERR_INCONSISTENT,
+        return ahc_fail_message(msg, msg_size, AHC_ERR_INCONSISTENT,
                     "zmp_limit_back = %.6g lies outside the foot (heel at %.6g)",
                     p->zmp_limit_back, p->heel_x);
     if (!(p->lg1 <= p->l1))
-        return fail(msg, msg_size, AHC_ERR_INCONSISTENT,
+        return ahc_fail_message(msg, msg_size, AHC_ERR_INCONSISTENT,
                     "lg1 = %.6g must be <= l1 = %.6g (CoM of link 1 lies on the link)", p->lg1, p->l1);
     if (!(p->ankle_min < p->ankle_max))
-        return fail(msg, msg_size, AHC_ERR_INCONSISTENT, "ankle_min = %.6g must be < ankle_max = %.6g",
+        return ahc_fail_message(msg, msg_size, AHC_ERR_INCONSISTENT, "ankle_min = %.6g must be < ankle_max = %.6g",
                     p->ankle_min, p->ankle_max);
     if (!(p->hip_min < p->hip_max))
-        return fail(msg, msg_size, AHC_ERR_INCONSISTENT, "hip_min = %.6g must be < hip_max = %.6g",
+        return ahc_fail_message(msg, msg_size, AHC_ERR_INCONSISTENT, "hip_min = %.6g must be < hip_max = %.6g",
                     p->hip_min, p->hip_max);
     if (!(p->fz_lifted < p->fz_max))
-        return fail(msg, msg_size, AHC_ERR_INCONSISTENT, "fz_lifted = %.6g must be < fz_max = %.6g",
+        return ahc_fail_message(msg, msg_size, AHC_ERR_INCONSISTENT, "fz_lifted = %.6g must be < fz_max = %.6g",
                     p->fz_lifted, p->fz_max);
     if (!(p->lean_margin < p->toe_x && p->lean_margin < -p->heel_x))
-        return fail(msg, msg_size, AHC_ERR_INCONSISTENT,
+        return ahc_fail_message(msg, msg_size, AHC_ERR_INCONSISTENT,
                     "lean_margin = %.6g must be < toe_x = %.6g and < -heel_x = %.6g (the lean range must hold 0)",
                     p->lean_margin, p->toe_x, -p->heel_x);
     if (!(p->lean_zmp_margin < p->toe_x && p->lean_zmp_margin < -p->heel_x))
-        return fail(msg, msg_size, AHC_ERR_INCONSISTENT,
+        return ahc_fail_message(msg, msg_size, AHC_ERR_INCONSISTENT,
                     "lean_zmp_margin = %.6g must be < toe_x = %.6g and < -heel_x = %.6g", p->lean_zmp_margin,
                     p->toe_x, -p->heel_x);
     if (!(p->rz_band_low < p->rz_band_high))
-        return fail(msg, msg_size, AHC_ERR_INCONSISTENT,
+        return ahc_fail_message(msg, msg_size, AHC_ERR_INCONSISTENT,
                     "rz_band_low = %.6g must be < rz_band_high = %.6g", p->rz_band_low, p->rz_band_high);
 
     h = p->sample_period;
     if (!(p->T_ah >= 2.0 * h))
-        return fail(msg, msg_size, AHC_ERR_INCONSISTENT,
+        return ahc_fail_message(msg, msg_size, AHC_ERR_INCONSISTENT,
                     "T_ah = %.6g must be at least two sample periods (sample_period = %.6g)", p->T_ah, h);
     if (p->feet_offset_mode == AHC_FEET_CALIBRATE && !(p->feet_calibration_time >= h))
-        return fail(msg, msg_size, AHC_ERR_INCONSISTENT,
+        return ahc_fail_message(msg, msg_size, AHC_ERR_INCONSISTENT,
                     "feet_calibration_time = %.6g must be >= sample_period = %.6g with feet_offset_mode = 2",
                     p->feet_calibration_time, h);
 
     /* Discrete-time stability of the reference integrators at this sample period. */
     Jmin = p->I1 + p->m1 * p->lg1 * p->lg1 + p->I2 + p->m2 * (p->l1 - p->lg2) * (p->l1 - p->lg2);
     if (!symplectic_stable(h, p->Ka / Jmin, p->Ca / Jmin))
-        return fail(msg, msg_size, AHC_ERR_INCONSISTENT,
+        return ahc_fail_message(msg, msg_size, AHC_ERR_INCONSISTENT,
                     "sample_period = %.6g too large for the ankle law (Ka = %.6g, Ca = %.6g): "
                     "semi-implicit Euler unstable", h, p->Ka, p->Ca);
     {
         const double J2 = p->I2 + p->m2 * p->lg2 * p->lg2;
         if (!(J2 > 0.0) || !symplectic_stable(h, p->Kh / J2, p->Ch / J2))
-            return fail(msg, msg_size, AHC_ERR_INCONSISTENT,
+            return ahc_fail_message(msg, msg_size, AHC_ERR_INCONSISTENT,
                         "sample_period = %.6g too large for the hip law (Kh = %.6g, Ch = %.6g): "
                         "semi-implicit Euler unstable", h, p->Kh, p->Ch);
     }
@@ -374,17 +364,17 @@ int ahc_params_validate(const ahc_params *p, char *msg, size_t msg_size)
         {
             const double w = sqrt(p->g / (rz + p->ankle_height)), k = p->lean_capture_gain;
             if (!symplectic_stable(h, k * w * w, (1.0 + k) * w))
-                return fail(msg, msg_size, AHC_ERR_INCONSISTENT,
+                return ahc_fail_message(msg, msg_size, AHC_ERR_INCONSISTENT,
                             "sample_period = %.6g too large for the pendulum lean (lean_capture_gain = %.6g): "
                             "semi-implicit Euler unstable", h, k);
         }
     }
     if (!(h * p->Kp_theta < 1.0))
-        return fail(msg, msg_size, AHC_ERR_INCONSISTENT,
+        return ahc_fail_message(msg, msg_size, AHC_ERR_INCONSISTENT,
                     "Kp_theta = %.6g too large for sample_period = %.6g (need Kp_theta * h < 1)",
                     p->Kp_theta, h);
     if (!(h * p->Kpr < 1.0))
-        return fail(msg, msg_size, AHC_ERR_INCONSISTENT,
+        return ahc_fail_message(msg, msg_size, AHC_ERR_INCONSISTENT,
                     "Kpr = %.6g too large for sample_period = %.6g (need Kpr * h < 1)", p->Kpr, h);
     return AHC_OK;
 }

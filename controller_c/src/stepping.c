@@ -125,21 +125,21 @@ int ahc_step_params_validate(const ahc_step_params *p, const ahc_params *sp, con
 {
     int rc;
     if (msg && msg_size > 0) msg[0] = '\0';
-    if (!p || !sp || !fp) return ahc_rows_fail(msg, msg_size, AHC_ERR_NULL, "params pointer is NULL");
+    if (!p || !sp || !fp) return ahc_fail_message(msg, msg_size, AHC_ERR_NULL, "params pointer is NULL");
     rc = ahc_frontal_params_validate(fp, sp, msg, msg_size);
     if (rc != AHC_OK) return rc;
     rc = ahc_rows_check(k_stable, STABLE_LEN, p, msg, msg_size);
     if (rc != AHC_OK) return rc;
     if (!(2.0 * p->step_zmp_margin < fp->sole_width) || !(2.0 * p->step_zmp_margin < sp->toe_x - sp->heel_x))
-        return ahc_rows_fail(msg, msg_size, AHC_ERR_INCONSISTENT,
+        return ahc_fail_message(msg, msg_size, AHC_ERR_INCONSISTENT,
                     "step_zmp_margin = %.6g leaves no room on a sole (%.6g x %.6g m)", p->step_zmp_margin,
                     sp->toe_x - sp->heel_x, fp->sole_width);
     if (!(p->step_width_max >= 2.0 * fp->ankle_y))
-        return ahc_rows_fail(msg, msg_size, AHC_ERR_INCONSISTENT,
+        return ahc_fail_message(msg, msg_size, AHC_ERR_INCONSISTENT,
                     "step_width_max = %.6g must be >= the stance width 2 ankle_y = %.6g", p->step_width_max,
                     2.0 * fp->ankle_y);
     if (!(p->step_pelvis_drop + p->step_height < 0.5 * sp->l1))
-        return ahc_rows_fail(msg, msg_size, AHC_ERR_INCONSISTENT,
+        return ahc_fail_message(msg, msg_size, AHC_ERR_INCONSISTENT,
                     "step_pelvis_drop + step_height = %.6g must be < l1 / 2 = %.6g",
                     p->step_pelvis_drop + p->step_height, 0.5 * sp->l1);
     return AHC_OK;
@@ -1185,7 +1185,7 @@ int ahc_step_state_consistent(const ahc_stepper *c, const ahc_params *sp, const 
     ahc_stepper fresh;
     int rc;
     if (msg && msg_size > 0) msg[0] = '\0';
-    if (!c || !sp || !fp) return ahc_rows_fail(msg, msg_size, AHC_ERR_NULL, "state pointer is NULL");
+    if (!c || !sp || !fp) return ahc_fail_message(msg, msg_size, AHC_ERR_NULL, "state pointer is NULL");
     if (!c->valid) return AHC_OK;
     rc = ahc_step_init(&fresh, &c->p, sp, fp);
     if (rc != AHC_OK) {
@@ -1209,7 +1209,7 @@ int ahc_step_state_consistent(const ahc_stepper *c, const ahc_params *sp, const 
         size_t i;
         for (i = 0; i < sizeof v / sizeof v[0]; ++i)
             if (memcmp(&v[i].a, &v[i].b, sizeof(double)) != 0)
-                return ahc_rows_fail(msg, msg_size, AHC_ERR_INCONSISTENT,
+                return ahc_fail_message(msg, msg_size, AHC_ERR_INCONSISTENT,
                             "%s = %.17g in the stepping layer's copy, %.17g from the robot's parameters", v[i].name,
                             v[i].a, v[i].b);
     }
@@ -1220,20 +1220,20 @@ int ahc_step_state_validate(const ahc_stepper *c, char *msg, size_t msg_size)
 {
     int side, j, i;
     if (msg && msg_size > 0) msg[0] = '\0';
-    if (!c) return ahc_rows_fail(msg, msg_size, AHC_ERR_NULL, "state pointer is NULL");
+    if (!c) return ahc_fail_message(msg, msg_size, AHC_ERR_NULL, "state pointer is NULL");
     if (!c->valid) return AHC_OK;
     if (c->phase < 0 || c->phase >= AHC_STEP_PHASES)
-        return ahc_rows_fail(msg, msg_size, AHC_ERR_INCONSISTENT, "stepping phase %d outside 0..%d", c->phase, AHC_STEP_PHASES - 1);
+        return ahc_fail_message(msg, msg_size, AHC_ERR_INCONSISTENT, "stepping phase %d outside 0..%d", c->phase, AHC_STEP_PHASES - 1);
     if (c->swing_side < -1 || c->swing_side > 1 || (c->phase != AHC_STEP_STAND && c->swing_side < 0))
-        return ahc_rows_fail(msg, msg_size, AHC_ERR_INCONSISTENT, "stepping swing side %d invalid", c->swing_side);
+        return ahc_fail_message(msg, msg_size, AHC_ERR_INCONSISTENT, "stepping swing side %d invalid", c->swing_side);
     if (c->steps < 0 || c->est_valid < 0 || c->est_valid > 1 || c->q_prev_valid < 0 || c->q_prev_valid > 1 ||
         c->tilt_valid < 0 || c->tilt_valid > 1 || c->pelvis_z_valid < 0 || c->pelvis_z_valid > 1 ||
         c->blend_from_flat < 0 || c->blend_from_flat > 1 || c->close_stage < 0 || c->close_stage > 3 ||
         c->obs_valid < 0 || c->obs_valid > 2 || c->obs_Hn < 0 || c->obs_Hn > 4 ||
         (c->close_stage != 0 && c->phase == AHC_STEP_STAND))
-        return ahc_rows_fail(msg, msg_size, AHC_ERR_INCONSISTENT, "stepping counters or flags corrupt");
+        return ahc_fail_message(msg, msg_size, AHC_ERR_INCONSISTENT, "stepping counters or flags corrupt");
     if (!(c->swing_time >= 0.0 && c->swing_time <= 2.0) || ((c->phase == AHC_STEP_SWING || c->phase == AHC_STEP_CLOSE) && !(c->swing_time > 0.0)))
-        return ahc_rows_fail(msg, msg_size, AHC_ERR_INCONSISTENT, "stepping swing time %g invalid", c->swing_time);
+        return ahc_fail_message(msg, msg_size, AHC_ERR_INCONSISTENT, "stepping swing time %g invalid", c->swing_time);
     {
         const double v[] = {c->phase_time, c->phase_duration, c->step_clock, c->blend_time, c->pitch_time, c->since_impact, c->xi_prev[0], c->xi_prev[1],
                             c->pitch_prev, c->pitch_rate,
@@ -1246,16 +1246,16 @@ int ahc_step_state_validate(const ahc_stepper *c, char *msg, size_t msg_size)
                             c->feet[1][0], c->feet[1][1], c->landing[0], c->landing[1], c->swing_pos[0],
                             c->swing_pos[1]};
         for (i = 0; i < (int)(sizeof v / sizeof v[0]); ++i)
-            if (!isfinite(v[i])) return ahc_rows_fail(msg, msg_size, AHC_ERR_NONFINITE, "stepping state value %d not finite", i);
+            if (!isfinite(v[i])) return ahc_fail_message(msg, msg_size, AHC_ERR_NONFINITE, "stepping state value %d not finite", i);
     }
     for (side = 0; side < 2; ++side)
         for (j = 0; j < AHC_LEG_JOINTS; ++j)
             if (!isfinite(c->q_out[side][j]) || !isfinite(c->q_prev[side][j]) || isinf(c->blend_from[side][j]))
-                return ahc_rows_fail(msg, msg_size, AHC_ERR_NONFINITE, "stepping joint reference not finite");
+                return ahc_fail_message(msg, msg_size, AHC_ERR_NONFINITE, "stepping joint reference not finite");
     for (i = 0; i < BODIES; ++i)
         for (j = 0; j < 3; ++j)
             if (!isfinite(c->obs_body_prev[i][j]))
-                return ahc_rows_fail(msg, msg_size, AHC_ERR_NONFINITE, "stepping observer state not finite");
+                return ahc_fail_message(msg, msg_size, AHC_ERR_NONFINITE, "stepping observer state not finite");
     {
         /* the swing foot's and the trunk's quintics: T within the parameters' longest (5 s), every
          * coefficient finite, and sum |c_k| T^k (a bound on |x(t)| over [0, T]) below 1e9 (m, rad),
@@ -1265,15 +1265,15 @@ int ahc_step_state_validate(const ahc_stepper *c, char *msg, size_t msg_size)
         for (i = 0; i < 3; ++i) {
             double bound = 0.0, Tk = 1.0;
             if (!(q[i]->T >= 0.0 && q[i]->T <= 5.0))
-                return ahc_rows_fail(msg, msg_size, AHC_ERR_RANGE, "stepping quintic %d: duration %g outside [0, 5] s", i, q[i]->T);
+                return ahc_fail_message(msg, msg_size, AHC_ERR_RANGE, "stepping quintic %d: duration %g outside [0, 5] s", i, q[i]->T);
             for (j = 0; j < 6; ++j) {
                 if (!isfinite(q[i]->c[j]))
-                    return ahc_rows_fail(msg, msg_size, AHC_ERR_NONFINITE, "stepping quintic %d: coefficient %d not finite", i, j);
+                    return ahc_fail_message(msg, msg_size, AHC_ERR_NONFINITE, "stepping quintic %d: coefficient %d not finite", i, j);
                 bound += fabs(q[i]->c[j]) * Tk;
                 Tk *= q[i]->T;
             }
             if (!(bound <= 1e9))
-                return ahc_rows_fail(msg, msg_size, AHC_ERR_RANGE, "stepping quintic %d: values up to %g", i, bound);
+                return ahc_fail_message(msg, msg_size, AHC_ERR_RANGE, "stepping quintic %d: values up to %g", i, bound);
         }
     }
     return AHC_OK;
