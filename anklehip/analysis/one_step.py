@@ -99,7 +99,7 @@ def biped_from_description(path, srdf=None, keyframe: str | None = None, mu: flo
     and velocities from the file (the narrower of left and right). mu and the push height are not
     in a robot file (defaults: Hoap2Plant3D's mu, the scenarios' push point)."""
     from ..robot.description import load_description
-    from ..robot.lump import _joint_body, find_legs, lump
+    from ..robot.lump import _joint_body, find_legs, lump, lump_description
     from ..robot.robotfile import RobotFileError
     d = load_description(path, srdf=srdf, keyframe=keyframe)
     legs = find_legs(d)
@@ -131,7 +131,6 @@ def biped_from_description(path, srdf=None, keyframe: str | None = None, mu: flo
         return Segment(float(v[0]), (float(v[1]), float(v[2])), float(v[3]))
 
     # the ground and the sole as the sagittal lump finds them
-    from ..robot.lump import lump_description
     sagittal = lump_description(d).model
     ankle_height = float(sagittal["ankle_height"].value)
 
@@ -195,7 +194,8 @@ class Model:
     points(x) -> (swing ankle, its velocity, whole-body CoM with both feet, push point);
     reaction(x, phi'', lambda, tau_ankle, F, with_swing_foot) -> (Gx, Gz, Gz * cop) of the stance
                          foot's ground reaction, cop its centre of pressure from its ankle;
-    front(lambda, tau_front_ankle) -> (Gx, Gz, Gz * cop) of the front foot."""
+    front(lambda, tau_front_ankle) -> (Gx, Gz, Gz * cop) of the front foot;
+    mass_bias(x) -> (M, bias) of the single-support equations (for the checks)."""
     single: object
     pinned: object
     points: object
@@ -286,7 +286,7 @@ def model(bp: Biped) -> Model:
         reaction=ca.Function("reaction", [x, ddphi_s, lam, tau5, F, with_foot],
                              [with_foot * r_air + (1 - with_foot) * r_pin]),
         front=ca.Function("front", [lam, tau_f], [front]),
-        mass_bias=ca.Function("mass_bias", [x], [M_air, b_air, M_pin, b_pin]))
+        mass_bias=ca.Function("mass_bias", [x], [M_air, b_air]))
 
 
 # ---------------------------------------------------------------------------------------------
