@@ -31,12 +31,18 @@ robot file's effort and velocity limits), the swing foot above the ground.
 
 Transcription: direct collocation, Radau IIA of degree 3 (flat_footed.radau_coefficients) on a mesh
 aligned with the push's and the phases' break points; the torques a value per collocation point;
-F_peak a decision variable maximised (one NLP). IPOPT (MUMPS), tol 1e-9. With both feet down the
-equations of motion are imposed implicitly (phi'' and the front foot's force lambda variables at each
-collocation point) and the feet's places as constraints on the positions: side by side, the swing
-leg's angles equal the stance leg's (with both legs straight the load's split between the feet is
-not determined by the dynamics, and the explicit pinned equations are singular); landed, the swing
-ankle at L.
+F_peak a decision variable maximised (one NLP), with two small terms: the torques' squared steps
+(REG) and their squares' integral relative to the limits (EFFORT: on two feet apart three torques
+are free). IPOPT (MUMPS), tol 1e-9. With both feet down the equations of motion are imposed
+implicitly (phi'' and the front foot's force lambda variables at each collocation point; with both
+legs straight the explicit pinned equations are singular), the feet's places at the acceleration
+level: side by side, the swing leg's angular accelerations equal the stance leg's (from rest side by
+side, the collocation keeps the angles equal exactly) and the legs' torques their twin's (the split
+of the load is not determined); landed, the front ankle's acceleration zero with Baumgarte's
+feedback on its velocity and place from the landing's (BAUMGARTE). Constraints that would be
+imposed twice (the twin legs' limits, the two soles side by side, the ground clearance at the
+landing) are imposed once: duplicated active constraints, and the front ankle's place imposed at
+every collocation point (ill-conditioned as 1/h^2), kept IPOPT from converging on finer meshes.
 
 CasADi is imported when a function here is called.
 """
@@ -52,6 +58,8 @@ import numpy as np
 from .flat_footed import DEGREE, IPOPT_OPTIONS, push_shape, radau_coefficients
 
 REG = 1e-6          # weight of the torques' squared steps between collocation points, against F_peak [N]
+BAUMGARTE = 20.0    # [1/s]: the landed foot's constraint drift decays at this rate (critically damped)
+EFFORT = 1e-3       # weight of the integral of the torques' squares (relative to their limits) [N/s]
 JOINTS = ("stance ankle", "stance knee", "stance hip", "swing hip", "swing knee")
 
 
@@ -192,6 +200,7 @@ class Model:
                          (tau6: the five joints and the front ankle; lambda the force the front foot
                          exerts on the chain at its ankle): zero for the motion;
     points(x) -> (swing ankle, its velocity, whole-body CoM with both feet, push point);
+    foot_acc(x, phi'') -> the swing ankle's acceleration;
     reaction(x, phi'', lambda, tau_ankle, F, with_swing_foot) -> (Gx, Gz, Gz * cop) of the stance
                          foot's ground reaction, cop its centre of pressure from its ankle;
     front(lambda, tau_front_ankle) -> (Gx, Gz, Gz * cop) of the front foot;
@@ -199,6 +208,7 @@ class Model:
     single: object
     pinned: object
     points: object
+    foot_acc: object
     reaction: object
     front: object
     mass_bias: object
@@ -283,6 +293,7 @@ def model(bp: Biped) -> Model:
         single=ca.Function("single", [x, tau5, F], [single, tau_swing_ankle]),
         pinned=ca.Function("pinned", [x, ddphi_s, lam, ca.vertcat(tau5, tau_f), F], [pinned]),
         points=ca.Function("points", [x], [A2, JA2 @ dphi, com, P]),
+        foot_acc=ca.Function("foot_acc", [x, ddphi_s], [JA2 @ ddphi_s + ca.jacobian(JA2 @ dphi, phi) @ dphi]),
         reaction=ca.Function("reaction", [x, ddphi_s, lam, tau5, F, with_foot],
                              [with_foot * r_air + (1 - with_foot) * r_pin]),
         front=ca.Function("front", [lam, tau_f], [front]),
@@ -310,11 +321,11 @@ class Solution:
 
 
 def solve(bp: Biped, duration: float = 1.0, rise: float = 0.05, t_lift: float = 0.0, t_land: float = 0.3,
-          l_max: float | None = None, t_after: float = 1.0, dt: float = 0.02,
+          l_max: float | None = None, t_after: float = 1.0, dt: float = 0.02, l_min: float = 0.0,
           guess: Solution | None = None) -> Solution:
     """The largest peak force [N] of the back push (duration, rise) at bp.push_height that the robot
     survives by one step lifting at t_lift and landing at t_land (module docstring), its landing at
-    most l_max ahead (None: wherever the legs reach), on a mesh of intervals <= dt; from `guess`
+    least l_min and at most l_max ahead (None: wherever the legs reach), on a mesh of intervals <= dt; from `guess`
     (another mesh's solution, interpolated) or from rest."""
     import casadi as ca
     if not 0.0 <= t_lift < t_land < duration + t_after:
@@ -350,31 +361,50 @@ def solve(bp: Biped, duration: float = 1.0, rise: float = 0.05, t_lift: float = 
         opti.subject_to(G[1] >= 0)
         opti.subject_to(opti.bounded(-bp.mu * G[1], G[0], bp.mu * G[1]))
 
-    def node(x, u, f, phase):
+    def node(x, u, f, phase, landing=False):
         """The dynamics' phi'' and the path constraints at a collocation point of a phase: 'together'
         (both feet down, side by side: the legs move as one), 'landed' (both feet down, the front
         ankle at L) or 'air' (the stance foot alone)."""
-        j, dj = Jm @ x[0:5], Jm @ x[5:10]
-        opti.subject_to(opti.bounded(q_lo, j, q_hi))
-        opti.subject_to(opti.bounded(-v_max, dj, v_max))
-        opti.subject_to(opti.bounded(-t_max, u, t_max))
+        # the limits (side by side, the other leg's joints and torques are this leg's: bounded once,
+        # as duplicated active constraints leave IPOPT's multipliers undetermined)
+        n = 3 if phase == "together" else 6
+        j, dj = (Jm @ x[0:5])[:n], (Jm @ x[5:10])[:n]
+        opti.subject_to(opti.bounded(q_lo[:n], j, q_hi[:n]))
+        opti.subject_to(opti.bounded(-v_max[:n], dj, v_max[:n]))
+        opti.subject_to(opti.bounded(-t_max[:n], u[:n], t_max[:n]))
         if phase != "air":
             ddphi, lam = opti.variable(5), opti.variable(2)
             opti.set_initial(lam, [0.0, 0.5 * bp.mass * bp.g])
             opti.subject_to(mdl.pinned(x, ddphi, lam, u, f) == 0)
             if phase == "together":
-                opti.subject_to(x[3] == x[1])            # the swing thigh and shank on the stance ones
-                opti.subject_to(x[4] == x[0])
+                # the swing thigh and shank turn with the stance ones (from rest side by side: the
+                # collocation keeps a linear relation of the accelerations in the angles exactly)
+                opti.subject_to(ddphi[3] == ddphi[1])
+                opti.subject_to(ddphi[4] == ddphi[0])
+                # the legs side by side share the load: each joint's torque equals its twin's
+                # (the split is not determined by the dynamics)
+                opti.subject_to(u[3:6] == u[2::-1])
             else:
-                opti.subject_to(mdl.points(x)[0] == ca.vertcat(L, bp.ankle_height))
-            sole(mdl.reaction(x, ddphi, lam, u[0:5], f, 0.0))
-            sole(mdl.front(lam, u[5]))
+                # the front ankle held at (L, ankle height) from the landing's place and rest on: its
+                # acceleration zero, with Baumgarte's feedback against the drift of the discretisation
+                # (the place itself at every collocation point, index 3, is ill-conditioned as
+                # O(1/h^2) and stalled IPOPT on fine meshes)
+                A2, dA2 = mdl.points(x)[0:2]
+                opti.subject_to(mdl.foot_acc(x, ddphi) + 2 * BAUMGARTE * dA2
+                                + BAUMGARTE ** 2 * (A2 - ca.vertcat(L, bp.ankle_height)) == 0)
+            rear, front = mdl.reaction(x, ddphi, lam, u[0:5], f, 0.0), mdl.front(lam, u[5])
+            if phase == "together":
+                sole(rear + front)      # one sole (each sole's constraints would be the same ones)
+            else:
+                sole(rear)
+                sole(front)
         else:
             ddphi, tau_s = mdl.single(x, u[0:5], f)
             opti.subject_to(opti.bounded(-t_max[5], tau_s, t_max[5]))
             opti.subject_to(u[5] == 0)
             sole(mdl.reaction(x, ddphi, ca.DM.zeros(2), u[0:5], f, 1.0))
-            opti.subject_to(mdl.points(x)[0][1] >= bp.ankle_height)
+            if not landing:             # there the landing's equality holds (the same constraint)
+                opti.subject_to(mdl.points(x)[0][1] >= bp.ankle_height)
         return ddphi
 
     opti.subject_to(X[:, 0] == 0)
@@ -385,14 +415,14 @@ def solve(bp: Biped, duration: float = 1.0, rise: float = 0.05, t_lift: float = 
         for j in range(1, DEGREE + 1):
             f = Fp * float(push_shape(tm[k] + tau_c[j] * h, duration, rise))
             x, u = xs[j], U[:, k * DEGREE + j - 1]
-            ddphi = node(x, u, f, phase)
+            ddphi = node(x, u, f, phase, landing=k == k_land - 1 and j == DEGREE)
             opti.subject_to(sum(C[i, j] * xs[i] for i in range(DEGREE + 1)) == h * ca.vertcat(x[5:10], ddphi))
         opti.subject_to(X[:, k + 1] == sum(D[i] * xs[i] for i in range(DEGREE + 1)))
     # the landing: at rest, on the ground, L ahead
     A2, dA2, _, _ = mdl.points(X[:, k_land])
     opti.subject_to(A2 == ca.vertcat(L, bp.ankle_height))
     opti.subject_to(dA2 == 0)
-    opti.subject_to(L >= 0)
+    opti.subject_to(L >= l_min)
     if l_max is not None:
         opti.subject_to(L <= l_max)
     # at rest at T, the CoM between the rear heel and the front toe
@@ -400,7 +430,11 @@ def solve(bp: Biped, duration: float = 1.0, rise: float = 0.05, t_lift: float = 
     opti.subject_to(X[5:10, N] == 0)
     opti.subject_to(opti.bounded(bp.heel, com[0], L + bp.toe))
     opti.subject_to(Fp >= 0)
-    opti.minimize(-Fp + REG * ca.sumsqr(U[:, 1:] - U[:, :-1]))
+    # the torques' steps, and their sizes weighted by the intervals (the closed chain on two feet
+    # leaves three torques free: their smallest use is chosen)
+    effort = sum((tm[k + 1] - tm[k]) * ca.sumsqr(ca.diag(1.0 / t_max) @ U[:, k * DEGREE:(k + 1) * DEGREE])
+                 for k in range(N))
+    opti.minimize(-Fp + REG * ca.sumsqr(U[:, 1:] - U[:, :-1]) + EFFORT * effort)
     if guess is not None:
         xg = np.array([np.interp(tm, guess.t, col) for col in np.hstack([guess.phi, guess.dphi]).T])
         opti.set_initial(X, xg)
