@@ -276,8 +276,17 @@ def test_capability_maps_draw_the_optimum_and_the_stepping_bounds(tmp_path):
     assert np.allclose(y, B.n_step_force_limit(r, x, 0.05, 1, 1, l_max, dt_s), rtol=1e-12)
     assert any(k.startswith("LIP capturable in ∞ steps") for k in lines)
     assert "sustained-push limit after one step" in lines
-    fig = capability_figure(sf, [], {**PARAMS, "m2": 5.0})
-    assert not any(ln.get_label().startswith("flat-footed") for ln in fig.axes[0].get_lines())
+    # the one-step optimum (section 9.3): a star at the cached 1 s push, its force and landing time
+    f1, t1 = B.one_step_optimum(1.0, 0.05)
+    star = next(v for k, v in lines.items() if k.startswith("one-step optimum"))
+    assert star.get_label().endswith(f"landing {1000 * t1:.0f} ms after the onset)")
+    assert [float(a) for a in star.get_xdata()] == [1.0] and [float(a) for a in star.get_ydata()] == [f1]
+    q = tmp_path / "step.toml"
+    q.write_text(head.replace('scenario = "hip_saves_push"', 'scenario = "step_recovery_3d"')
+                 + 'controller = { stepping_enabled = 1 }\n[grid]\n"push.force" = [4, 8]\n"push.duration" = [0.5, 1.0]\n')
+    assert f"  one-step opt.    1: {f1:.1f} (landing {1000 * t1:.0f} ms)" in bound_lines(load_sweep_file(q), PARAMS)
+    fig = capability_figure(sf, [], {**PARAMS, "m2": 5.0}, stepping=True)
+    assert not any(ln.get_label().startswith(("flat-footed", "one-step")) for ln in fig.axes[0].get_lines())
     assert "m2 differ" in fig.axes[0].get_title()
     p.write_text(head.replace("rise = 0.05", "rise = 0.05\nduration = 1.0") +
                  '[grid]\n"push.force" = [4, 8]\n"push.height" = [0.26, 0.46]\n')

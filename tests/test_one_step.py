@@ -180,15 +180,15 @@ def test_a_coarse_optimum_steps_and_stands():
 
 
 def _cache() -> dict:
-    import json
-    path = REPO_ROOT / "anklehip" / "analysis" / "data" / "one_step_optimum.json"
-    return json.loads(path.read_text())
+    from anklehip.analysis import bounds as B
+    return B.load_one_step_optimum()
 
 
 def _converged(points):
-    """The cached points IPOPT solved on both meshes (success or its acceptable level) to a step forward
-    (not the step in place, a poorer local optimum)."""
-    return [p for p in points if p["ok"] and p["landing"] > 0.05]
+    """The cached points IPOPT solved on both meshes to a step forward (anklehip.analysis.bounds'
+    one_step_points: not the step in place, a poorer local optimum)."""
+    from anklehip.analysis import bounds as B
+    return B.one_step_points({"points": points})
 
 
 def test_cache_is_current():

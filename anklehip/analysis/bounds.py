@@ -210,17 +210,23 @@ def optimum_parameters(params: dict) -> dict[str, float]:
     return {k: float(params[k]) for k in OPTIMUM_PARAMETERS}
 
 
-def load_optimum(path=None) -> dict:
-    """The cached flat-footed optimum (JSON written by scripts/flat_footed_optimum.py): its parameters,
-    settings and points. path: the package's data file unless given."""
+def _load_cache(path, name: str, what: str, script: str) -> dict:
+    """A cached optimum: the JSON at path, or the package's data file `name`; InputError naming the
+    file and the script that makes it when there is none."""
     import json
     from pathlib import Path
-    p = Path(path) if path is not None else Path(__file__).parent / "data" / OPTIMUM_FILE
+    p = Path(path) if path is not None else Path(__file__).parent / "data" / name
     try:
         return json.loads(p.read_text())
     except FileNotFoundError:
         from ..errors import InputError
-        raise InputError(f"{p}: no cached flat-footed optimum (make it: python scripts/flat_footed_optimum.py)") from None
+        raise InputError(f"{p}: no cached {what} (make it: python scripts/{script})") from None
+
+
+def load_optimum(path=None) -> dict:
+    """The cached flat-footed optimum (JSON written by scripts/flat_footed_optimum.py): its parameters,
+    settings and points. path: the package's data file unless given."""
+    return _load_cache(path, OPTIMUM_FILE, "flat-footed optimum", "flat_footed_optimum.py")
 
 
 def optimum_matches(data: dict, params: dict, rel: float = 1e-9) -> list[str]:
@@ -293,6 +299,45 @@ def flat_footed_optimum(duration, rise: float = 0.05, direction: float = +1, hei
     out = np.full(D.shape, float(np.interp(h, hs, fh)) / h)
     return float(out) if np.ndim(out) == 0 else out
 
+
+
+# the one-step optimum (docs/capability.md section 9.3): cached trajectory-optimization results of the
+# whole robot's sagittal model (anklehip.analysis.one_step) stepping once
+
+ONE_STEP_FILE = "one_step_optimum.json"       # in anklehip/analysis/data/, made by scripts/one_step_optimum.py
+ONE_STEP_FORWARD = 0.05      # a converged point is a step forward when it lands more than this ahead [m]
+
+
+def load_one_step_optimum(path=None) -> dict:
+    """The cached one-step optimum (JSON written by scripts/one_step_optimum.py): its settings (the push
+    height among them), the hashes of its sources, and its points (per landing time). path: the
+    package's data file unless given."""
+    return _load_cache(path, ONE_STEP_FILE, "one-step optimum", "one_step_optimum.py")
+
+
+def one_step_points(data: dict | None = None, duration: float = 1.0, rise: float = 0.05) -> list[dict]:
+    """The cached one-step points of a back push (duration, rise) that IPOPT solved on both meshes
+    (success or its acceptable level) to a step forward (landing more than ONE_STEP_FORWARD ahead: not
+    the step in place, a poorer local optimum), by landing time."""
+    data = load_one_step_optimum() if data is None else data
+    return sorted((p for p in data["points"] if p["ok"] and p["landing"] > ONE_STEP_FORWARD
+                   and math.isclose(p["duration"], duration, rel_tol=1e-9)
+                   and math.isclose(p["rise"], rise, rel_tol=1e-9, abs_tol=1e-12)), key=lambda p: p["t_land"])
+
+
+def one_step_optimum(duration: float = 1.0, rise: float = 0.05, data: dict | None = None) -> tuple[float, float]:
+    """The largest peak force [N] of a back push (duration, rise) at the cached push height that the
+    whole robot survives with one step, and the landing time [s after the onset] that gives it: the
+    best of the cached landing times (one_step_points; a local optimum of each, docs/capability.md
+    section 9.3, so what one step can do at least, not a bound above). InputError when the push is
+    not cached."""
+    pts = one_step_points(data, duration, rise)
+    if not pts:
+        from ..errors import InputError
+        raise InputError(f"one-step optimum: no converged point cached for a {duration:g} s back push with "
+                         f"{1000 * rise:g} ms ramps ({ONE_STEP_FILE}; make it with scripts/one_step_optimum.py)")
+    best = max(pts, key=lambda p: p["f_peak"])
+    return float(best["f_peak"]), float(best["t_land"])
 
 
 def optimum_table(data: dict | None = None) -> str:

@@ -12,7 +12,8 @@ bounds of anklehip/analysis/bounds.py (docs/capability.md). A grid over push.for
 instead (`capability.png`): each variant's boundary per push direction against the bounds in
 every direction (docs/capability.md section 7). On the sagittal maps the flat-footed optimum (the
 cached trajectory optimum, docs/capability.md section 8) is drawn beside the analytic bounds, and on
-a stepping sweep's map the N-step capturability bounds (section 9).
+a stepping sweep's map the N-step capturability bounds (section 9) and the one-step optimum (the
+cached trajectory optimum of the whole robot stepping once, section 9.3).
 """
 from __future__ import annotations
 
@@ -291,6 +292,33 @@ def cached_points(direction: int, rise: float, kx: str, h0: float, dur: float) -
     return [p for p in same if math.isclose(p["duration"], dur, rel_tol=1e-9)]
 
 
+def one_step_point(plant_params: dict, direction: int, rise: float, kx: str, h0: float):
+    """The one-step optimum (anklehip.analysis.bounds.one_step_optimum) on a stepping map over push
+    durations: ([(duration, force, landing time) per cached push duration], None), or ([], the reason)
+    where it does not apply: another map, a push on the chest, another robot than the HOAP-2 both
+    optimum caches were made for (the flat-footed cache's robot check), another push height or rise."""
+    from ..errors import InputError
+    from . import bounds as B
+    if kx != "push.duration" or direction != 1:
+        return [], None
+    try:
+        if B.optimum_matches(B.load_optimum(), plant_params):
+            return [], None          # another robot: the flat-footed optimum's reason is given
+        data = B.load_one_step_optimum()
+    except InputError as e:
+        return [], str(e)
+    if not math.isclose(data["settings"]["push_height"], h0, rel_tol=1e-9):
+        return [], f"one-step optimum cached at h = {data['settings']['push_height']:g} m only"
+    out = []
+    for dur in sorted({p["duration"] for p in data["points"]}):
+        try:
+            f, t = B.one_step_optimum(dur, rise, data=data)
+        except InputError:
+            continue
+        out.append((dur, f, t))
+    return out, None if out else f"one-step optimum not cached for {1000 * rise:g} ms rises"
+
+
 def stepping_curves(plant_params: dict, robot, direction: int, rise: float, kx: str, xx, dur: float, at_height):
     """The N-step capturability bounds (anklehip.analysis.bounds.n_step_force_limit, N = 1, 2, inf)
     along the map's x with HOAP-2's step (step_reach), and the sustained-push limit after one step:
@@ -336,10 +364,16 @@ def bound_lines(sf, plant_params: dict) -> list[str]:
     opt, why = optimum_curve(plant_params, d, rise, kx, xv, robot.h, dur)
     if opt is not None:
         rows["flat-footed opt."] = list(opt)
+    one = []
     if sweep_steps(sf):
         for k, v in stepping_curves(plant_params, robot, d, rise, kx, xv, dur, at).items():
             rows[k.split(" (")[0].replace("LIP capturable in", "LIP,")] = list(v)
+        one, why_one = one_step_point(plant_params, d, rise, kx, robot.h)
+        why = why or why_one
     out = [f"  {k:<16} " + "  ".join(f"{x:g}: {f:.1f}" for x, f in zip(xv, vals)) for k, vals in rows.items()]
+    if one:
+        out.append(f"  {'one-step opt.':<16} " + "  ".join(f"{x:g}: {f:.1f} (landing {1000 * t:.0f} ms)"
+                                                           for x, f, t in one))
     if why:
         out.append(f"  ({why})")
     return out
@@ -426,6 +460,13 @@ def capability_figure(sf, rows: list[dict[str, Any]], plant_params: dict, steppi
                 ax.plot(xx, y, "-." if "steps" in lab or "step (" in lab else ":", color=f"C{6 + j}", lw=1.2, label=lab)
                 if "1 step (" in lab or "after one step" in lab:     # the y range: what one step allows at the far x
                     tops.append(float(y[-1]))
+            one, why_one = one_step_point(plant_params, d, rise, kx, h0)
+            why = why or why_one
+            for k, (x, f, t) in enumerate(one):
+                ax.plot([x], [f], "*", color="tab:purple", ms=13, zorder=5,
+                        label=f"one-step optimum (trajectory optimization, the step landing {1000 * t:.0f} ms "
+                              f"after the onset)" if k == 0 else None)
+                tops.append(f)
     fmax = max([max(sf.axes["push.force"])] + tops)
     ax.set_ylim(0.0, 1.15 * fmax)
     ax.set_xlim(xx[0], xx[-1])
