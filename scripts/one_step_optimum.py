@@ -7,10 +7,11 @@ collocation), over the step's landing time.
 Each point is solved on two meshes (intervals of at most DT and DT/2): the coarse one by continuation
 from its neighbour in landing time, the better of two local optima (best_coarse: the problem has a
 poorer one, the step in place); the fine one warm-started from the coarse one (fine). The finer value
-is cached with the relative change between the two (the convergence check). One point is solved again
+is cached with the relative change between the two (the convergence check) and the landed foot's drift
+on each (landed_drift: it must shrink as the mesh refines). One point is solved again
 with a longer horizon after the push (the horizon check). The file records the settings and the
 sha256 of the sources the optimum depends on (the model, the collocation it borrows, the robot file),
-so a stale cache is detected (tests/test_one_step.py). It is written whole or not at all. About
+so a stale cache is detected (tests/test_one_step.py). It is written whole or not at all. 15 to
 22 min with two jobs.
 
     .venv/bin/python scripts/one_step_optimum.py [--out FILE] [--jobs 2] [--quick]
@@ -32,6 +33,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from anklehip.analysis import one_step as os_  # noqa: E402
+from anklehip.analysis.bounds import ONE_STEP_FORWARD  # noqa: E402
 
 OUT_FILE = "one_step_optimum.json"
 DURATION, RISE = 1.0, 0.05
@@ -80,15 +82,41 @@ def coarse_chain(t_lift: float, landings) -> dict:
 def fine(t_lift: float, t_land: float, coarse: "os_.Solution") -> "os_.Solution":
     """The fine optimum of a point, warm-started from its coarse one; when IPOPT stops short of its
     acceptable level (its iteration limit), once more from where it stopped (a restart resets its
-    barrier parameter). The seconds are the two solves'."""
+    barrier parameter). When that is not a converged step forward (anklehip.analysis.bounds'
+    ONE_STEP_FORWARD: the warm start fell into the step in place, or did not converge), the coarse
+    mesh's way out too: a step forced FORWARD ahead from the coarse optimum, then released; the best
+    converged step forward of them all. The seconds are all the solves'."""
     bp = os_.hoap2()
     kw = dict(t_after=T_AFTER, dt=DT / 2)
-    f = os_.solve(bp, DURATION, RISE, t_lift, t_land, guess=coarse, **kw)
-    if not f.ok:
-        again = os_.solve(bp, DURATION, RISE, t_lift, t_land, guess=f, **kw)
-        again.seconds += f.seconds
-        f = again
-    return f
+    tried = [os_.solve(bp, DURATION, RISE, t_lift, t_land, guess=coarse, **kw)]
+    if not tried[-1].ok:
+        tried.append(os_.solve(bp, DURATION, RISE, t_lift, t_land, guess=tried[-1], **kw))
+
+    def forward(s):
+        return s.ok and s.landing > ONE_STEP_FORWARD
+
+    seconds = sum(s.seconds for s in tried)
+    if not forward(tried[-1]):
+        # the forced solve is not a candidate: its least step length is not the problem's
+        forced = os_.solve(bp, DURATION, RISE, t_lift, t_land, guess=coarse, l_min=FORWARD, **kw)
+        tried.append(os_.solve(bp, DURATION, RISE, t_lift, t_land, guess=forced, **kw))
+        seconds += forced.seconds + tried[-1].seconds
+    good = [s for s in tried if forward(s)]
+    best = max(good, key=lambda s: s.f_peak) if good else tried[-1]
+    best.seconds = seconds
+    return best
+
+
+def landed_drift(s: "os_.Solution", t_land: float) -> float:
+    """The largest distance [m] of the landed ankle from where it landed (L, ankle_height) at the mesh
+    points from the landing on: the acceleration-level constraint's discretisation drift
+    (docs/capability.md 9.3), which must shrink as the mesh refines."""
+    import numpy as np
+    bp = os_.hoap2()
+    mdl = os_.model(bp)
+    after = s.t >= t_land - 1e-9
+    ankle = np.array([np.array(mdl.points(np.concatenate([p, v]))[0]).ravel() for p, v in zip(s.phi[after], s.dphi[after])])
+    return float(np.hypot(ankle[:, 0] - s.landing, ankle[:, 1] - bp.ankle_height).max())
 
 
 def row(t_lift: float, t_land: float, c: "os_.Solution", f: "os_.Solution", quick: bool) -> dict:
@@ -97,7 +125,8 @@ def row(t_lift: float, t_land: float, c: "os_.Solution", f: "os_.Solution", quic
          "f_peak_coarse": c.f_peak, "status_coarse": c.status,
          "rel_change_mesh": (f.f_peak - c.f_peak) / f.f_peak, "intervals": f.n_intervals,
          "seconds": round(c.seconds + (0.0 if quick else f.seconds), 1),
-         "max_stance_ankle": float(abs(f.phi[:, 0]).max())}
+         "max_stance_ankle": float(abs(f.phi[:, 0]).max()),
+         "landed_drift": landed_drift(f, t_land), "landed_drift_coarse": landed_drift(c, t_land)}
     print(f"lift {t_lift:g} land {t_land:g}: {f.f_peak:.3f} N, L {1000 * f.landing:.0f} mm ({f.status}; "
           f"coarse {c.f_peak:.3f}, {100 * r['rel_change_mesh']:+.3f} %) {r['seconds']:.0f} s", flush=True)
     return r

@@ -593,9 +593,13 @@ def test_one_step_optimum_is_the_best_converged_forward_step():
     data = B.load_one_step_optimum()
     pts = B.one_step_points(data)
     assert pts and all(p["ok"] and p["landing"] > B.ONE_STEP_FORWARD for p in pts)
-    assert {p["t_land"] for p in data["points"]} - {p["t_land"] for p in pts}   # some are left out
     f, t = B.one_step_optimum(1.0, 0.05, data=data)
     assert f == max(p["f_peak"] for p in pts) and t == next(p["t_land"] for p in pts if p["f_peak"] == f)
     assert (round(f, 1), t) == (26.1, 0.2)
+    # a larger force that did not converge, or stepped in place, does not count
+    base = dict(pts[0], t_land=0.15, f_peak=99.0)
+    for bad in (dict(base, ok=False), dict(base, landing=0.0)):
+        extra = dict(data, points=data["points"] + [bad])
+        assert bad not in B.one_step_points(extra) and B.one_step_optimum(1.0, 0.05, data=extra) == (f, t)
     with pytest.raises(InputError, match=r"0\.5 s back push.*one_step_optimum\.py"):
         B.one_step_optimum(0.5, 0.05, data=data)

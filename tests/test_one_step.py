@@ -195,7 +195,8 @@ def test_cache_is_current():
     """Establishes: the cached one-step optimum (scripts/one_step_optimum.py) was made by the current
     sources (the model, the collocation it borrows from flat_footed.py, the robot file); at least three
     of its landing times converged on both meshes to a step forward, the mesh refinement (50 to 25 ms)
-    changing none of them by more than 0.5 %; the longer horizon (1 s after the push) changed the
+    changing none of them by more than 0.5 % and shrinking the landed foot's drift (under 5 mm on the
+    coarse mesh) at every one of them; the longer horizon (1 s after the push) changed the
     horizon check's point by less than 0.5 %. The points that did not converge are in the cache as
     such (docs/capability.md 9.3 lists them)."""
     import hashlib
@@ -208,6 +209,9 @@ def test_cache_is_current():
     good = _converged(d["points"])
     assert len({p["t_land"] for p in good}) >= 3, d["points"]
     assert max(abs(p["rel_change_mesh"]) for p in good) < 0.005
+    # the landed foot's drift (the acceleration-level constraint's) shrinks as the mesh refines
+    assert all(p["landed_drift"] < p["landed_drift_coarse"] < 0.005 for p in good), \
+        [(p["landed_drift"], p["landed_drift_coarse"]) for p in good]
     assert d["horizon_check"]["ok"] and abs(d["horizon_check"]["rel_change_horizon"]) < 0.005
 
 
