@@ -247,7 +247,9 @@ def test_capability_maps_draw_the_optimum_and_the_stepping_bounds(tmp_path):
     analytic bounds (its values those of flat_footed_optimum inside the cached durations, absent
     outside), and over force x height too; the printed bound lines carry it; a stepping map adds
     the N-step bounds (1, 2, inf steps) and the sustained limit after a step, whose 1-step line is
-    n_step_force_limit; a robot other than the cached one gets no optimum and says why."""
+    n_step_force_limit, and the one-step optimum (section 9.3) as a star at the cached 1 s push with
+    its landing time, printed under a stepping sweep's bounds too; a robot other than the cached one
+    gets neither optimum and says why."""
     import matplotlib
     matplotlib.use("Agg")
     from anklehip.analysis.capability import bound_lines, capability_figure
