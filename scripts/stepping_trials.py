@@ -37,8 +37,10 @@ landed, after the push onset, against the LIP's one-step bound for a first step 
 centre of pressure lay against the bound's (at the toe: the feet's before the decision, the stance
 sole's alone in the swing, and how long its heel carried nothing), and how far
 the pushed pendulum's capture point (the plant's CoM, xi = c + c'/omega, plus u = F h_push / (m g))
-lay beyond the landed sole's toe at the landing; then the same with the decision set 100 ms after
-the onset (step_trigger_time), whatever the layer's rules.
+lay beyond the landed sole's toe at the landing, when the swing sole first carried a fifth of the
+weight (which may be before the layer counts the landing), and the range of the layer's push_moment
+estimate from the decision on against the plant's push moment; then the same with the decision set
+100 ms after the onset (step_trigger_time), whatever the layer's rules.
 
 --touchdown: what the first landing does to the robot, over back pushes around the stepping boundary
 of each duration: the time no sole touches the ground after it, the largest sole load within 0.3 s of
@@ -243,8 +245,10 @@ def landing_table(scenario, models, engine, overrides, robot, l_max, dt_s):
           f"| before the decision: the feet's CoP within 2.5 mm of the toes [%] "
           f"| stance sole alone: its CoP from its ankle, mean [mm] (toe {1000 * robot.x_toe:.0f}) "
           f"| stance sole alone: its heel unloaded [%] "
-          f"| capture point under the push at the landing, beyond the front toe [mm] |")
-    print("|---|---|---|---|---|---|---|---|---|---|")
+          f"| capture point under the push at the landing, beyond the front toe [mm] "
+          f"| the swing sole first carries a fifth of the weight [ms] "
+          f"| push_moment from the decision to the end, min .. max [N m] (the push's F h_push) |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|")
     for force in LANDING_FORCES:
         r = run(scenario, models, engine, force, 1.0, overrides)
         t, phase, steps = r.data["time"], col(r.data, "step_phase"), col(r.data, "steps")
@@ -276,7 +280,27 @@ def landing_table(scenario, models, engine, overrides, robot, l_max, dt_s):
             xi = c[k] + (c[k] - c[k - n]) / (t[k] - t[k - n]) / np.sqrt(robot.g / z[k])
             u = r.data["push_force"][k] * r.plant_parameters["h_push"] / r.data["fz"][0]
             beyond = f"{1000 * (xi + u - col(r.data, 'landing_x')[landed[0]] - robot.x_toe):+.0f}"
-        print(f"| {force} | {outcome(r)} | {cells[0]} | {cells[1]} | {bound} | {ahead} | {at_toe} | {zmp} | {heel} | {beyond} |")
+        # the swing sole's first load after lift-off (the plant's load cells, a fifth of the weight: the
+        # layer's step_touchdown_fz), which may come before the layer counts the landing (it waits for
+        # the foot within step_touchdown_tol of its landing point)
+        touch = "-"
+        if swing.any():
+            k0 = int(np.flatnonzero(swing)[0])
+            side = "left" if col(r.data, "swing_side")[k0] == 0 else "right"
+            load = col(r.data, f"fz_{side}")[k0:]
+            lifted = np.flatnonzero(load < 1.0)
+            if lifted.size:
+                down = np.flatnonzero(load[lifted[0]:] > 0.2 * r.data["fz"][0])
+                if down.size:
+                    touch = f"{1000 * (t[k0 + lifted[0] + down[0]] - ONSET):.0f}"
+        # the momentum observer's estimate through the step (docs/controller.md §12.5: the plan keeps the
+        # decision's), against the moment the plant applies
+        moment = "-"
+        if decided.size:
+            m = col(r.data, "push_moment")[decided[0]:]
+            moment = f"{m.min():+.1f} .. {m.max():+.1f} ({force * r.plant_parameters['h_push']:.1f})"
+        print(f"| {force} | {outcome(r)} | {cells[0]} | {cells[1]} | {bound} | {ahead} | {at_toe} | {zmp} | {heel} | {beyond} "
+              f"| {touch} | {moment} |")
 
 
 def stance_sole_alone(d, swing, decided) -> tuple[str, str]:

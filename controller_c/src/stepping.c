@@ -455,10 +455,14 @@ static void observe_push(ahc_stepper *c, const ahc_step_sensors *s, const double
 }
 
 /* The external moment as the ZMP offset it asks for, u = M / (m g): the pendulum under a push moves
- * as c'' = omega^2 (c - p + u) (0 unless step_push_estimate). */
+ * as c'' = omega^2 (c - p + u) (0 unless step_push_estimate). Standing, the estimate now; through a
+ * step, the estimate at its decision: the observer's model leaves out the swing and the impacts, and
+ * its estimate swings by several N m at lift-off and touch-down (docs/controller.md §12.5), which a
+ * plan following it turned into the pendulum's. */
 static double push_offset(const ahc_stepper *c)
 {
-    return c->p.step_push_estimate ? c->push_moment / (c->mass * c->g) : 0.0;
+    if (!c->p.step_push_estimate) return 0.0;
+    return (c->phase == AHC_STEP_STAND ? c->push_moment : c->push_planned) / (c->mass * c->g);
 }
 
 /* ---- the plan --------------------------------------------------------------------------------- */
@@ -970,6 +974,7 @@ void ahc_step_step(ahc_stepper *c, const ahc_step_sensors *s, const double flat_
             ahc_quintic_init(&c->pitch_plan, c->pitch_prev, c->pitch_rate, 0.0, c->pitch_erect, 0.0, 0.0,
                              c->p.step_pitch_time);
             c->pitch_time = 0.0;
+            c->push_planned = c->push_moment;
             start_step(c, c->com_prev, xi_push); /* the estimate (held through a non-finite reading) */
             c->q_prev_valid = 0;
             c->pelvis_z_valid = 0;
@@ -1240,7 +1245,7 @@ int ahc_step_state_validate(const ahc_stepper *c, char *msg, size_t msg_size)
                             c->knee_settle, c->com_prev[0], c->com_prev[1], c->com_rate[0], c->com_rate[1], c->c0[0],
                             c->c0[1], c->v0[0], c->v0[1], c->cref[0], c->cref[1], c->vref[0], c->vref[1], c->zmp[0], c->zmp[1],
                             c->settle_mid[0], c->settle_mid[1], c->settle_capture_time, c->tilt[0], c->tilt[1],
-                            c->pelvis_z, c->knee_settle, c->feet[0][0], c->feet[0][1], c->obs_pred, c->push_moment,
+                            c->pelvis_z, c->knee_settle, c->feet[0][0], c->feet[0][1], c->obs_pred, c->push_moment, c->push_planned,
                             c->obs_pitch_prev, c->obs_leg_prev[0], c->obs_leg_prev[1], c->obs_H[0], c->obs_H[1],
                             c->obs_H[2], c->obs_H[3],
                             c->feet[1][0], c->feet[1][1], c->landing[0], c->landing[1], c->swing_pos[0],

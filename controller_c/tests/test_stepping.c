@@ -628,10 +628,59 @@ static void test_push_decision(void)
           "u = 0.8 toe, step_push_estimate 2: no step");
 }
 
+/* step_push_estimate 1 plans the step with the estimate at its decision: two robots standing under
+ * the same moment step at the same set time; afterwards one's measured ZMP moves by 10 mm (the
+ * observer's estimate then differs by m g 10 mm), and their references stay bit-identical for the
+ * step's first 0.3 s. (A plan that followed the estimate turned its swings at lift-off and
+ * touch-down into the pendulum's, and a step from rest with no push fell: docs/controller.md §12.5.) */
+static void test_push_planned_at_decision(void)
+{
+    ahc_params sp;
+    ahc_frontal_params fp;
+    ahc_step_params st;
+    static ahc_stepper c[2];
+    ahc_step_sensors s[2];
+    ahc_step_outputs out[2];
+    const double flat[2][AHC_LEG_JOINTS] = {{0}};
+    double mass, fz, M;
+    int k, r, side, j, stepping = 0, identical = 1;
+    defaults(&sp, &fp, &st);
+    st.step_trigger_x = 1.0; /* no rule fires: the step starts at the set time */
+    st.step_trigger_lean = 0.0;
+    st.step_push_estimate = 1;
+    st.step_trigger_time = 0.1;
+    mass = sp.m1 + sp.m2 + sp.feet_mass;
+    fz = mass * sp.g;
+    M = 0.5 * HOAP2_TOE_X * fz;
+    for (r = 0; r < 2; ++r) {
+        CHECK(ahc_step_init(&c[r], &st, &sp, &fp) == AHC_OK, "init");
+        memset(&s[r], 0, sizeof s[r]);
+        s[r].fz_left = s[r].fz_right = 0.5 * fz;
+        ahc_step_step(&c[r], &s[r], flat, &out[r]);
+        s[r].zmp_x = (mass * sp.g * out[r].com[0] + M) / fz;
+    }
+    for (k = 2; k < 400; ++k) {
+        for (r = 0; r < 2; ++r) ahc_step_step(&c[r], &s[r], flat, &out[r]);
+        if (out[0].phase == AHC_STEP_STAND) continue;
+        if (!stepping) s[1].zmp_x += 0.01; /* from the tick after the decision */
+        stepping = 1;
+        for (side = 0; side < 2; ++side)
+            for (j = 0; j < AHC_LEG_JOINTS; ++j)
+                identical = identical && memcmp(&out[0].q_ref[side][j], &out[1].q_ref[side][j], sizeof(double)) == 0;
+        identical = identical && out[0].phase == out[1].phase &&
+                    memcmp(out[0].com_ref, out[1].com_ref, sizeof out[0].com_ref) == 0;
+    }
+    CHECK(stepping, "the step started at the set time");
+    CHECK(fabs(out[1].push_moment - out[0].push_moment - 0.01 * fz) < 0.05 * 0.01 * fz,
+          "the estimates differ by m g 10 mm (%g N m, expected %g)", out[1].push_moment - out[0].push_moment, 0.01 * fz);
+    CHECK(identical, "the step's references are the same whatever the estimate does after the decision");
+}
+
 int main(void)
 {
     test_push_observer();
     test_push_decision();
+    test_push_planned_at_decision();
     test_triggers();
     test_close_rest();
     test_close_inset();

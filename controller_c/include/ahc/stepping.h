@@ -225,6 +225,7 @@ typedef struct {
     double obs_H[4];            /* the last four ticks' angular momentum (the median of five) [N m s] */
     int obs_Hn;                 /* how many of them are held                                        */
     double push_moment;         /* the estimate [N m]                                               */
+    double push_planned;        /* the estimate at the step's decision: the push the step plans with [N m] */
 } ahc_stepper;
 
 int ahc_step_init(ahc_stepper *c, const ahc_step_params *p, const ahc_params *sp, const ahc_frontal_params *fp);
