@@ -21,6 +21,7 @@ paper_five_pushes_3d's base, run with the 3D controller:
     .venv/bin/python scripts/stepping_trials.py --map --sweep NAME=V1,V2,... [--set ...]
     .venv/bin/python scripts/stepping_trials.py --landing [--set ...]
     .venv/bin/python scripts/stepping_trials.py --touchdown [--set ...]
+    .venv/bin/python scripts/stepping_trials.py --swing [--set ...]
 
 --map: the boundary (the largest force below which every 1 N step stands) of back pushes of each
 duration, flat-footed (the 3D controller's defaults, stepping off) and with stepping, and their ratio.
@@ -41,6 +42,14 @@ lay beyond the landed sole's toe at the landing, when the swing sole first carri
 weight (which may be before the layer counts the landing), and the range of the layer's push_moment
 estimate from the decision on against the plant's push moment; then the same with the decision set
 100 ms after the onset (step_trigger_time), whatever the layer's rules.
+
+--swing: 1 s back pushes of 8-20 N with stepping: the first swing as the plant's joints and IMU put it
+(hoap2/hoap2.urdf's legs through Pinocchio, as tests/test_leg_ik_crosscheck.py maps them; the trunk's
+attitude from the IMU), from the swing's start to the swing sole's first load (a fifth of the weight)
+or the layer's landing: how high the swing sole's lowest corner rose above the stance sole's, its
+largest pitch toes down relative to the stance sole, how far the trunk pitched forward meanwhile,
+and where the swing ankle was, ahead of the stance ankle, when the sole came down against where the
+layer sent it.
 
 --touchdown: what the first landing does to the robot, over back pushes around the stepping boundary
 of each duration: the time no sole touches the ground after it, the largest sole load within 0.3 s of
@@ -112,6 +121,9 @@ def main(argv=None) -> int:
     ap.add_argument("--touchdown", action="store_true",
                     help="pushes around the stepping boundary: flight, load and set-point steps after the first "
                          "landing (nothing else runs)")
+    ap.add_argument("--swing", action="store_true",
+                    help="1 s back pushes: the first swing's clearance, foot pitch and reach from the plant's joints "
+                         "(nothing else runs)")
     ap.add_argument("--map", action="store_true",
                     help="the boundaries of back pushes per duration, flat-footed and with stepping (nothing else runs)")
     args = ap.parse_args(argv)
@@ -132,6 +144,8 @@ def main(argv=None) -> int:
         return landing_times(scenario, models, engine, extra, args.set)
     if args.touchdown:
         return touchdowns(scenario, models, engine, extra, args.set)
+    if args.swing:
+        return swings(scenario, models, engine, {"stepping_enabled": 1, **extra}, args.set)
     if args.map and args.sweep:
         name, _, values = args.sweep.partition("=")
         print("back pushes (50 ms ramps): the boundary, the largest force [N] below which every 1 N step stands, "
@@ -301,6 +315,72 @@ def landing_table(scenario, models, engine, overrides, robot, l_max, dt_s):
             moment = f"{m.min():+.1f} .. {m.max():+.1f} ({force * r.plant_parameters['h_push']:.1f})"
         print(f"| {force} | {outcome(r)} | {cells[0]} | {cells[1]} | {bound} | {ahead} | {at_toe} | {zmp} | {heel} | {beyond} "
               f"| {touch} | {moment} |")
+
+
+# leg_ik.h's joints (AHC_LEG_* order, the plant's) as hoap2/hoap2.urdf's and their senses
+# (tests/test_leg_ik_crosscheck.py, which checks the mapping against the C kinematics to 1e-9)
+URDF_JOINT = ("joint_1", "joint_3", "joint_2", "joint_4", "joint_5", "joint_6")
+URDF_SENSE = (1.0, -1.0, 1.0, 1.0, -1.0, 1.0)
+
+
+def swings(scenario, models, engine, overrides, settings) -> int:
+    import pinocchio as pin
+    root = Path(__file__).resolve().parents[1]
+    model = pin.buildModelFromUrdf(str(root / "hoap2" / "hoap2.urdf"))
+    data = model.createData()
+    idx = {side: [model.joints[model.getJointId(f"{side[0]}leg_{j}")].idx_q for j in URDF_JOINT]
+           for side in ("left", "right")}
+    sole = {side: model.getFrameId(f"{side[0]}_sole") for side in ("left", "right")}
+    print("1 s back pushes (50 ms ramps), stepping on" + (f" ({', '.join(settings)})" if settings else "")
+          + ": the first swing from the plant's joints and IMU, from its start to the swing sole's first load "
+            "(a fifth of the weight) or the landing; times after the push onset [ms]")
+    print("| push [N] | outcome | swing starts | swing sole comes down | its lowest corner above the stance sole's, "
+          "highest [mm] | its pitch toes down relative to the stance sole, largest [rad] | the trunk's pitch, change "
+          "[rad] | swing ankle ahead of the stance ankle when it comes down [mm] | sent to [mm] |")
+    print("|---|---|---|---|---|---|---|---|---|")
+    for force in LANDING_FORCES:
+        r = run(scenario, models, engine, force, 1.0, overrides)
+        d, t = r.data, r.data["time"]
+        phase, steps = col(d, "step_phase"), col(d, "steps")
+        first = np.flatnonzero(phase == 2)
+        if not first.size:
+            print(f"| {force} | {outcome(r)} | - | - | - | - | - | - | - |")
+            continue
+        k0 = int(first[0])
+        swing_side = "left" if col(d, "swing_side")[k0] == 0 else "right"
+        stance_side = "right" if swing_side == "left" else "left"
+        cp = r.controller_parameters
+        corners = np.array([(x, y, 0.0) for x in (cp["toe_x"], cp["heel_x"])
+                            for y in (cp["sole_width"] / 2, -cp["sole_width"] / 2)])
+        load = col(d, f"fz_{swing_side}")
+        lifted = np.flatnonzero(load[k0:] < 1.0)
+        k1 = k0
+        while k1 + 1 < len(t) and phase[k1 + 1] == 2 and steps[k1 + 1] == 0 and not (
+                lifted.size and k1 + 1 >= k0 + lifted[0] and load[k1 + 1] > 0.2 * d["fz"][0]):
+            k1 += 1
+        k1 += 1 if k1 + 1 < len(t) else 0
+        rise, pitch, ahead = -np.inf, -np.inf, np.nan
+        for k in range(k0, k1 + 1):
+            q = pin.neutral(model)
+            for side in ("left", "right"):
+                for i, (j, sense) in enumerate(zip(JOINTS, URDF_SENSE)):
+                    q[idx[side][i]] = sense * col(d, f"q_{side}_{j}")[k]
+            pin.framesForwardKinematics(model, data, q)
+            roll, pitch_imu = d["imu_roll"][k], d["imu_pitch"][k]
+            cr, sr, cpt, spt = np.cos(roll), np.sin(roll), np.cos(pitch_imu), np.sin(pitch_imu)
+            R = np.array([[cpt, spt * sr, spt * cr], [0.0, cr, -sr], [-spt, cpt * sr, cpt * cr]])  # Ry(pitch) Rx(roll)
+            pose = {side: (R @ data.oMf[sole[side]].translation, R @ data.oMf[sole[side]].rotation)
+                    for side in ("left", "right")}
+            low = {side: min((p + Rs @ c)[2] for c in corners) for side, (p, Rs) in pose.items()}
+            rise = max(rise, low[swing_side] - low[stance_side])
+            rel = pose[stance_side][1].T @ pose[swing_side][1]
+            pitch = max(pitch, float(np.arcsin(np.clip(-rel[2, 0], -1.0, 1.0))))
+            ahead = (pose[swing_side][0] - pose[stance_side][0])[0]
+        trunk = d["imu_pitch"][k1] - d["imu_pitch"][k0]
+        print(f"| {force} | {outcome(r)} | {1000 * (t[k0] - ONSET):.0f} | {1000 * (t[k1] - ONSET):.0f} | "
+              f"{1000 * rise:.1f} | {pitch:+.3f} | {trunk:+.3f} | {1000 * ahead:.0f} | "
+              f"{1000 * col(d, 'landing_x')[k1 - 1]:.0f} |")
+    return 0
 
 
 def stance_sole_alone(d, swing, decided) -> tuple[str, str]:
