@@ -550,35 +550,53 @@ static void test_triggers(void)
     }
 }
 
-/* A robot standing still under an external moment M: the measured ZMP where the balance of a
- * standing robot under M puts it, p f_z = m g c_x + M (M = 0: the static balance). Runs `ticks`
- * ticks (or to the first step) with the observer at `gain`, the capture-point rule at trigger_x
- * (the lean rule off) and step_push_estimate `estimate`; returns the tick the first step started
- * (-1: none) and the last estimate in *moment. */
-static int standing_under_moment(double M, double gain, int ticks, double trigger_x, int estimate, double *moment)
+/* Starts c standing still under an external moment M with parameters st: legs straight, trunk
+ * upright, feet flat, the measured ZMP where the balance of a standing robot under M puts it,
+ * p f_z = m g c_x + M (M = 0: the static balance; the ankles' mid-point is the frame's origin). Runs
+ * the first tick and leaves in *s the sensors for the next ones. */
+static void stand_under_moment(ahc_stepper *c, const ahc_step_params *st, double M, ahc_step_sensors *s)
 {
     ahc_params sp;
     ahc_frontal_params fp;
+    ahc_step_params unused;
+    ahc_step_outputs out;
+    const double flat[2][AHC_LEG_JOINTS] = {{0}};
+    double mg;
+    defaults(&sp, &fp, &unused);
+    CHECK(ahc_step_init(c, st, &sp, &fp) == AHC_OK, "init");
+    mg = (sp.m1 + sp.m2 + sp.feet_mass) * sp.g;
+    memset(s, 0, sizeof *s);
+    s->fz_left = s->fz_right = 0.5 * mg;
+    ahc_step_step(c, s, flat, &out);
+    s->zmp_x = (mg * out.com[0] + M) / mg;
+}
+
+/* The stepping defaults with the capture-point rule at trigger_x, the lean rule off, the observer at
+ * `gain` and step_push_estimate `estimate`. */
+static void moment_params(ahc_step_params *st, double trigger_x, double gain, int estimate)
+{
+    ahc_params sp;
+    ahc_frontal_params fp;
+    defaults(&sp, &fp, st);
+    st->step_trigger_x = trigger_x;
+    st->step_trigger_lean = 0.0;
+    st->step_observer_gain = gain;
+    st->step_push_estimate = estimate;
+}
+
+/* A robot standing still under an external moment M (stand_under_moment) for `ticks` ticks or to the
+ * first step, with moment_params; returns the tick the first step started (-1: none) and the last
+ * estimate in *moment. */
+static int standing_under_moment(double M, double gain, int ticks, double trigger_x, int estimate, double *moment)
+{
     ahc_step_params st;
     static ahc_stepper c;
     ahc_step_sensors s;
     ahc_step_outputs out;
     const double flat[2][AHC_LEG_JOINTS] = {{0}};
-    double mass, fz;
     int k;
-    defaults(&sp, &fp, &st);
-    st.step_trigger_x = trigger_x;
-    st.step_trigger_lean = 0.0;
-    st.step_observer_gain = gain;
-    st.step_push_estimate = estimate;
-    CHECK(ahc_step_init(&c, &st, &sp, &fp) == AHC_OK, "init");
-    mass = sp.m1 + sp.m2 + sp.feet_mass;
-    fz = mass * sp.g;
-    memset(&s, 0, sizeof s); /* legs straight, trunk upright, feet flat */
-    s.fz_left = s.fz_right = 0.5 * fz;
-    ahc_step_step(&c, &s, flat, &out);
-    /* the ankles' mid-point is the frame's origin: p = (m g c_x + M) / f_z */
-    s.zmp_x = (mass * sp.g * out.com[0] + M) / fz;
+    moment_params(&st, trigger_x, gain, estimate);
+    stand_under_moment(&c, &st, M, &s);
     for (k = 2; k <= ticks + 1; ++k) {
         ahc_step_step(&c, &s, flat, &out);
         *moment = out.push_moment;
@@ -635,30 +653,16 @@ static void test_push_decision(void)
  * touch-down into the pendulum's, and a step from rest with no push fell: docs/controller.md §12.5.) */
 static void test_push_planned_at_decision(void)
 {
-    ahc_params sp;
-    ahc_frontal_params fp;
     ahc_step_params st;
     static ahc_stepper c[2];
     ahc_step_sensors s[2];
     ahc_step_outputs out[2];
     const double flat[2][AHC_LEG_JOINTS] = {{0}};
-    double mass, fz, M;
+    const double mg = HOAP2_TOTAL_MASS * HOAP2_G, M = 0.5 * HOAP2_TOE_X * mg;
     int k, r, side, j, stepping = 0, identical = 1;
-    defaults(&sp, &fp, &st);
-    st.step_trigger_x = 1.0; /* no rule fires: the step starts at the set time */
-    st.step_trigger_lean = 0.0;
-    st.step_push_estimate = 1;
+    moment_params(&st, 1.0, 50.0, 1); /* no rule fires: the step starts at the set time */
     st.step_trigger_time = 0.1;
-    mass = sp.m1 + sp.m2 + sp.feet_mass;
-    fz = mass * sp.g;
-    M = 0.5 * HOAP2_TOE_X * fz;
-    for (r = 0; r < 2; ++r) {
-        CHECK(ahc_step_init(&c[r], &st, &sp, &fp) == AHC_OK, "init");
-        memset(&s[r], 0, sizeof s[r]);
-        s[r].fz_left = s[r].fz_right = 0.5 * fz;
-        ahc_step_step(&c[r], &s[r], flat, &out[r]);
-        s[r].zmp_x = (mass * sp.g * out[r].com[0] + M) / fz;
-    }
+    for (r = 0; r < 2; ++r) stand_under_moment(&c[r], &st, M, &s[r]);
     for (k = 2; k < 400; ++k) {
         for (r = 0; r < 2; ++r) ahc_step_step(&c[r], &s[r], flat, &out[r]);
         if (out[0].phase == AHC_STEP_STAND) continue;
@@ -671,8 +675,8 @@ static void test_push_planned_at_decision(void)
                     memcmp(out[0].com_ref, out[1].com_ref, sizeof out[0].com_ref) == 0;
     }
     CHECK(stepping, "the step started at the set time");
-    CHECK(fabs(out[1].push_moment - out[0].push_moment - 0.01 * fz) < 0.05 * 0.01 * fz,
-          "the estimates differ by m g 10 mm (%g N m, expected %g)", out[1].push_moment - out[0].push_moment, 0.01 * fz);
+    CHECK(fabs(out[1].push_moment - out[0].push_moment - 0.01 * mg) < 0.05 * 0.01 * mg,
+          "the estimates differ by m g 10 mm (%g N m, expected %g)", out[1].push_moment - out[0].push_moment, 0.01 * mg);
     CHECK(identical, "the step's references are the same whatever the estimate does after the decision");
 }
 
