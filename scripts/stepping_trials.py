@@ -299,14 +299,9 @@ def landing_table(scenario, models, engine, overrides, robot, l_max, dt_s):
         # the foot within step_touchdown_tol of its landing point)
         touch = "-"
         if swing.any():
-            k0 = int(np.flatnonzero(swing)[0])
-            side = "left" if col(r.data, "swing_side")[k0] == 0 else "right"
-            load = col(r.data, f"fz_{side}")[k0:]
-            lifted = np.flatnonzero(load < 1.0)
-            if lifted.size:
-                down = np.flatnonzero(load[lifted[0]:] > 0.2 * r.data["fz"][0])
-                if down.size:
-                    touch = f"{1000 * (t[k0 + lifted[0] + down[0]] - ONSET):.0f}"
+            k = first_load(r.data, int(np.flatnonzero(swing)[0]))
+            if k is not None:
+                touch = f"{1000 * (t[k] - ONSET):.0f}"
         # the momentum observer's estimate through the step (docs/controller.md §12.5: the plan keeps the
         # decision's), against the moment the plant applies
         moment = "-"
@@ -315,6 +310,18 @@ def landing_table(scenario, models, engine, overrides, robot, l_max, dt_s):
             moment = f"{m.min():+.1f} .. {m.max():+.1f} ({force * r.plant_parameters['h_push']:.1f})"
         print(f"| {force} | {outcome(r)} | {cells[0]} | {cells[1]} | {bound} | {ahead} | {at_toe} | {zmp} | {heel} | {beyond} "
               f"| {touch} | {moment} |")
+
+
+def first_load(d, k0):
+    """The first row from k0, the start of a swing, at which the swing sole, having lifted (under 1 N),
+    carries a fifth of the weight again (the plant's load cells; the layer's step_touchdown_fz): None
+    if it does not."""
+    load = col(d, "fz_left" if col(d, "swing_side")[k0] == 0 else "fz_right")[k0:]
+    lifted = np.flatnonzero(load < 1.0)
+    if not lifted.size:
+        return None
+    down = np.flatnonzero(load[lifted[0]:] > 0.2 * d["fz"][0])
+    return k0 + int(lifted[0] + down[0]) if down.size else None
 
 
 # leg_ik.h's joints (AHC_LEG_* order, the plant's) as hoap2/hoap2.urdf's and their senses
@@ -352,13 +359,12 @@ def swings(scenario, models, engine, overrides, settings) -> int:
         cp = r.controller_parameters
         corners = np.array([(x, y, 0.0) for x in (cp["toe_x"], cp["heel_x"])
                             for y in (cp["sole_width"] / 2, -cp["sole_width"] / 2)])
-        load = col(d, f"fz_{swing_side}")
-        lifted = np.flatnonzero(load[k0:] < 1.0)
-        k1 = k0
-        while k1 + 1 < len(t) and phase[k1 + 1] == 2 and steps[k1 + 1] == 0 and not (
-                lifted.size and k1 + 1 >= k0 + lifted[0] and load[k1 + 1] > 0.2 * d["fz"][0]):
-            k1 += 1
-        k1 += 1 if k1 + 1 < len(t) else 0
+        # to the swing sole's first load, or the tick the layer counts the landing (or leaves the swing)
+        k1 = first_load(d, k0)
+        k1 = len(t) - 1 if k1 is None else k1
+        left = np.flatnonzero((phase[k0:] != 2) | (steps[k0:] > 0))
+        if left.size:
+            k1 = min(k1, k0 + int(left[0]))
         rise, pitch, ahead = -np.inf, -np.inf, np.nan
         for k in range(k0, k1 + 1):
             q = pin.neutral(model)
