@@ -457,7 +457,7 @@ static void observe_push(ahc_stepper *c, const ahc_step_sensors *s, const double
 /* The external moment as the ZMP offset it asks for, u = M / (m g): the pendulum under a push moves
  * as c'' = omega^2 (c - p + u) (0 unless step_push_estimate). Standing, the estimate now; through a
  * step, the estimate at its decision: the observer's model leaves out the swing and the impacts, and
- * its estimate swings by several N m at lift-off and touch-down (docs/controller.md §12.5), which a
+ * its estimate swings by tens of N m at the soles' impacts (docs/controller.md §12.5), which a
  * plan following it turned into the pendulum's. */
 static double push_offset(const ahc_stepper *c)
 {
