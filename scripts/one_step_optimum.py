@@ -33,7 +33,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from anklehip.analysis import one_step as os_  # noqa: E402
-from anklehip.analysis.bounds import ONE_STEP_FORWARD  # noqa: E402
+from anklehip.analysis.bounds import is_step_forward  # noqa: E402
 
 OUT_FILE = "one_step_optimum.json"
 DURATION, RISE = 1.0, 0.05
@@ -83,7 +83,7 @@ def fine(t_lift: float, t_land: float, coarse: "os_.Solution") -> "os_.Solution"
     """The fine optimum of a point, warm-started from its coarse one; when IPOPT stops short of its
     acceptable level (its iteration limit), once more from where it stopped (a restart resets its
     barrier parameter). When that is not a converged step forward (anklehip.analysis.bounds'
-    ONE_STEP_FORWARD: the warm start fell into the step in place, or did not converge), the coarse
+    is_step_forward: the warm start fell into the step in place, or did not converge), the coarse
     mesh's way out too: a step forced FORWARD ahead from the coarse optimum, then released; the best
     converged step forward of them all. The seconds are all the solves'."""
     bp = os_.hoap2()
@@ -93,7 +93,7 @@ def fine(t_lift: float, t_land: float, coarse: "os_.Solution") -> "os_.Solution"
         tried.append(os_.solve(bp, DURATION, RISE, t_lift, t_land, guess=tried[-1], **kw))
 
     def forward(s):
-        return s.ok and s.landing > ONE_STEP_FORWARD
+        return is_step_forward(s.ok, s.landing)
 
     seconds = sum(s.seconds for s in tried)
     if not forward(tried[-1]):

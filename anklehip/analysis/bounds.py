@@ -308,6 +308,12 @@ ONE_STEP_FILE = "one_step_optimum.json"       # in anklehip/analysis/data/, made
 ONE_STEP_FORWARD = 0.05      # a converged point is a step forward when it lands more than this ahead [m]
 
 
+def is_step_forward(ok: bool, landing: float) -> bool:
+    """A one-step solve that counts: IPOPT converged (success or its acceptable level) to a landing
+    more than ONE_STEP_FORWARD ahead, not to the step in place (a poorer local optimum)."""
+    return bool(ok) and landing > ONE_STEP_FORWARD
+
+
 def load_one_step_optimum(path=None) -> dict:
     """The cached one-step optimum (JSON written by scripts/one_step_optimum.py): its settings (the push
     height among them), the hashes of its sources, and its points (per landing time). path: the
@@ -320,7 +326,7 @@ def one_step_points(data: dict | None = None, duration: float = 1.0, rise: float
     (success or its acceptable level) to a step forward (landing more than ONE_STEP_FORWARD ahead: not
     the step in place, a poorer local optimum), by landing time."""
     data = load_one_step_optimum() if data is None else data
-    return sorted((p for p in data["points"] if p["ok"] and p["landing"] > ONE_STEP_FORWARD
+    return sorted((p for p in data["points"] if is_step_forward(p["ok"], p["landing"])
                    and math.isclose(p["duration"], duration, rel_tol=1e-9)
                    and math.isclose(p["rise"], rise, rel_tol=1e-9, abs_tol=1e-12)), key=lambda p: p["t_land"])
 
