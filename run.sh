@@ -13,12 +13,13 @@ case "${1:-}" in
   test)
     # The suite includes the Windows binaries under Wine (tests/test_win64.py) and the aarch64
     # ones under qemu-user (tests/test_aarch64.py), and the fmi-sim importer (tests/test_fmi_sim.py):
-    # build them, and fail rather than skip if any piece is missing. Then the reliability checks on the sanitizer
+    # build them, and fail rather than skip if any piece is missing. pytest spreads the test files over
+    # the cores (pytest-xdist). Then the reliability checks on the sanitizer
     # build: sanitized CTest, FMI fuzzing, a sanitized closed loop, Valgrind (docs/reliability.md).
     bash scripts/setup.sh --win64 --sanitize --aarch64 --fmi-sim
     export PATH="$root/.venv/bin:$PATH" ANKLEHIP_REQUIRE_WIN64=1 ANKLEHIP_REQUIRE_AARCH64=1 ANKLEHIP_REQUIRE_FMI_SIM=1
     ctest --test-dir "${ANKLEHIP_BUILD_DIR:-build}" --output-on-failure --no-tests=error
-    .venv/bin/python -m pytest -q tests
+    .venv/bin/python -m pytest -q -n auto --dist loadfile tests
     bash scripts/reliability.sh
     ;;
   *)
