@@ -46,24 +46,44 @@ export ASAN_SYMBOLIZER_PATH="${ASAN_SYMBOLIZER_PATH:-$(command -v llvm-symbolize
 mkdir -p "$work/findings"
 figures="$work/figures.md"
 [ "$long" -eq 1 ] && printf '| FMU | inputs | per second | edges | corpus | deep programs | successful steps per program | functions reached |\n|---|---|---|---|---|---|---|---|\n' >"$figures"
+# One FMU: its fuzzer, then the coverage of its final corpus (every function of ours the inputs
+# reach); the fuzzer's exit status and wall time go to files for the report.
+fuzz_one() {
+  local fmu="$1" exe corpus log t0 rc=0
+  exe="$(find "$sbuild/fmu" -name "${fmu}_fuzz" -type f | head -n1)"
+  corpus="$work/corpus-$fmu"
+  log="$work/$fmu.log"
+  mkdir -p "$corpus"
+  t0=$(date +%s)
+  LD_PRELOAD="$asan_rt" "$exe" "${limit[@]}" -timeout=10 -rss_limit_mb=4096 -print_final_stats=1 \
+    -artifact_prefix="$work/findings/$fmu-" "$corpus" fmu/fuzz/corpus >"$log" 2>&1 || rc=$?
+  echo $(( $(date +%s) - t0 )) >"$work/$fmu.wall"
+  echo "$rc" >"$work/$fmu.status"
+  [ "$rc" -ne 0 ] || LD_PRELOAD="$asan_rt" "$exe" -runs=0 -print_coverage=1 "$corpus" fmu/fuzz/corpus \
+    >"$work/$fmu.coverage" 2>&1 || true
+}
 for fmu in "${fmus[@]}"; do
   exe="$(find "$sbuild/fmu" -name "${fmu}_fuzz" -type f | head -n1)"
   [ -x "$exe" ] || { echo "fuzz: ${fmu}_fuzz not built in $sbuild (bash scripts/setup.sh --sanitize)" >&2; exit 1; }
-  corpus="$work/corpus-$fmu"
-  mkdir -p "$corpus"
-  log="$work/$fmu.log"
-  t0=$(date +%s)
-  if ! LD_PRELOAD="$asan_rt" "$exe" "${limit[@]}" -timeout=10 -rss_limit_mb=4096 -print_final_stats=1 \
-      -artifact_prefix="$work/findings/$fmu-" "$corpus" fmu/fuzz/corpus >"$log" 2>&1; then
-    tail -n 60 "$log"
-    echo "fuzz: the $fmu fuzzer found a defect (input in $work/findings/)" >&2
-    exit 1
-  fi
-  wall=$(( $(date +%s) - t0 ))
-  # coverage of the final corpus: every function of ours the fuzzer's inputs reach
-  LD_PRELOAD="$asan_rt" "$exe" -runs=0 -print_coverage=1 "$corpus" fmu/fuzz/corpus >"$work/$fmu.coverage" 2>&1 || true
-  extra=()
-  [ "$long" -eq 0 ] || extra=(--figures "$figures")
-  .venv/bin/python scripts/fuzz_report.py "$fmu" "$log" "$work/$fmu.coverage" "$corpus" "$wall" "${extra[@]}"
+done
+# As many fuzzers at once as there are cores (each is one process on one core, so an FMU gets the
+# same inputs per second as alone), reported in the FMUs' order.
+jobs="$(nproc)"
+for ((first = 0; first < ${#fmus[@]}; first += jobs)); do
+  batch=("${fmus[@]:first:jobs}")
+  pids=()
+  for fmu in "${batch[@]}"; do fuzz_one "$fmu" & pids+=($!); done
+  wait "${pids[@]}"
+  for fmu in "${batch[@]}"; do
+    if [ "$(cat "$work/$fmu.status")" -ne 0 ]; then
+      tail -n 60 "$work/$fmu.log"
+      echo "fuzz: the $fmu fuzzer found a defect (input in $work/findings/)" >&2
+      exit 1
+    fi
+    extra=()
+    [ "$long" -eq 0 ] || extra=(--figures "$figures")
+    .venv/bin/python scripts/fuzz_report.py "$fmu" "$work/$fmu.log" "$work/$fmu.coverage" "$work/corpus-$fmu" \
+      "$(cat "$work/$fmu.wall")" "${extra[@]}"
+  done
 done
 [ "$long" -eq 0 ] || echo "figures: $figures"
