@@ -152,12 +152,15 @@ fi
 # --- fmi-sim (--fmi-sim) ----------------------------------------------------------------------
 # An FMI importer that shares no code with FMPy or libcosim (Rust; FMI 2.0 and 3.0), built once
 # from the crates registry into <build>/fmi-sim (tests/test_fmi_sim.py, docs/integration.md).
+# Unoptimised (--debug, with Rust's overflow checks): 3.3 min to compile on the 2-core machine
+# against 7.3 min for a release build, and its tests run in 12 s instead of 6 s. The benchmark
+# (bench/report.py, docs/performance.md) times a release fmi-sim on PATH, not this one.
 if [ "$fmisim" -eq 1 ] && [ ! -x "$build/fmi-sim/bin/fmi-sim" ]; then
   cargo_bin="$(command -v cargo || true)"
   [ -n "$cargo_bin" ] || [ ! -x "$HOME/.cargo/bin/cargo" ] || cargo_bin="$HOME/.cargo/bin/cargo"
   if [ -z "$cargo_bin" ]; then echo "setup: --fmi-sim needs Rust's cargo (https://rustup.rs)" >&2; exit 1; fi
-  echo "setup: building fmi-sim 0.7.0 (cargo install) into $build/fmi-sim"
+  echo "setup: building fmi-sim 0.7.0 (cargo install --debug) into $build/fmi-sim"
   log="$build/fmi-sim-install.log"
-  "$cargo_bin" install fmi-sim --version 0.7.0 --root "$build/fmi-sim" >"$log" 2>&1 \
+  "$cargo_bin" install fmi-sim --version 0.7.0 --debug --root "$build/fmi-sim" >"$log" 2>&1 \
     || { tail -n 40 "$log"; echo "setup: cargo install fmi-sim failed (full log: $log)" >&2; exit 1; }
 fi
