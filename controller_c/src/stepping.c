@@ -317,6 +317,7 @@ void ahc_step_reset(ahc_stepper *c)
     }
     c->phase = AHC_STEP_STAND;
     c->swing_side = -1;
+    c->obs_loaded_time = c->p.step_impact_hold; /* the robot starts on both feet */
     c->feet[AHC_LEFT][1] = c->ankle_y;
     c->feet[AHC_RIGHT][1] = -c->ankle_y;
 }
@@ -388,12 +389,23 @@ static void estimate(const ahc_stepper *c, const ahc_step_sensors *s, double P[3
  * p and f_z the measured ZMP and load, the bodies' motion the measured configuration's finite
  * differences. The residual r = K (H - integral of (m g c_x - p f_z + r)) follows M_ext as a
  * first-order lag of bandwidth K (step_observer_gain), with no second derivative of a measurement
- * (the generalized-momentum observer of De Luca and Mattone 2003, here for the whole robot). */
+ * (the generalized-momentum observer of De Luca and Mattone 2003, here for the whole robot).
+ * The estimate holds on one foot and through the landed foot's transfer (SWING, CLOSE, TRANSFER),
+ * and from a sole's unloading until both soles have carried step_touchdown_fz for step_impact_hold:
+ * the model has no soles' impacts, whose momentum jumps it took for pushes of tens of N m (and a
+ * robot settling after a step rocks from foot to foot, docs/controller.md §12.5). It then restarts
+ * from the held value. */
 static void observe_push(ahc_stepper *c, const ahc_step_sensors *s, const double P[3], double ankle[2][3],
                          double Rfw[2][9], const double com[3])
 {
     double R[9], pts[BODIES][3], hips[2][3], leg[2], H = 0.0, torque, fz, px;
-    int b, i, finite = 1;
+    int b, i, finite = 1, have_median;
+    const int both_loaded = s->fz_left >= c->p.step_touchdown_fz && s->fz_right >= c->p.step_touchdown_fz;
+    c->obs_loaded_time = both_loaded ? c->obs_loaded_time + c->dt : 0.0;
+    if (one_foot(c->phase) || c->phase == AHC_STEP_TRANSFER || c->obs_loaded_time < c->p.step_impact_hold - 1e-12) {
+        c->obs_valid = 0;
+        return;
+    }
     rot_trunk(s->imu_roll, s->imu_pitch, R);
     bodies_of(c, P, R, ankle, Rfw, pts, hips);
     for (b = 0; b < 2; ++b) leg[b] = atan2(hips[b][0] - ankle[b][0], hips[b][2] - ankle[b][2]);
@@ -413,14 +425,14 @@ static void observe_push(ahc_stepper *c, const ahc_step_sensors *s, const double
         H += (c->I2 * (s->imu_pitch - c->obs_pitch_prev) +
               0.5 * c->I1 * ((leg[0] - c->obs_leg_prev[0]) + (leg[1] - c->obs_leg_prev[1]))) / c->dt;
         torque = c->mass * c->g * com[0] - px * fz;
-        if (c->obs_valid == 1) c->obs_Hn = 0;
         {
             /* the median of the last five ticks' H: a jump of the estimate (a sole unloading, the foot's
              * rocking edge changing) moves the bodies by a millimetre in a tick, and their finite
              * differences would put a spike of some 50 N m into the estimate for a tick or two */
             double h5[5], Hm = H;
             int n = c->obs_Hn, k, j;
-            if (n == 4) {
+            have_median = n == 4;
+            if (have_median) {
                 h5[0] = H;
                 for (k = 0; k < 4; ++k) h5[k + 1] = c->obs_H[k];
                 for (k = 1; k < 5; ++k)
@@ -436,16 +448,18 @@ static void observe_push(ahc_stepper *c, const ahc_step_sensors *s, const double
             if (n < 4) c->obs_Hn = n + 1;
             H = Hm;
         }
-        if (c->obs_valid == 1) {
-            /* (re)start: the prediction where the estimate is */
+        if (c->obs_valid == 1 && have_median) {
+            /* (re)start once the median has five ticks: the prediction where the estimate is (a
+             * restart on the raw H of an impact's ticks put a spike of 40 N m into the estimate) */
             c->obs_pred = H - c->push_moment / c->p.step_observer_gain;
             c->obs_valid = 2;
-        } else {
+        } else if (c->obs_valid == 2) {
             c->obs_pred += (torque + c->push_moment) * c->dt;
         }
-        c->push_moment = c->p.step_observer_gain * (H - c->obs_pred);
+        if (c->obs_valid == 2) c->push_moment = c->p.step_observer_gain * (H - c->obs_pred);
     } else {
         c->obs_valid = 1;
+        c->obs_Hn = 0;
     }
     for (b = 0; b < BODIES; ++b)
         for (i = 0; i < 3; ++i) c->obs_body_prev[b][i] = pts[b][i];
@@ -1076,7 +1090,10 @@ void ahc_step_step(ahc_stepper *c, const ahc_step_sensors *s, const double flat_
                     c->obs_body_prev[i][0] -= mx;
                     c->obs_body_prev[i][1] -= my;
                 }
-                if (c->obs_valid) c->obs_valid = 1; /* the observer restarts about the new origin */
+                if (c->obs_valid) { /* the observer restarts about the new origin */
+                    c->obs_valid = 1;
+                    c->obs_Hn = 0;
+                }
                 c->phase = AHC_STEP_STAND;
                 c->swing_side = -1;
                 c->close_stage = 0;
@@ -1234,7 +1251,7 @@ int ahc_step_state_validate(const ahc_stepper *c, char *msg, size_t msg_size)
     if (c->steps < 0 || c->est_valid < 0 || c->est_valid > 1 || c->q_prev_valid < 0 || c->q_prev_valid > 1 ||
         c->tilt_valid < 0 || c->tilt_valid > 1 || c->pelvis_z_valid < 0 || c->pelvis_z_valid > 1 ||
         c->blend_from_flat < 0 || c->blend_from_flat > 1 || c->close_stage < 0 || c->close_stage > 3 ||
-        c->obs_valid < 0 || c->obs_valid > 2 || c->obs_Hn < 0 || c->obs_Hn > 4 ||
+        c->obs_valid < 0 || c->obs_valid > 2 || c->obs_Hn < 0 || c->obs_Hn > 4 || c->obs_loaded_time < 0.0 ||
         (c->close_stage != 0 && c->phase == AHC_STEP_STAND))
         return ahc_fail_message(msg, msg_size, AHC_ERR_INCONSISTENT, "stepping counters or flags corrupt");
     if (!(c->swing_time >= 0.0 && c->swing_time <= 2.0) || ((c->phase == AHC_STEP_SWING || c->phase == AHC_STEP_CLOSE) && !(c->swing_time > 0.0)))
@@ -1246,7 +1263,7 @@ int ahc_step_state_validate(const ahc_stepper *c, char *msg, size_t msg_size)
                             c->c0[1], c->v0[0], c->v0[1], c->cref[0], c->cref[1], c->vref[0], c->vref[1], c->zmp[0], c->zmp[1],
                             c->settle_mid[0], c->settle_mid[1], c->settle_capture_time, c->tilt[0], c->tilt[1],
                             c->pelvis_z, c->knee_settle, c->feet[0][0], c->feet[0][1], c->obs_pred, c->push_moment, c->push_planned,
-                            c->obs_pitch_prev, c->obs_leg_prev[0], c->obs_leg_prev[1], c->obs_H[0], c->obs_H[1],
+                            c->obs_loaded_time, c->obs_pitch_prev, c->obs_leg_prev[0], c->obs_leg_prev[1], c->obs_H[0], c->obs_H[1],
                             c->obs_H[2], c->obs_H[3],
                             c->feet[1][0], c->feet[1][1], c->landing[0], c->landing[1], c->swing_pos[0],
                             c->swing_pos[1]};

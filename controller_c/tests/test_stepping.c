@@ -614,16 +614,22 @@ static double observed_moment(double M, double gain, int ticks)
     return moment;
 }
 
+/* The observer's first estimate comes on tick 6 of standing_under_moment, once five ticks of H fill
+ * its median (no start on the raw H of an impact's ticks), 4 ticks after its first H. */
+#define OBSERVER_START 4
+
 static void test_push_observer(void)
 {
     const double M = 2.0, K = 50.0;
-    const double lag = observed_moment(M, K, 20); /* 1 / K after the observer starts (2 ticks) */
+    /* 1 / K after the observer starts: on the 6th tick, once five ticks of H fill its median */
+    const double lag = observed_moment(M, K, OBSERVER_START + 20);
     CHECK(fabs(observed_moment(0.0, K, 300)) < 1e-9, "at rest in static balance: no moment (%g N m)",
           observed_moment(0.0, K, 300));
     CHECK(fabs(observed_moment(M, K, 300) - M) < 1e-4 * M, "a standing robot under %g N m: the estimate %g N m", M,
           observed_moment(M, K, 300));
     CHECK(lag > 0.55 * M && lag < 0.7 * M, "after 1/K the estimate is about 1 - 1/e of the moment (%g of %g)", lag, M);
-    CHECK(observed_moment(M, 2.0 * K, 10) > 0.55 * M && observed_moment(M, 2.0 * K, 10) < 0.7 * M,
+    CHECK(observed_moment(M, 2.0 * K, OBSERVER_START + 10) > 0.55 * M &&
+              observed_moment(M, 2.0 * K, OBSERVER_START + 10) < 0.7 * M,
           "twice the gain: the same fraction in half the time");
 }
 
@@ -635,7 +641,7 @@ static void test_push_observer(void)
 static void test_push_decision(void)
 {
     const double K = 20.0, /* the toe reached after the layer's first 20 ticks, when it may step */ mg = (HOAP2_TOTAL_MASS) * HOAP2_G, M = 2.0 * HOAP2_TOE_X * mg;
-    const int expected = 2 + (int)ceil(-log(1.0 - 0.5) / K / HOAP2_SAMPLE_PERIOD);
+    const int expected = OBSERVER_START + 2 + (int)ceil(-log(1.0 - 0.5) / K / HOAP2_SAMPLE_PERIOD);
     double moment;
     const int k2 = standing_under_moment(M, K, 300, 0.0, 2, &moment);
     CHECK(k2 >= expected - 2 && k2 <= expected + 2, "u = twice the toe, step_push_estimate 2: a step on tick %d "
@@ -648,8 +654,8 @@ static void test_push_decision(void)
 
 /* step_push_estimate 1 plans the step with the estimate at its decision: two robots standing under
  * the same moment step at the same set time; afterwards one's measured ZMP moves by 10 mm (the
- * observer's estimate then differs by m g 10 mm), and their references stay bit-identical for the
- * step's first 0.3 s. (A plan that followed the estimate turned its swings at lift-off and
+ * observer's estimate then differs by m g 10 mm), and their references stay bit-identical to the
+ * step's end. (A plan that followed the estimate turned its swings at lift-off and
  * touch-down into the pendulum's, and a step from rest with no push fell: docs/controller.md §12.5.) */
 static void test_push_planned_at_decision(void)
 {
@@ -663,8 +669,9 @@ static void test_push_planned_at_decision(void)
     moment_params(&st, 1.0, 50.0, 1); /* no rule fires: the step starts at the set time */
     st.step_trigger_time = 0.1;
     for (r = 0; r < 2; ++r) stand_under_moment(&c[r], &st, M, &s[r]);
-    for (k = 2; k < 400; ++k) {
+    for (k = 2; k < 3000; ++k) {
         for (r = 0; r < 2; ++r) ahc_step_step(&c[r], &s[r], flat, &out[r]);
+        if (out[0].phase == AHC_STEP_STAND && stepping) break;
         if (out[0].phase == AHC_STEP_STAND) continue;
         if (!stepping) s[1].zmp_x += 0.01; /* from the tick after the decision */
         stepping = 1;
@@ -674,10 +681,52 @@ static void test_push_planned_at_decision(void)
         identical = identical && out[0].phase == out[1].phase &&
                     memcmp(out[0].com_ref, out[1].com_ref, sizeof out[0].com_ref) == 0;
     }
-    CHECK(stepping, "the step started at the set time");
+    CHECK(stepping && k < 3000, "the step started at the set time and ended");
     CHECK(fabs(out[1].push_moment - out[0].push_moment - 0.01 * mg) < 0.05 * 0.01 * mg,
           "the estimates differ by m g 10 mm (%g N m, expected %g)", out[1].push_moment - out[0].push_moment, 0.01 * mg);
     CHECK(identical, "the step's references are the same whatever the estimate does after the decision");
+}
+
+/* On one foot and through the landed foot's transfer the estimate holds (the observer's model has
+ * no soles' impacts, docs/controller.md §12.5): a robot standing under a moment steps at a set time;
+ * while it swings and transfers its measured ZMP jumps by 30 mm either way every tick, as at an
+ * impact, and push_moment stays bit-identical to its value at lift-off. With both feet down again
+ * the observer restarts from the held value (its first estimate is the held one) and is back at the
+ * moment by the step's end. */
+static void test_push_held_on_one_foot(void)
+{
+    ahc_step_params st;
+    static ahc_stepper c;
+    ahc_step_sensors s;
+    ahc_step_outputs out;
+    const double flat[2][AHC_LEG_JOINTS] = {{0}};
+    const double mg = HOAP2_TOTAL_MASS * HOAP2_G, M = 0.5 * HOAP2_TOE_X * mg;
+    double zmp, held = NAN, prev = NAN, first_after = NAN;
+    int k, held_ticks = 0, holds_still = 1;
+    moment_params(&st, 1.0, 50.0, 0);
+    st.step_trigger_time = 0.1;
+    stand_under_moment(&c, &st, M, &s);
+    zmp = s.zmp_x;
+    for (k = 2; k < 3000; ++k) {
+        const int holds = c.phase == AHC_STEP_SWING || c.phase == AHC_STEP_TRANSFER; /* the phase this tick runs in */
+        s.zmp_x = holds ? zmp + (k % 2 ? 0.03 : -0.03) : zmp;
+        ahc_step_step(&c, &s, flat, &out);
+        if (holds) {
+            if (isnan(held)) held = prev;
+            holds_still = holds_still && out.push_moment == held;
+            ++held_ticks;
+        } else if (!isnan(held) && isnan(first_after)) {
+            first_after = out.push_moment;
+        }
+        prev = out.push_moment;
+        if (out.phase == AHC_STEP_STAND && !isnan(first_after)) break;
+    }
+    CHECK(held_ticks > 100 && holds_still, "through SWING and TRANSFER (%d ticks) the estimate holds at %g N m",
+          held_ticks, held);
+    CHECK(first_after == held, "both feet down, the observer restarts from the held estimate (%g, held %g N m)",
+          first_after, held);
+    CHECK(k < 3000 && fabs(prev - M) < 0.02 * M,
+          "at the step's end the estimate is back at the moment (%g N m, applied %g)", prev, M);
 }
 
 int main(void)
@@ -685,6 +734,7 @@ int main(void)
     test_push_observer();
     test_push_decision();
     test_push_planned_at_decision();
+    test_push_held_on_one_foot();
     test_triggers();
     test_close_rest();
     test_close_inset();

@@ -169,7 +169,8 @@ ModelInfo makeInfo() {
   out("zmp_plan_y", vr::zmp_plan_y, Type::Real, "m", "The ZMP the step's CoM reference plans in this phase, y");
   out("push_moment", vr::push_moment, Type::Real, "N.m",
       "The stepping layer's estimate of the external pitching moment about the ground (+ tips the robot forward: a push "
-      "on the back), from its momentum observer; 0 with stepping off");
+      "on the back), from its momentum observer; held on one foot, through the landed foot's transfer and until both "
+      "soles carry load again (the observer's model has no impacts); 0 with stepping off");
   for (int s = 0; s < 2; ++s)
     for (int j = 0; j < AHC_LEG_JOINTS; ++j)
       out(std::string("q_") + kSide[s] + "_" + kJoint[j] + "_ref", jointVr(vr::first_joint_ref, s, j), Type::Real,

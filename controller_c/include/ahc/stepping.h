@@ -226,6 +226,7 @@ typedef struct {
     int obs_Hn;                 /* how many of them are held                                        */
     double push_moment;         /* the estimate [N m]                                               */
     double push_planned;        /* the estimate at the step's decision: the push the step plans with [N m] */
+    double obs_loaded_time;     /* how long both soles have carried step_touchdown_fz [s]          */
 } ahc_stepper;
 
 int ahc_step_init(ahc_stepper *c, const ahc_step_params *p, const ahc_params *sp, const ahc_frontal_params *fp);
