@@ -49,8 +49,7 @@ figures="$work/figures.md"
 # One FMU: its fuzzer, then the coverage of its final corpus (every function of ours the inputs
 # reach); the fuzzer's exit status and wall time go to files for the report.
 fuzz_one() {
-  local fmu="$1" exe corpus log t0 rc=0
-  exe="$(find "$sbuild/fmu" -name "${fmu}_fuzz" -type f | head -n1)"
+  local fmu="$1" exe="$2" corpus log t0 rc=0
   corpus="$work/corpus-$fmu"
   log="$work/$fmu.log"
   mkdir -p "$corpus"
@@ -62,17 +61,19 @@ fuzz_one() {
   [ "$rc" -ne 0 ] || LD_PRELOAD="$asan_rt" "$exe" -runs=0 -print_coverage=1 "$corpus" fmu/fuzz/corpus \
     >"$work/$fmu.coverage" 2>&1 || true
 }
+exes=()
 for fmu in "${fmus[@]}"; do
   exe="$(find "$sbuild/fmu" -name "${fmu}_fuzz" -type f | head -n1)"
   [ -x "$exe" ] || { echo "fuzz: ${fmu}_fuzz not built in $sbuild (bash scripts/setup.sh --sanitize)" >&2; exit 1; }
+  exes+=("$exe")
 done
-# As many fuzzers at once as there are cores (each is one process on one core, so an FMU gets the
-# same inputs per second as alone), reported in the FMUs' order.
+# As many fuzzers at once as there are cores (each is one single-threaded process with a core to
+# itself), reported in the FMUs' order.
 jobs="$(nproc)"
 for ((first = 0; first < ${#fmus[@]}; first += jobs)); do
   batch=("${fmus[@]:first:jobs}")
   pids=()
-  for fmu in "${batch[@]}"; do fuzz_one "$fmu" & pids+=($!); done
+  for ((i = first; i < first + ${#batch[@]}; ++i)); do fuzz_one "${fmus[$i]}" "${exes[$i]}" & pids+=($!); done
   wait "${pids[@]}"
   for fmu in "${batch[@]}"; do
     if [ "$(cat "$work/$fmu.status")" -ne 0 ]; then
