@@ -47,7 +47,8 @@ estimate from the decision on against the plant's push moment; then the same wit
 (hoap2/hoap2.urdf's legs through Pinocchio, as tests/test_leg_ik_crosscheck.py maps them; the trunk's
 attitude from the IMU), from the swing's start to the swing sole's first load (a fifth of the weight)
 or the layer's landing: how high the swing sole's lowest corner rose above the stance sole's, its
-largest pitch toes down relative to the stance sole, how far the trunk pitched forward meanwhile,
+largest pitch toes down relative to the stance sole, the stance sole's own largest pitch toes down
+(rolling onto its toe edge), how far the trunk pitched forward meanwhile,
 and where the swing ankle was, ahead of the stance ankle, when the sole came down against where the
 layer sent it.
 
@@ -342,16 +343,16 @@ def swings(scenario, models, engine, overrides, settings) -> int:
           + ": the first swing from the plant's joints and IMU, from its start to the swing sole's first load "
             "(a fifth of the weight) or the landing; times after the push onset [ms]")
     print("| push [N] | outcome | swing starts | swing sole comes down | its lowest corner above the stance sole's, "
-          "highest [mm] | its pitch toes down relative to the stance sole, largest [rad] | the trunk's pitch, change "
+          "highest [mm] | its pitch toes down relative to the stance sole, largest [rad] | the stance sole's pitch toes down, largest [rad] | the trunk's pitch, change "
           "[rad] | swing ankle ahead of the stance ankle when it comes down [mm] | sent to [mm] |")
-    print("|---|---|---|---|---|---|---|---|---|")
+    print("|---|---|---|---|---|---|---|---|---|---|")
     for force in LANDING_FORCES:
         r = run(scenario, models, engine, force, 1.0, overrides)
         d, t = r.data, r.data["time"]
         phase, steps = col(d, "step_phase"), col(d, "steps")
         first = np.flatnonzero(phase == 2)
         if not first.size:
-            print(f"| {force} | {outcome(r)} | - | - | - | - | - | - | - |")
+            print(f"| {force} | {outcome(r)} | - | - | - | - | - | - | - | - |")
             continue
         k0 = int(first[0])
         swing_side = "left" if col(d, "swing_side")[k0] == 0 else "right"
@@ -365,7 +366,7 @@ def swings(scenario, models, engine, overrides, settings) -> int:
         left = np.flatnonzero((phase[k0:] != 2) | (steps[k0:] > 0))
         if left.size:
             k1 = min(k1, k0 + int(left[0]))
-        rise, pitch, ahead = -np.inf, -np.inf, np.nan
+        rise, pitch, tip, ahead = -np.inf, -np.inf, -np.inf, np.nan
         for k in range(k0, k1 + 1):
             q = pin.neutral(model)
             for side in ("left", "right"):
@@ -380,11 +381,12 @@ def swings(scenario, models, engine, overrides, settings) -> int:
             low = {side: min((p + Rs @ c)[2] for c in corners) for side, (p, Rs) in pose.items()}
             rise = max(rise, low[swing_side] - low[stance_side])
             rel = pose[stance_side][1].T @ pose[swing_side][1]
+            tip = max(tip, float(np.arcsin(np.clip(-pose[stance_side][1][2, 0], -1.0, 1.0))))
             pitch = max(pitch, float(np.arcsin(np.clip(-rel[2, 0], -1.0, 1.0))))
             ahead = (pose[swing_side][0] - pose[stance_side][0])[0]
         trunk = d["imu_pitch"][k1] - d["imu_pitch"][k0]
         print(f"| {force} | {outcome(r)} | {1000 * (t[k0] - ONSET):.0f} | {1000 * (t[k1] - ONSET):.0f} | "
-              f"{1000 * rise:.1f} | {pitch:+.3f} | {trunk:+.3f} | {1000 * ahead:.0f} | "
+              f"{1000 * rise:.1f} | {pitch:+.3f} | {tip:+.3f} | {trunk:+.3f} | {1000 * ahead:.0f} | "
               f"{1000 * col(d, 'landing_x')[k1 - 1]:.0f} |")
     return 0
 

@@ -160,11 +160,11 @@ def test_landing_times_table_is_the_docs(fmu_dir):
 
 def test_swing_table_is_the_docs(fmu_dir):
     """docs/capability.md §9.2: the table of `scripts/stepping_trials.py --swing` (1 s back pushes: the
-    first swing's clearance, foot pitch, trunk pitch and reach from the plant's joints and IMU through
+    first swing's clearance, foot pitches, trunk pitch and reach from the plant's joints and IMU through
     Pinocchio on hoap2/hoap2.urdf) is what the script prints now; and the measurement is sound where
     it can be checked: at the swing's start both soles are flat on the ground, so the highest clearance
-    is never below zero by more than a millimetre, and a sole that comes down where it stood shows
-    none."""
+    is never below zero by more than a millimetre, nor the stance sole's largest pitch below zero by
+    more than 5 mrad, and a sole that comes down where it stood shows no clearance."""
     import os
     import subprocess
     import sys
@@ -179,7 +179,8 @@ def test_swing_table_is_the_docs(fmu_dir):
     stepped = [r for r in rows if r[2].strip() != "-"]
     assert stepped, table
     for r in stepped:
-        clearance, ahead = float(r[4]), float(r[7])
+        clearance, stance_pitch, ahead = float(r[4]), float(r[6]), float(r[8])
         assert clearance > -1.0, r
+        assert stance_pitch > -0.005, r
         if abs(ahead) < 5.0:  # came down where it stood
             assert clearance < 1.0, r
