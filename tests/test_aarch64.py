@@ -33,7 +33,7 @@ import pytest
 
 from conftest import REPO_ROOT, SHIPPED
 from test_linux_binaries import GLIBC_BASELINE, version_tuple
-from test_win64 import DISCRETE, SOLVER_COUNTERS, _replay, _write_inputs, controller_tolerance
+from test_win64 import _replay, _write_inputs, assert_platforms_agree
 
 REQUIRED = os.environ.get("ANKLEHIP_REQUIRE_AARCH64") == "1"
 SYSROOT = "/usr/aarch64-linux-gnu"      # Debian's libc6-arm64-cross
@@ -143,18 +143,4 @@ def test_aarch64_binaries_replay_a_closed_loop_like_x86_64(arm_fmus, qemu, arm_r
         arm = _replay(qemu_cmd, qemu_env, arm_runner, info.unzipdir, csv_in, tmp_path / f"{role}_aarch64.csv", h,
                       t_end)
         assert len(x86) == len(arm) == n + 1
-        worst = {}
-        for name in x86.dtype.names[1:]:
-            a, b = x86[name], arm[name]
-            if name in DISCRETE:
-                assert np.array_equal(a, b), f"{role} {name}: discrete output differs on aarch64"
-                continue
-            if name in SOLVER_COUNTERS:   # libm's last bits may move one step-size decision
-                assert np.max(np.abs(a - b)) <= 1e-3 * np.max(np.abs(a)) + 2, f"{role} {name}"
-                continue
-            tol = controller_tolerance(name) if role == "controller" else 1e-8 * float(np.max(np.abs(a))) + 1e-12
-            err = float(np.max(np.abs(a - b)))
-            worst[name] = err
-            assert err <= tol, f"{info.name} {name}: |x86_64 - aarch64| = {err:.3g} > {tol:.3g}"
-        print(f"{scenario} {info.name}: largest |x86_64 - aarch64| "
-              + ", ".join(f"{k} {v:.2g}" for k, v in sorted(worst.items(), key=lambda kv: -kv[1])[:3]))
+        assert_platforms_agree(x86, arm, role, info, scenario, ("x86_64", "aarch64"))

@@ -160,6 +160,28 @@ def controller_tolerance(name: str) -> float:
     return LEG_IK_TOL if name.startswith("q_") and name.endswith("_ref") else 1e-12
 
 
+def assert_platforms_agree(ref, other, role: str, info, scenario: str, labels: tuple[str, str]) -> None:
+    """One FMU's replays on two platforms (`labels`: the reference's, the other's) agree: discrete
+    outputs bit for bit, the integrator's counters within a step-size decision, a controller's
+    outputs to controller_tolerance and a plant's to 1e-8 of their scale; prints the largest
+    differences."""
+    worst = {}
+    for name in ref.dtype.names[1:]:
+        a, b = ref[name], other[name]
+        if name in DISCRETE:
+            assert np.array_equal(a, b), f"{role} {name}: discrete output differs on {labels[1]}"
+            continue
+        if name in SOLVER_COUNTERS:   # libm's last bits may move one step-size decision
+            assert np.max(np.abs(a - b)) <= 1e-3 * np.max(np.abs(a)) + 2, f"{role} {name}"
+            continue
+        tol = controller_tolerance(name) if role == "controller" else 1e-8 * float(np.max(np.abs(a))) + 1e-12
+        err = float(np.max(np.abs(a - b)))
+        worst[name] = err
+        assert err <= tol, f"{info.name} {name}: |{labels[0]} - {labels[1]}| = {err:.3g} > {tol:.3g}"
+    print(f"{scenario} {info.name}: largest |{labels[0]} - {labels[1]}| "
+          + ", ".join(f"{k} {v:.2g}" for k, v in sorted(worst.items(), key=lambda kv: -kv[1])[:3]))
+
+
 @pytest.mark.parametrize("fmi", [2, 3])
 # the sagittal loop, the sagittal controller on the 3D plant, and the 3D controller on it
 # (side_push_frontal: the frontal layer's lean and per-leg set points at work)
@@ -210,22 +232,7 @@ def test_windows_binaries_replay_a_closed_loop_like_the_linux_ones(win64_fmus, w
                 ref = np.asarray(d[name][1:n + 1], float)
                 err = float(np.max(np.abs(lin[name][1:] - ref)))
                 assert err <= 1e-9 * (np.max(np.abs(ref)) + 1e-3), (role, name, err)
-
-        worst = {}
-        for name in lin.dtype.names[1:]:
-            a, b = lin[name], win[name]
-            if name in DISCRETE:
-                assert np.array_equal(a, b), f"{role} {name}: discrete output differs on Windows"
-                continue
-            if name in SOLVER_COUNTERS:   # libm's last bits may move one step-size decision
-                assert np.max(np.abs(a - b)) <= 1e-3 * np.max(np.abs(a)) + 2, f"{role} {name}"
-                continue
-            tol = controller_tolerance(name) if role == "controller" else 1e-8 * float(np.max(np.abs(a))) + 1e-12
-            err = float(np.max(np.abs(a - b)))
-            worst[name] = err
-            assert err <= tol, f"{info.name} {name}: |linux - win64| = {err:.3g} > {tol:.3g}"
-        print(f"{scenario} {info.name}: largest |linux - win64| "
-              + ", ".join(f"{k} {v:.2g}" for k, v in sorted(worst.items(), key=lambda kv: -kv[1])[:3]))
+        assert_platforms_agree(lin, win, role, info, scenario, ("linux", "win64"))
 
 
 LIBM_PROBE = r"""
