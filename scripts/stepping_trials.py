@@ -39,9 +39,11 @@ centre of pressure lay against the bound's (at the toe: the feet's before the de
 sole's alone in the swing, and how long its heel carried nothing), and how far
 the pushed pendulum's capture point (the plant's CoM, xi = c + c'/omega, plus u = F h_push / (m g))
 lay beyond the landed sole's toe at the landing, when the swing sole first carried a fifth of the
-weight (which may be before the layer counts the landing), and the range of the layer's push_moment
-estimate from the decision on against the plant's push moment; then the same with the decision set
-100 ms after the onset (step_trigger_time), whatever the layer's rules.
+weight (which may be before the layer counts the landing), the range of the layer's push_moment
+estimate from the decision on against the plant's push moment, and the time the pushed pendulum left
+from the decision to land a step of step_length_max (the ZMP at the stance toe, the push at its peak)
+against the time the layer took; then the same with the decision set 100 ms after the onset
+(step_trigger_time), whatever the layer's rules.
 
 --swing: 1 s back pushes of 8-20 N with stepping: the first swing as the plant's joints and IMU put it
 (hoap2/hoap2.urdf's legs through Pinocchio, as tests/test_leg_ik_crosscheck.py maps them; the trunk's
@@ -262,8 +264,10 @@ def landing_table(scenario, models, engine, overrides, robot, l_max, dt_s):
           f"| stance sole alone: its heel unloaded [%] "
           f"| capture point under the push at the landing, beyond the front toe [mm] "
           f"| the swing sole first carries a fifth of the weight [ms] "
-          f"| push_moment from the decision to the end, min .. max [N m] (the push's F h_push) |")
-    print("|---|---|---|---|---|---|---|---|---|---|---|---|")
+          f"| push_moment from the decision to the end, min .. max [N m] (the push's F h_push) "
+          f"| from the decision: the time the pushed pendulum leaves to land a step of step_length_max / the layer's "
+          f"[ms] |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|")
     for force in LANDING_FORCES:
         r = run(scenario, models, engine, force, 1.0, overrides)
         t, phase, steps = r.data["time"], col(r.data, "step_phase"), col(r.data, "steps")
@@ -287,14 +291,20 @@ def landing_table(scenario, models, engine, overrides, robot, l_max, dt_s):
         # is the landing point plus the sole's toe
         beyond = "-"
         if landed.size:
-            k, n = landed[0] - 1, 10
-            # the plant's com_x is from the ankles' mid-point, which moves with the swing foot; the
-            # step frame's origin is that mid-point (feet_x, world) when the step was decided
-            c = r.data["com_x"] + r.data["feet_x"] - r.data["feet_x"][decided[0]]
-            z = r.data["com_z"] + r.controller_parameters["ankle_height"]  # com_z: above the ankles
-            xi = c[k] + (c[k] - c[k - n]) / (t[k] - t[k - n]) / np.sqrt(robot.g / z[k])
-            u = r.data["push_force"][k] * r.plant_parameters["h_push"] / r.data["fz"][0]
-            beyond = f"{1000 * (xi + u - col(r.data, 'landing_x')[landed[0]] - robot.x_toe):+.0f}"
+            k = landed[0] - 1
+            beyond = f"{1000 * (pushed_capture_point(r, k, decided[0], robot.g) - col(r.data, 'landing_x')[landed[0]] - robot.x_toe):+.0f}"
+        # the time the pushed pendulum leaves a step of step_length_max from the decision: with the ZMP
+        # at the stance toe and the push at its peak, the pushed capture point's distance d beyond the
+        # toe grows as d e^(omega T), and the landed toe holds it while d e^(omega T) <= L (both feet
+        # side by side at the decision)
+        budget = "-"
+        if decided.size:
+            k = decided[0]
+            d = pushed_capture_point(r, k, k, robot.g, force) - robot.x_toe
+            L = r.controller_parameters["step_length_max"]
+            omega = np.sqrt(robot.g / (r.data["com_z"][k] + r.controller_parameters["ankle_height"]))
+            took = f"{1000 * (t[landed[0]] - t[k]):.0f}" if landed.size else "-"
+            budget = ("no limit" if d <= 0 else f"{1000 * max(np.log(L / d) / omega, 0.0):.0f}") + f" / {took}"
         # the swing sole's first load after lift-off (the plant's load cells, a fifth of the weight: the
         # layer's step_touchdown_fz), which may come before the layer counts the landing (it waits for
         # the foot within step_touchdown_tol of its landing point)
@@ -310,7 +320,23 @@ def landing_table(scenario, models, engine, overrides, robot, l_max, dt_s):
             m = col(r.data, "push_moment")[decided[0]:]
             moment = f"{m.min():+.1f} .. {m.max():+.1f} ({force * r.plant_parameters['h_push']:.1f})"
         print(f"| {force} | {outcome(r)} | {cells[0]} | {cells[1]} | {bound} | {ahead} | {at_toe} | {zmp} | {heel} | {beyond} "
-              f"| {touch} | {moment} |")
+              f"| {touch} | {moment} | {budget} |")
+
+
+def pushed_capture_point(r, k, decided, g, force=None):
+    """The pushed pendulum's capture point xi + u at row k in the step's frame (the ankles' mid-point at
+    the decision row), from the plant's truth (its CoM and the push it applies at h_push; the layer's
+    estimates are jolted when a sole touches down): xi = c + c'/omega (c' over the 10 rows before k),
+    omega from the CoM's height above the ground, u = F h_push / (m g), where a sole's ZMP must be to
+    hold it; F the push at row k, or `force`."""
+    t, n = r.data["time"], 10
+    # the plant's com_x is from the ankles' mid-point, which moves with the swing foot; the step
+    # frame's origin is that mid-point (feet_x, world) when the step was decided
+    c = r.data["com_x"] + r.data["feet_x"] - r.data["feet_x"][decided]
+    z = r.data["com_z"] + r.controller_parameters["ankle_height"]  # com_z: above the ankles
+    xi = c[k] + (c[k] - c[k - n]) / (t[k] - t[k - n]) / np.sqrt(g / z[k])
+    u = (r.data["push_force"][k] if force is None else force) * r.plant_parameters["h_push"] / r.data["fz"][0]
+    return xi + u
 
 
 def first_load(d, k0):

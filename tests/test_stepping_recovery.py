@@ -140,7 +140,8 @@ def test_landing_times_table_is_the_docs(fmu_dir):
     """docs/capability.md §9.2: the tables of `scripts/stepping_trials.py --landing` (1 s back pushes:
     outcome, decision and first landing times, the one-step bound at that landing, where the foot
     landed, the centre of pressure before the decision and on the stance sole alone, the pushed pendulum's capture point against the landed sole's
-    toe from the plant's state; the layer's decisions, then decisions set 100 ms into the
+    toe from the plant's state, the time it left from the decision to land a full step against the
+    layer's; the layer's decisions, then decisions set 100 ms into the
     push with step_trigger_time) are what the script prints now — the script runs, and the figures
     the docs draw conclusions from are today's."""
     import os
