@@ -284,11 +284,8 @@ def landing_table(scenario, models, engine, overrides, robot, l_max, dt_s):
         if decided.size:
             before = (t >= ONSET) & (t < t[decided[0]])
             at_toe = f"{100 * np.mean(col(r.data, 'zmp_x')[before] > robot.x_toe - 0.0025):.0f}"
-        # the pushed pendulum's capture point xi + u the tick before the layer counts the landing,
-        # from the plant's truth (its CoM and the push it applies at h_push; the layer's estimates are
-        # jolted when a sole touches down): xi = c + c'/omega, omega from the CoM's height above the
-        # ground, u = F h_push / (m g), where the front sole's ZMP must be to hold it; the front toe
-        # is the landing point plus the sole's toe
+        # the pushed pendulum's capture point the tick before the layer counts the landing, against the
+        # front toe (the landing point plus the sole's toe)
         beyond = "-"
         if landed.size:
             k = landed[0] - 1
@@ -302,7 +299,7 @@ def landing_table(scenario, models, engine, overrides, robot, l_max, dt_s):
             k = decided[0]
             d = pushed_capture_point(r, k, k, robot.g, force) - robot.x_toe
             L = r.controller_parameters["step_length_max"]
-            omega = np.sqrt(robot.g / (r.data["com_z"][k] + r.controller_parameters["ankle_height"]))
+            omega = pendulum_omega(r, k, robot.g)
             took = f"{1000 * (t[landed[0]] - t[k]):.0f}" if landed.size else "-"
             budget = ("no limit" if d <= 0 else f"{1000 * max(np.log(L / d) / omega, 0.0):.0f}") + f" / {took}"
         # the swing sole's first load after lift-off (the plant's load cells, a fifth of the weight: the
@@ -323,6 +320,12 @@ def landing_table(scenario, models, engine, overrides, robot, l_max, dt_s):
               f"| {touch} | {moment} | {budget} |")
 
 
+def pendulum_omega(r, k, g):
+    """The pendulum's frequency at row k, sqrt(g / z), z the plant's CoM height above the ground (its
+    com_z is above the ankles)."""
+    return np.sqrt(g / (r.data["com_z"][k] + r.controller_parameters["ankle_height"]))
+
+
 def pushed_capture_point(r, k, decided, g, force=None):
     """The pushed pendulum's capture point xi + u at row k in the step's frame (the ankles' mid-point at
     the decision row), from the plant's truth (its CoM and the push it applies at h_push; the layer's
@@ -333,8 +336,7 @@ def pushed_capture_point(r, k, decided, g, force=None):
     # the plant's com_x is from the ankles' mid-point, which moves with the swing foot; the step
     # frame's origin is that mid-point (feet_x, world) when the step was decided
     c = r.data["com_x"] + r.data["feet_x"] - r.data["feet_x"][decided]
-    z = r.data["com_z"] + r.controller_parameters["ankle_height"]  # com_z: above the ankles
-    xi = c[k] + (c[k] - c[k - n]) / (t[k] - t[k - n]) / np.sqrt(g / z[k])
+    xi = c[k] + (c[k] - c[k - n]) / (t[k] - t[k - n]) / pendulum_omega(r, k, g)
     u = (r.data["push_force"][k] if force is None else force) * r.plant_parameters["h_push"] / r.data["fz"][0]
     return xi + u
 

@@ -28,7 +28,6 @@ import shutil
 import subprocess
 import zipfile
 
-import numpy as np
 import pytest
 
 from conftest import REPO_ROOT, SHIPPED
