@@ -6,6 +6,7 @@ a journal of another sweep is refused by name.
 """
 from __future__ import annotations
 
+import contextlib
 import csv
 import os
 import signal
@@ -58,16 +59,22 @@ def _free_port() -> int:
         return s.getsockname()[1]
 
 
-def test_real_scheduler_and_worker_by_address(one_by_one, tmp_path):
-    """`dask scheduler` and `dask worker` started here on 127.0.0.1 (stopped by their pids): the
-    sweep reaches them by --scheduler and by $DASK_SCHEDULER_ADDRESS, and the scheduler's
-    worker ran the points."""
+def _stop(proc) -> None:
+    proc.terminate()
+    try:
+        proc.wait(timeout=20)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+
+
+@contextlib.contextmanager
+def _scheduler():
+    """`dask scheduler` on a free port of 127.0.0.1, listening: yields its address and the environment
+    to start its clients in; stopped (by its pid) on the way out."""
     port = _free_port()
-    addr = f"tcp://127.0.0.1:{port}"
     env = {**os.environ, "DASK_LOGGING__DISTRIBUTED": "error"}
     sched = subprocess.Popen([DASK, "scheduler", "--host", "127.0.0.1", "--port", str(port), "--no-dashboard"],
                              stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=env)
-    worker = None
     try:
         deadline = time.time() + 60
         while True:
@@ -77,33 +84,38 @@ def test_real_scheduler_and_worker_by_address(one_by_one, tmp_path):
             except OSError:
                 assert time.time() < deadline, "dask scheduler did not start"
                 time.sleep(0.2)
+        yield f"tcp://127.0.0.1:{port}", env
+    finally:
+        _stop(sched)
+
+
+def test_real_scheduler_and_worker_by_address(one_by_one, tmp_path):
+    """`dask scheduler` and `dask worker` started here on 127.0.0.1 (stopped by their pids): the
+    sweep reaches them by --scheduler and by $DASK_SCHEDULER_ADDRESS, and the scheduler's
+    worker ran the points."""
+    with _scheduler() as (addr, env):
         worker = subprocess.Popen([DASK, "worker", addr, "--nworkers", "1", "--nthreads", "1", "--no-dashboard",
                                    "--name", "anklehip-test-worker"],
                                   stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=env)
-        from dask.distributed import Client
-        with Client(addr, timeout="30s") as c:
-            c.wait_for_workers(1, timeout=60)
-        res = run_sweep(str(find_scenario(SCENARIO)), FORCES, VARIANTS, workers=1, engine="native", scheduler=addr)
-        assert res.complete and _strip(res.rows) == one_by_one
-        out = tmp_path / "by_env"
-        r = subprocess.run([ANKLEHIP, "sweep", SCENARIO, "--forces", "7,9,11", "--variant", "full", "--engine",
-                            "native", "--out", str(out)], capture_output=True, text=True, timeout=300,
-                           env={**env, "DASK_SCHEDULER_ADDRESS": addr})
-        assert r.returncode == 0, r.stderr
-        got = [(x["peak_force"], x["outcome"], x["max_phase"], x["max_abs_zmp"]) for x in _table(out / "sweep.csv")]
-        assert got == [(str(x["peak_force"]), x["outcome"], str(x["max_phase"]), str(x["max_abs_zmp"]))
-                       for x in one_by_one if x["variant"] == "full"]
-        with Client(addr, timeout="30s") as c:
-            logs = c.run(lambda dask_worker: dask_worker.state.executed_count)
-        assert sum(logs.values()) >= 9      # 6 + 3 points ran on the scheduler's worker
-    finally:
-        for p in (worker, sched):
-            if p is not None:
-                p.terminate()
-                try:
-                    p.wait(timeout=20)
-                except subprocess.TimeoutExpired:
-                    p.kill()
+        try:
+            from dask.distributed import Client
+            with Client(addr, timeout="30s") as c:
+                c.wait_for_workers(1, timeout=60)
+            res = run_sweep(str(find_scenario(SCENARIO)), FORCES, VARIANTS, workers=1, engine="native", scheduler=addr)
+            assert res.complete and _strip(res.rows) == one_by_one
+            out = tmp_path / "by_env"
+            r = subprocess.run([ANKLEHIP, "sweep", SCENARIO, "--forces", "7,9,11", "--variant", "full", "--engine",
+                                "native", "--out", str(out)], capture_output=True, text=True, timeout=300,
+                               env={**env, "DASK_SCHEDULER_ADDRESS": addr})
+            assert r.returncode == 0, r.stderr
+            got = [(x["peak_force"], x["outcome"], x["max_phase"], x["max_abs_zmp"]) for x in _table(out / "sweep.csv")]
+            assert got == [(str(x["peak_force"]), x["outcome"], str(x["max_phase"]), str(x["max_abs_zmp"]))
+                           for x in one_by_one if x["variant"] == "full"]
+            with Client(addr, timeout="30s") as c:
+                logs = c.run(lambda dask_worker: dask_worker.state.executed_count)
+            assert sum(logs.values()) >= 9      # 6 + 3 points ran on the scheduler's worker
+        finally:
+            _stop(worker)
 
 
 def _sweep_cmd(out: Path, *extra: str) -> list[str]:
@@ -215,20 +227,7 @@ def test_journal_of_another_sweep_is_refused(tmp_path):
 def test_scheduler_without_workers_says_so_and_gives_up_after_the_timeout(tmp_path):
     """A scheduler with no worker (issue 33: the sweep waited silently forever): a line says so and
     how to start one, and after --worker-timeout the command ends with the reason."""
-    port = _free_port()
-    addr = f"tcp://127.0.0.1:{port}"
-    env = {**os.environ, "DASK_LOGGING__DISTRIBUTED": "error"}
-    sched = subprocess.Popen([DASK, "scheduler", "--host", "127.0.0.1", "--port", str(port), "--no-dashboard"],
-                             stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=env)
-    try:
-        deadline = time.time() + 60
-        while True:
-            try:
-                socket.create_connection(("127.0.0.1", port), timeout=1).close()
-                break
-            except OSError:
-                assert time.time() < deadline, "dask scheduler did not start"
-                time.sleep(0.2)
+    with _scheduler() as (addr, env):
         t0 = time.time()
         r = subprocess.run([ANKLEHIP, "sweep", SCENARIO, "--forces", "7,9", "--scheduler", addr,
                             "--worker-timeout", "2", "--out", str(tmp_path / "out")],
@@ -238,12 +237,6 @@ def test_scheduler_without_workers_says_so_and_gives_up_after_the_timeout(tmp_pa
         assert f"the Dask scheduler at {addr} has no worker; waiting up to 2 s" in r.stderr, r.stderr
         assert f"no Dask worker connected to the scheduler at {addr} within 2 s" in r.stderr, r.stderr
         assert "Traceback" not in r.stderr
-    finally:
-        sched.terminate()
-        try:
-            sched.wait(timeout=20)
-        except subprocess.TimeoutExpired:
-            sched.kill()
 
 
 def test_journal_that_is_not_utf8_is_refused_naming_the_file(tmp_path):
