@@ -30,9 +30,9 @@ import zipfile
 
 import pytest
 
-from conftest import REPO_ROOT, SHIPPED
+from conftest import SHIPPED
 from test_linux_binaries import GLIBC_BASELINE, version_tuple
-from test_win64 import _replay, _write_inputs, assert_platforms_agree
+from test_win64 import _replay, _write_inputs, assert_platforms_agree, closed_loop_to_replay
 
 REQUIRED = os.environ.get("ANKLEHIP_REQUIRE_AARCH64") == "1"
 SYSROOT = "/usr/aarch64-linux-gnu"      # Debian's libc6-arm64-cross
@@ -119,27 +119,13 @@ def test_aarch64_binaries(arm_fmus, name, fmi, tmp_path):
 def test_aarch64_binaries_replay_a_closed_loop_like_x86_64(arm_fmus, qemu, arm_runner, native_tool, fmu_dir,
                                                             tmp_path, scenario, stop, fmi):
     """FMI 2.0 and the FMI 3.0 twins: the runner reads either (binaries/aarch64-linux in both)."""
-    from anklehip.running.master import Models, simulate
-    from anklehip.files.scenario import load_scenario
-
-    sc = load_scenario(REPO_ROOT / "scenarios" / f"{scenario}.toml")
-    models = Models.for_scenario(sc, fmu_dir, fmi=fmi)
-    res = simulate(sc, models, stop_time=stop)
-    assert res.outcome == "completed", res.message
-    d, n, h = res.data, len(res.data) - 1, res.step
-    t_end = float(d["time"][n])
-    by_var = {var: col for col, var in res.controller_columns.items()}
-    plant_inputs = [v.name for v in models.plant.by_causality("input")]
-    cases = {
-        "controller": (models.controller, [(c, c) for c in res.controller_inputs]),
-        "plant": (models.plant, [(v, by_var.get(v, v)) for v in plant_inputs if by_var.get(v, v) in d.dtype.names]),
-    }
+    res, n, h, t_end, cases = closed_loop_to_replay(scenario, fmu_dir, stop, fmi)
     x86_runner = native_tool("anklehip_rt_step")
     qemu_cmd, qemu_env = qemu
-    for role, (info, columns) in cases.items():
-        csv_in = _write_inputs(tmp_path / f"{role}_in.csv", d, columns, n)
-        x86 = _replay([], None, x86_runner, info.unzipdir, csv_in, tmp_path / f"{role}_x86_64.csv", h, t_end)
+    for role, (info, columns, params) in cases.items():
+        csv_in = _write_inputs(tmp_path / f"{role}_in.csv", res.data, columns, n)
+        x86 = _replay([], None, x86_runner, info.unzipdir, csv_in, tmp_path / f"{role}_x86_64.csv", h, t_end, params)
         arm = _replay(qemu_cmd, qemu_env, arm_runner, info.unzipdir, csv_in, tmp_path / f"{role}_aarch64.csv", h,
-                      t_end)
+                      t_end, params)
         assert len(x86) == len(arm) == n + 1
         assert_platforms_agree(x86, arm, role, info, scenario, ("x86_64", "aarch64"))

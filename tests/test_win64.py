@@ -146,6 +146,29 @@ def _replay(cmd_prefix, env, runner, unzipdir, csv_in, csv_out, step, stop, para
     return read_csv_exact(csv_out)
 
 
+def closed_loop_to_replay(scenario: str, fmu_dir, stop: float, fmi: int):
+    """The closed-loop run of `scenario` that the cross-platform tests replay FMU by FMU: the result, its
+    last row n, its step h, its end time, and per role (controller, plant) the FMU, its inputs as
+    (variable, result column) and the parameters the closed loop gave it (the 3D plant's link CoM
+    offsets reach the controller this way, docs/fmu.md)."""
+    from anklehip.running.master import Models, simulate
+    from anklehip.files.scenario import load_scenario
+
+    sc = load_scenario(REPO_ROOT / "scenarios" / f"{scenario}.toml")
+    models = Models.for_scenario(sc, fmu_dir, fmi=fmi)
+    res = simulate(sc, models, stop_time=stop)
+    assert res.outcome == "completed", res.message
+    d, n = res.data, len(res.data) - 1
+    by_var = {var: col for col, var in res.controller_columns.items()}
+    plant_inputs = [v.name for v in models.plant.by_causality("input")]
+    cases = {
+        "controller": (models.controller, [(c, c) for c in res.controller_inputs], res.controller_overrides),
+        "plant": (models.plant, [(v, by_var.get(v, v)) for v in plant_inputs if by_var.get(v, v) in d.dtype.names],
+                  sc.plant),
+    }
+    return res, n, res.step, float(d["time"][n]), cases
+
+
 DISCRETE = {"phase", "fault", "phase_y", "fault_y", "fallen", "contact", "contact_mode", "terminated"}
 # AnkleHipController3D's per-leg set points q_<side>_<joint>_ref come from the legs' inverse
 # kinematics, which is singular at a straight knee: the knee angle is acos of a cosine near 1,
@@ -190,25 +213,8 @@ def assert_platforms_agree(ref, other, role: str, info, scenario: str, labels: t
 def test_windows_binaries_replay_a_closed_loop_like_the_linux_ones(win64_fmus, wine, win_runner, native_tool,
                                                                     fmu_dir, tmp_path, scenario, stop, fmi):
     """FMI 2.0 (win64) and the FMI 3.0 twins (x86_64-windows): the runner reads either."""
-    from anklehip.running.master import Models, simulate
-    from anklehip.files.scenario import load_scenario
-
-    sc = load_scenario(REPO_ROOT / "scenarios" / f"{scenario}.toml")
-    models = Models.for_scenario(sc, fmu_dir, fmi=fmi)
-    res = simulate(sc, models, stop_time=stop)
-    assert res.outcome == "completed", res.message
-    d, n, h = res.data, len(res.data) - 1, res.step
-    t_end = float(d["time"][n])
-
-    by_var = {var: col for col, var in res.controller_columns.items()}
-    plant_inputs = [v.name for v in models.plant.by_causality("input")]
-    # each FMU with the parameters the closed loop gave it (the 3D plant's link CoM offsets reach
-    # the controller this way, docs/fmu.md)
-    cases = {
-        "controller": (models.controller, [(c, c) for c in res.controller_inputs], res.controller_overrides),
-        "plant": (models.plant, [(v, by_var.get(v, v)) for v in plant_inputs if by_var.get(v, v) in d.dtype.names],
-                  sc.plant),
-    }
+    res, n, h, t_end, cases = closed_loop_to_replay(scenario, fmu_dir, stop, fmi)
+    d = res.data
     linux_runner = native_tool("anklehip_rt_step")
     wine_cmd, wine_env = wine
     for role, (info, columns, params) in cases.items():
