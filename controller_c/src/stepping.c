@@ -54,6 +54,7 @@ void ahc_step_params_default(ahc_step_params *p)
     p->step_trigger_time = 0.0;
     p->step_push_estimate = 0;
     p->step_observer_gain = 50.0;
+    p->step_swing_rate_max = 0.0;
 }
 
 #define SD(field, unit, lo, hi, desc) \
@@ -103,6 +104,7 @@ static const ahc_param_info k_stable[] = {
     SD(step_trigger_time, "s", 0.0, 1e6, "A step starts at the first tick at or after this time (ticks x sample_period from the start) whatever the decision rules, if the robot stands then: experiments on the decision's timing; 0: off"),
     SI(step_push_estimate, 0.0, 2.0, "The estimated external pitching moment (push_moment) in the step: 1 in its plan (the weight shift, the landing point, the CoM reference); 2 in the decision too (the capture point beyond the feet is xi + u, u = push_moment / (m g)); 0 nowhere"),
     SD(step_observer_gain, "1/s", 1.0, 500.0, "The momentum observer's gain: push_moment follows the external moment as a first-order lag of this bandwidth"),
+    SD(step_swing_rate_max, "rad/s", 0.0, 1e3, "The swing leg's joint set points move at most this fast while it swings (a tick's change at most this x sample_period); 0: no limit"),
 };
 #define STABLE_LEN (sizeof k_stable / sizeof k_stable[0])
 
@@ -845,14 +847,19 @@ static void plan_joints(ahc_stepper *c, const double r[2], double leg, double ro
 
 /* ---- one tick --------------------------------------------------------------------------------- */
 
-/* The set points plus the blended-out jump of the last switch. */
+/* The set points plus the blended-out jump of the last switch; the swing leg's rate-limited to
+ * step_swing_rate_max (its plan jumps where the foot first comes within the leg's reach,
+ * docs/controller.md §12.4 item 4). */
 static void blend(ahc_stepper *c, ahc_step_outputs *out)
 {
     const double w = 1.0 - smooth01(c->blend_time / c->p.step_blend_time);
+    const double dq_max = c->p.step_swing_rate_max * c->dt;
     int side, j;
     for (side = 0; side < 2; ++side)
         for (j = 0; j < AHC_LEG_JOINTS; ++j) {
             out->q_ref[side][j] += w * c->blend_from[side][j];
+            if (dq_max > 0.0 && one_foot(c->phase) && side == c->swing_side)
+                out->q_ref[side][j] = clampd(out->q_ref[side][j], c->q_out[side][j] - dq_max, c->q_out[side][j] + dq_max);
             c->q_out[side][j] = out->q_ref[side][j];
         }
     c->blend_time += c->dt;

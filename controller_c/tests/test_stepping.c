@@ -40,6 +40,7 @@ static void defaults(ahc_params *sp, ahc_frontal_params *fp, ahc_step_params *st
 typedef struct {
     int started, ended, steps, phases_seen, n_seq, seq[16];
     double landing[2], max_jump, max_com_err, max_rate[AHC_LEG_JOINTS];
+    double max_swing_step; /* the swing leg's largest set-point change in a tick while it swings [rad] */
     double rest_planned;  /* the first SETTLE's planned end (the closing step's earliest start) [s] */
     double close_start;   /* the closing step's weight shift began [s]                         */
     double close_capture[2]; /* the capture point when the closing step's swing began [m]         */
@@ -129,6 +130,9 @@ static void kinematic_run(const ahc_step_params *st, double unrest, kinematic_re
                             fprintf(stderr, "rate tick %d phase %d t %.4f side %d joint %d: %.1f rad/s\n", k, out.phase,
                                     c.phase_time, side, j, (out.q_ref[side][j] - prev[side][j]) / sp.sample_period);
             r->max_jump = fmax(r->max_jump, jump);
+            if (r->started && (out.phase == AHC_STEP_SWING || out.phase == AHC_STEP_CLOSE))
+                for (j = 0; j < AHC_LEG_JOINTS; ++j)
+                    r->max_swing_step = fmax(r->max_swing_step, fabs(out.q_ref[out.swing_side][j] - prev[out.swing_side][j]));
             if (r->started)
                 for (side = 0; side < 2; ++side)
                     for (j = 0; j < AHC_LEG_JOINTS; ++j)
@@ -182,6 +186,27 @@ static void test_kinematic_step(void)
     printf("kinematic step: fastest planned joint rates [rad/s]: hip yaw %.1f, hip pitch %.1f, hip roll %.1f, knee %.1f, "
            "ankle pitch %.1f, ankle roll %.1f\n",
            r.max_rate[0], r.max_rate[1], r.max_rate[2], r.max_rate[3], r.max_rate[4], r.max_rate[5]);
+}
+
+/* step_swing_rate_max: the swing leg's set points move at most that fast while it swings (the kinematic
+ * plan asks up to 11.9 rad/s, so 5 rad/s, Hoap2Plant3D's servo rate, is a limit that acts), and the
+ * steps still run to the end. */
+static void test_swing_rate_max(void)
+{
+    ahc_params sp;
+    ahc_frontal_params fp;
+    ahc_step_params st;
+    kinematic_result free_run, limited;
+    defaults(&sp, &fp, &st);
+    kinematic_run(&st, 0.0, &free_run);
+    st.step_swing_rate_max = 5.0;
+    kinematic_run(&st, 0.0, &limited);
+    CHECK(free_run.max_swing_step > 5.0 * sp.sample_period * 1.5,
+          "without the limit the swing leg moves faster than 5 rad/s (%.2f rad/s)", free_run.max_swing_step / sp.sample_period);
+    CHECK(limited.max_swing_step <= 5.0 * sp.sample_period * (1.0 + 1e-12),
+          "with step_swing_rate_max 5 rad/s it moves at most that (%.4f rad/s)", limited.max_swing_step / sp.sample_period);
+    CHECK(limited.ended && limited.steps == 2, "both steps run to the end (%d steps)", limited.steps);
+    CHECK(limited.max_jump < 0.02, "the references move at most 0.02 rad per tick (%.4f)", limited.max_jump);
 }
 
 /* The closing step's rest (step_close_rest): off, it starts at SETTLE's planned end; on (the default), it waits
@@ -744,5 +769,6 @@ int main(void)
     test_foot_choice();
     test_state_validate();
     test_kinematic_step();
+    test_swing_rate_max();
     TEST_MAIN_END();
 }

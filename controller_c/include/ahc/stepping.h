@@ -128,6 +128,8 @@ typedef struct {
                                   reference); 2 in the decision too (xi + u); 0 nowhere          */
     double step_observer_gain; /* the momentum observer's gain: the estimate follows the external
                                   moment with this bandwidth [1/s]                               */
+    double step_swing_rate_max; /* the swing leg's set points move at most this fast while it swings
+                                  (docs/controller.md §12.4 item 4); 0: no limit [rad/s]          */
 } ahc_step_params;
 
 /* HOAP-2 defaults (docs/controller.md §12): stepping off. */
