@@ -188,9 +188,9 @@ static void test_kinematic_step(void)
            r.max_rate[0], r.max_rate[1], r.max_rate[2], r.max_rate[3], r.max_rate[4], r.max_rate[5]);
 }
 
-/* step_swing_rate_max: the swing leg's set points move at most that fast while it swings (the kinematic
- * plan asks up to 11.9 rad/s, so 5 rad/s, Hoap2Plant3D's servo rate, is a limit that acts), and the
- * steps still run to the end. */
+/* step_swing_rate_max: the swing leg's set points move at most that fast while it swings (the
+ * kinematic plan asks up to 12.9 rad/s of the knee, so 5 rad/s, Hoap2Plant3D's servo rate, is a
+ * limit that acts), and the steps still run to the end. */
 static void test_swing_rate_max(void)
 {
     ahc_params sp;
