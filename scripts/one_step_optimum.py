@@ -1,8 +1,9 @@
 """Make the cached one-step optimum, anklehip/analysis/data/one_step_optimum.json (docs/capability.md
 section 9.3): for the 1 s back push (50 ms rise, at the scenarios' push point) the largest peak force
-HOAP-2 survives with one recovery step lifting at the push's onset, by trajectory optimization on the
-whole robot's sagittal five-link model (anklehip.analysis.one_step: CasADi, IPOPT, Radau
-collocation), over the step's landing time.
+HOAP-2 survives with one recovery step, by trajectory optimization on the whole robot's sagittal
+five-link model (anklehip.analysis.one_step: CasADi, IPOPT, Radau collocation), over the step's
+landing time, in two series (SERIES): the step lifting at the push's onset, its sole free to skim the
+ground; and lifting 60 ms into the push, its sole 10 mm clear of the ground over mid-swing.
 
 Each point is solved on two meshes (intervals of at most DT and DT/2): the coarse one by continuation
 from its neighbour in landing time, the better of two local optima (best_coarse: the problem has a
@@ -40,8 +41,10 @@ DURATION, RISE = 1.0, 0.05
 DT = 0.05                       # the coarse mesh's longest interval [s]; the cached value is DT/2's
 T_AFTER = 0.5                   # horizon after the push [s]
 T_AFTER_CHECK = 1.0             # the horizon check's
-LIFTS = (0.0,)                  # at the push's onset (a later lift, 0.06 s, the stepping layer's decision on a
-                                # 20 N push, did not converge on the fine mesh: docs/capability.md 9.3)
+# the series (t_lift [s], clearance [m]): the step lifting at the push's onset, its sole free to skim the
+# ground; and lifting 60 ms in (the push-aware stepping layer decides 46-70 ms into 12-20 N pushes,
+# docs/capability.md 9.2), its sole 10 mm clear over mid-swing (docs/capability.md 9.3)
+SERIES = ((0.0, 0.0), (0.06, 0.01))
 LANDINGS = (0.2, 0.25, 0.3, 0.35, 0.4)
 SEED_LANDING = 0.3              # each chain starts here, from rest
 FORWARD = 0.1                   # [m] the forced step's least length (best_coarse)
@@ -54,11 +57,11 @@ def sources() -> dict:
     return {f: hashlib.sha256((ROOT / f).read_bytes()).hexdigest() for f in files}
 
 
-def best_coarse(bp, t_lift: float, t_land: float, guess) -> "os_.Solution":
+def best_coarse(bp, t_lift: float, t_land: float, clearance: float, guess) -> "os_.Solution":
     """The coarse optimum of a point: the better of two local optima, each from `guess`: the free problem,
     and a step forced FORWARD ahead, then released (the problem has a poorer local optimum, the step
     in place, that a warm start from another landing time can fall into)."""
-    kw = dict(t_after=T_AFTER, dt=DT)
+    kw = dict(t_after=T_AFTER, dt=DT, clearance=clearance)
     free = os_.solve(bp, DURATION, RISE, t_lift, t_land, guess=guess, **kw)
     forced = os_.solve(bp, DURATION, RISE, t_lift, t_land, guess=guess, l_min=FORWARD, **kw)
     released = os_.solve(bp, DURATION, RISE, t_lift, t_land, guess=forced, **kw)
@@ -66,8 +69,8 @@ def best_coarse(bp, t_lift: float, t_land: float, guess) -> "os_.Solution":
     return max(done, key=lambda s: s.f_peak)
 
 
-def coarse_chain(t_lift: float, landings) -> dict:
-    """The coarse optima of one lift time, by continuation over the landing time outward from
+def coarse_chain(t_lift: float, clearance: float, landings) -> dict:
+    """The coarse optima of one series (lift time, clearance), by continuation over the landing time outward from
     SEED_LANDING (the first from the lift-at-onset seed)."""
     bp = os_.hoap2()
     seed = os_.solve(bp, DURATION, RISE, 0.0, SEED_LANDING, t_after=T_AFTER, dt=DT)
@@ -75,11 +78,11 @@ def coarse_chain(t_lift: float, landings) -> dict:
     coarse = {}
     for t_land in order:
         near = min(coarse, key=lambda t: abs(t - t_land)) if coarse else None
-        coarse[t_land] = best_coarse(bp, t_lift, t_land, coarse[near] if near is not None else seed)
+        coarse[t_land] = best_coarse(bp, t_lift, t_land, clearance, coarse[near] if near is not None else seed)
     return coarse
 
 
-def fine(t_lift: float, t_land: float, coarse: "os_.Solution") -> "os_.Solution":
+def fine(t_lift: float, t_land: float, clearance: float, coarse: "os_.Solution") -> "os_.Solution":
     """The fine optimum of a point, warm-started from its coarse one; when IPOPT stops short of its
     acceptable level (its iteration limit), once more from where it stopped (a restart resets its
     barrier parameter). When that is not a converged step forward (anklehip.analysis.bounds'
@@ -87,7 +90,7 @@ def fine(t_lift: float, t_land: float, coarse: "os_.Solution") -> "os_.Solution"
     mesh's way out too: a step forced FORWARD ahead from the coarse optimum, then released; the best
     converged step forward of them all. The seconds are all the solves'."""
     bp = os_.hoap2()
-    kw = dict(t_after=T_AFTER, dt=DT / 2)
+    kw = dict(t_after=T_AFTER, dt=DT / 2, clearance=clearance)
     tried = [os_.solve(bp, DURATION, RISE, t_lift, t_land, guess=coarse, **kw)]
     if not tried[-1].ok:
         tried.append(os_.solve(bp, DURATION, RISE, t_lift, t_land, guess=tried[-1], **kw))
@@ -119,15 +122,15 @@ def landed_drift(s: "os_.Solution", t_land: float) -> float:
     return float(np.hypot(ankle[:, 0] - s.landing, ankle[:, 1] - bp.ankle_height).max())
 
 
-def row(t_lift: float, t_land: float, c: "os_.Solution", f: "os_.Solution", quick: bool) -> dict:
-    r = {"duration": DURATION, "rise": RISE, "t_lift": t_lift, "t_land": t_land, "dt": DT if quick else DT / 2,
+def row(t_lift: float, clearance: float, t_land: float, c: "os_.Solution", f: "os_.Solution", quick: bool) -> dict:
+    r = {"duration": DURATION, "rise": RISE, "t_lift": t_lift, "clearance": clearance, "t_land": t_land, "dt": DT if quick else DT / 2,
          "f_peak": f.f_peak, "landing": f.landing, "ok": bool(c.ok and f.ok), "status": f.status,
          "f_peak_coarse": c.f_peak, "status_coarse": c.status,
          "rel_change_mesh": (f.f_peak - c.f_peak) / f.f_peak, "intervals": f.n_intervals,
          "seconds": round(c.seconds + (0.0 if quick else f.seconds), 1),
          "max_stance_ankle": float(abs(f.phi[:, 0]).max()),
          "landed_drift": landed_drift(f, t_land), "landed_drift_coarse": landed_drift(c, t_land)}
-    print(f"lift {t_lift:g} land {t_land:g}: {f.f_peak:.3f} N, L {1000 * f.landing:.0f} mm ({f.status}; "
+    print(f"lift {t_lift:g} clearance {clearance:g} land {t_land:g}: {f.f_peak:.3f} N, L {1000 * f.landing:.0f} mm ({f.status}; "
           f"coarse {c.f_peak:.3f}, {100 * r['rel_change_mesh']:+.3f} %) {r['seconds']:.0f} s", flush=True)
     return r
 
@@ -149,18 +152,20 @@ def main(argv=None) -> int:
     a = ap.parse_args(argv)
     t0 = time.perf_counter()
     landings = (SEED_LANDING, 0.25) if a.quick else LANDINGS
-    lifts = LIFTS[:1] if a.quick else LIFTS
+    series = SERIES[:1] if a.quick else SERIES
     with ProcessPoolExecutor(max_workers=max(1, a.jobs)) as pool:
         horizon = None if a.quick else pool.submit(horizon_check)
-        chains = {t: pool.submit(coarse_chain, t, landings) for t in lifts}
-        coarse = {t: c.result() for t, c in chains.items()}
-        fines = {(t, tl): pool.submit(fine, t, tl, c) for t in lifts for tl, c in coarse[t].items() if not a.quick}
-        points = [row(t, tl, coarse[t][tl], fines[t, tl].result() if fines else coarse[t][tl], a.quick)
-                  for t in lifts for tl in sorted(coarse[t])]
+        chains = {s: pool.submit(coarse_chain, *s, landings) for s in series}
+        coarse = {s: c.result() for s, c in chains.items()}
+        fines = {(s, tl): pool.submit(fine, s[0], tl, s[1], c) for s in series for tl, c in coarse[s].items()
+                 if not a.quick}
+        points = [row(*s, tl, coarse[s][tl], fines[s, tl].result() if fines else coarse[s][tl], a.quick)
+                  for s in series for tl in sorted(coarse[s])]
         horizon = horizon.result() if horizon else None
     data = {
         "about": "the one-step optimum: the largest peak force [N] of a 1 s back push (50 ms rise) HOAP-2 survives "
-                 "with one recovery step lifting at t_lift and landing at rest at t_land, by trajectory optimization "
+                 "with one recovery step lifting at t_lift and landing at rest at t_land, its sole at least clearance [m] "
+                 "above the ground over mid-swing, by trajectory optimization "
                  "(anklehip.analysis.one_step); made by scripts/one_step_optimum.py",
         "made": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
         "sources_sha256": sources(),

@@ -586,19 +586,21 @@ def test_docs_side_step_table_is_the_modules(fmu_path):
 def test_one_step_optimum_is_the_best_converged_forward_step():
     """Establishes: one_step_optimum (docs/capability.md section 9.3) is the largest force among the
     cache's points IPOPT solved on both meshes to a step forward, with that point's landing time (the
-    26.1 N, 200 ms the docs state); points that did not converge or stepped in place are not among
-    one_step_points; an uncached push is an InputError naming the push and the script."""
+    26.1 N, 200 ms the docs state); points that did not converge, stepped in place or whose meshes
+    disagree are not among one_step_points; an uncached push is an InputError naming the push and
+    the script."""
     from anklehip.analysis import bounds as B
     from anklehip.errors import InputError
     data = B.load_one_step_optimum()
     pts = B.one_step_points(data)
-    assert pts and all(p["ok"] and p["landing"] > B.ONE_STEP_FORWARD for p in pts)
+    assert pts and all(p["ok"] and p["landing"] > B.ONE_STEP_FORWARD and abs(p["rel_change_mesh"]) < 0.005
+                       for p in pts)
     f, t = B.one_step_optimum(1.0, 0.05, data=data)
     assert f == max(p["f_peak"] for p in pts) and t == next(p["t_land"] for p in pts if p["f_peak"] == f)
     assert (round(f, 1), t) == (26.1, 0.2)
     # a larger force that did not converge, or stepped in place, does not count
     base = dict(pts[0], t_land=0.15, f_peak=99.0)
-    for bad in (dict(base, ok=False), dict(base, landing=0.0)):
+    for bad in (dict(base, ok=False), dict(base, landing=0.0), dict(base, rel_change_mesh=0.3)):
         extra = dict(data, points=data["points"] + [bad])
         assert bad not in B.one_step_points(extra) and B.one_step_optimum(1.0, 0.05, data=extra) == (f, t)
     with pytest.raises(InputError, match=r"0\.5 s back push.*one_step_optimum\.py"):

@@ -306,6 +306,7 @@ def flat_footed_optimum(duration, rise: float = 0.05, direction: float = +1, hei
 
 ONE_STEP_FILE = "one_step_optimum.json"       # in anklehip/analysis/data/, made by scripts/one_step_optimum.py
 ONE_STEP_FORWARD = 0.05      # a converged point is a step forward when it lands more than this ahead [m]
+ONE_STEP_MESH_TOL = 0.005    # a point counts when its two meshes (50 and 25 ms) agree within this (relative)
 
 
 def is_step_forward(ok: bool, landing: float) -> bool:
@@ -321,29 +322,72 @@ def load_one_step_optimum(path=None) -> dict:
     return _load_cache(path, ONE_STEP_FILE, "one-step optimum", "one_step_optimum.py")
 
 
-def one_step_points(data: dict | None = None, duration: float = 1.0, rise: float = 0.05) -> list[dict]:
-    """The cached one-step points of a back push (duration, rise) that IPOPT solved on both meshes
-    (success or its acceptable level) to a step forward (landing more than ONE_STEP_FORWARD ahead: not
-    the step in place, a poorer local optimum), by landing time."""
+def one_step_points(data: dict | None = None, duration: float = 1.0, rise: float = 0.05, t_lift: float = 0.0,
+                    clearance: float = 0.0) -> list[dict]:
+    """The cached one-step points of a back push (duration, rise) and a series (the step lifting t_lift
+    after the onset, its sole at least `clearance` [m] above the ground over mid-swing) that IPOPT solved
+    on both meshes (success or its acceptable level) to a step forward (landing more than
+    ONE_STEP_FORWARD ahead: not the step in place, a poorer local optimum), the two meshes agreeing
+    within ONE_STEP_MESH_TOL (not a coarse solve that found a poorer local optimum), by landing time."""
     data = load_one_step_optimum() if data is None else data
     return sorted((p for p in data["points"] if is_step_forward(p["ok"], p["landing"])
+                   and abs(p["rel_change_mesh"]) < ONE_STEP_MESH_TOL
                    and math.isclose(p["duration"], duration, rel_tol=1e-9)
-                   and math.isclose(p["rise"], rise, rel_tol=1e-9, abs_tol=1e-12)), key=lambda p: p["t_land"])
+                   and math.isclose(p["rise"], rise, rel_tol=1e-9, abs_tol=1e-12)
+                   and math.isclose(p["t_lift"], t_lift, abs_tol=1e-12)
+                   and math.isclose(p.get("clearance", 0.0), clearance, abs_tol=1e-12)), key=lambda p: p["t_land"])
 
 
-def one_step_optimum(duration: float = 1.0, rise: float = 0.05, data: dict | None = None) -> tuple[float, float]:
+def one_step_optimum(duration: float = 1.0, rise: float = 0.05, data: dict | None = None, t_lift: float = 0.0,
+                     clearance: float = 0.0) -> tuple[float, float]:
     """The largest peak force [N] of a back push (duration, rise) at the cached push height that the
-    whole robot survives with one step, and the landing time [s after the onset] that gives it: the
-    best of the cached landing times (one_step_points; a local optimum of each, docs/capability.md
-    section 9.3, so what one step can do at least, not a bound above). InputError when the push is
-    not cached."""
-    pts = one_step_points(data, duration, rise)
+    whole robot survives with one step (lifting t_lift after the onset, its sole `clearance` clear over
+    mid-swing; by default at the onset, free to skim the ground), and the landing time [s after the
+    onset] that gives it: the best of the cached landing times (one_step_points; a local optimum of
+    each, docs/capability.md section 9.3, so what one step can do at least, not a bound above).
+    InputError when the push or the series is not cached."""
+    pts = one_step_points(data, duration, rise, t_lift, clearance)
     if not pts:
         from ..errors import InputError
         raise InputError(f"one-step optimum: no converged point cached for a {duration:g} s back push with "
-                         f"{1000 * rise:g} ms ramps ({ONE_STEP_FILE}; make it with scripts/one_step_optimum.py)")
+                         f"{1000 * rise:g} ms ramps, the step lifting {1000 * t_lift:g} ms after the onset with "
+                         f"{1000 * clearance:g} mm clearance ({ONE_STEP_FILE}; make it with scripts/one_step_optimum.py)")
     best = max(pts, key=lambda p: p["f_peak"])
     return float(best["f_peak"]), float(best["t_land"])
+
+
+_IPOPT_WORDS = {"Solve_Succeeded": "success", "Solved_To_Acceptable_Level": "acceptable level"}
+
+
+def one_step_table(data: dict | None = None) -> str:
+    """The cached one-step optimum (docs/capability.md section 9.3) as markdown tables, one per series
+    (the lift time and the swing sole's clearance): per landing time the force on both meshes and the
+    change, IPOPT's status on the finer, where the step landed, the stance ankle's largest angle and
+    the landed foot's drift on each mesh; a point that did not converge to a step forward says so."""
+    data = load_one_step_optimum() if data is None else data
+    series = sorted({(p["t_lift"], p.get("clearance", 0.0)) for p in data["points"]})
+    out = []
+    for t_lift, clearance in series:
+        pts = sorted((p for p in data["points"] if (p["t_lift"], p.get("clearance", 0.0)) == (t_lift, clearance)),
+                     key=lambda p: p["t_land"])
+        out.append(f"The step lifting {1000 * t_lift:g} ms after the onset, its sole "
+                   + (f"at least {1000 * clearance:g} mm above the ground over mid-swing:" if clearance
+                      else "free to skim the ground:"))
+        out.append("")
+        out.append("| t_land [s] | 25 ms mesh [N] | IPOPT | 50 ms mesh [N] | change | landed ahead [mm] "
+                   "| stance ankle, largest [rad] | landed-foot drift, 50 → 25 ms mesh [mm] |")
+        out.append("|---|---|---|---|---|---|---|---|")
+        for p in pts:
+            status = _IPOPT_WORDS.get(p["status"], f"stopped: {p['status']}")
+            if p["ok"] and not is_step_forward(p["ok"], p["landing"]):
+                status += ", the step in place"
+            elif p["ok"] and abs(p["rel_change_mesh"]) >= ONE_STEP_MESH_TOL:
+                status += ", the meshes disagree"
+            out.append(f"| {p['t_land']:.2f} | {p['f_peak']:.2f} | {status} | {p['f_peak_coarse']:.2f} "
+                       f"| {100 * p['rel_change_mesh']:+.2f} % | {1000 * p['landing']:.0f} | {p['max_stance_ankle']:.2f} "
+                       f"| {1000 * p['landed_drift_coarse']:.1f} → {1000 * p['landed_drift']:.1f} |".replace("-", "−"))
+        out.append("")
+    return "\n".join(out).rstrip("\n")
 
 
 def optimum_table(data: dict | None = None) -> str:
@@ -930,6 +974,7 @@ if __name__ == "__main__":      # pragma: no cover - prints the doc's tables
     p = bounds_parameters_of(Models.load(fmu_dir, plant_model="3d"), Scenario("bounds", None, plant_model="3d"))
     print("\n" + nominal_tables_3d(p, p.get("theta_ankle_erect", 0.0), p.get("theta_hip_erect", 0.0)))
     print("\n" + optimum_table())          # the cached flat-footed optimum (section 8)
+    print("\n" + one_step_table())         # the cached one-step optimum (section 9.3)
     sagittal = bounds_parameters(plant.start_values(), plant_header(plant.unzipdir))
     print("\n" + n_step_table(sagittal))        # section 9
     print("\n" + side_step_table(sagittal))     # 9.1

@@ -27,7 +27,9 @@ the height h of the upper body's axis (the sagittal plant's push point):
 
 Every phase keeps each loaded sole's centre of pressure between its heel and toe, its normal force
 >= 0 and its friction within mu, the joints within their ranges, torques and rates (per joint: the
-robot file's effort and velocity limits), the swing foot above the ground.
+robot file's effort and velocity limits), the swing foot above the ground: over the middle half of the
+swing (from a quarter of the swing's time after the lift to a quarter before the landing) at least
+`clearance` above it (0 by default: the foot may skim the ground, touching it without load).
 
 Transcription: direct collocation, Radau IIA of degree 3 (flat_footed.radau_coefficients) on a mesh
 aligned with the push's and the phases' break points; the torques a value per collocation point;
@@ -322,15 +324,18 @@ class Solution:
 
 def solve(bp: Biped, duration: float = 1.0, rise: float = 0.05, t_lift: float = 0.0, t_land: float = 0.3,
           l_max: float | None = None, t_after: float = 1.0, dt: float = 0.02, l_min: float = 0.0,
-          guess: Solution | None = None) -> Solution:
+          guess: Solution | None = None, clearance: float = 0.0) -> Solution:
     """The largest peak force [N] of the back push (duration, rise) at bp.push_height that the robot
     survives by one step lifting at t_lift and landing at t_land (module docstring), its landing at
-    least l_min and at most l_max ahead (None: wherever the legs reach), on a mesh of intervals <= dt; from `guess`
+    least l_min and at most l_max ahead (None: wherever the legs reach), the swing sole at least `clearance`
+    [m] above the ground over the middle half of the swing, on a mesh of intervals <= dt; from `guess`
     (another mesh's solution, interpolated) or from rest."""
     import casadi as ca
     if not 0.0 <= t_lift < t_land < duration + t_after:
         raise ValueError(f"one_step.solve: need 0 <= t_lift ({t_lift}) < t_land ({t_land}) < "
                          f"duration + t_after ({duration + t_after})")
+    if not clearance >= 0.0:
+        raise ValueError(f"one_step.solve: clearance {clearance} m: need >= 0")
     t0 = time.perf_counter()
     from .flat_footed import mesh
     mdl = model(bp)
@@ -361,10 +366,10 @@ def solve(bp: Biped, duration: float = 1.0, rise: float = 0.05, t_lift: float = 
         opti.subject_to(G[1] >= 0)
         opti.subject_to(opti.bounded(-bp.mu * G[1], G[0], bp.mu * G[1]))
 
-    def node(x, u, f, phase, landing=False):
+    def node(x, u, f, phase, landing=False, clear=0.0):
         """The dynamics' phi'' and the path constraints at a collocation point of a phase: 'together'
         (both feet down, side by side: the legs move as one), 'landed' (both feet down, the front
-        ankle at L) or 'air' (the stance foot alone)."""
+        ankle at L) or 'air' (the stance foot alone, its swing sole at least `clear` above the ground)."""
         # the limits (side by side, the other leg's joints and torques are this leg's: bounded once,
         # as duplicated active constraints leave IPOPT's multipliers undetermined)
         n = 3 if phase == "together" else 6
@@ -404,7 +409,7 @@ def solve(bp: Biped, duration: float = 1.0, rise: float = 0.05, t_lift: float = 
             opti.subject_to(u[5] == 0)
             sole(mdl.reaction(x, ddphi, ca.DM.zeros(2), u[0:5], f, 1.0))
             if not landing:             # there the landing's equality holds (the same constraint)
-                opti.subject_to(mdl.points(x)[0][1] >= bp.ankle_height)
+                opti.subject_to(mdl.points(x)[0][1] >= bp.ankle_height + clear)
         return ddphi
 
     opti.subject_to(X[:, 0] == 0)
@@ -415,7 +420,9 @@ def solve(bp: Biped, duration: float = 1.0, rise: float = 0.05, t_lift: float = 
         for j in range(1, DEGREE + 1):
             f = Fp * float(push_shape(tm[k] + tau_c[j] * h, duration, rise))
             x, u = xs[j], U[:, k * DEGREE + j - 1]
-            ddphi = node(x, u, f, phase, landing=k == k_land - 1 and j == DEGREE)
+            tc = tm[k] + tau_c[j] * h
+            mid = 0.75 * t_lift + 0.25 * t_land <= tc <= 0.25 * t_lift + 0.75 * t_land
+            ddphi = node(x, u, f, phase, landing=k == k_land - 1 and j == DEGREE, clear=clearance if mid else 0.0)
             opti.subject_to(sum(C[i, j] * xs[i] for i in range(DEGREE + 1)) == h * ca.vertcat(x[5:10], ddphi))
         opti.subject_to(X[:, k + 1] == sum(D[i] * xs[i] for i in range(DEGREE + 1)))
     # the landing: at rest, on the ground, L ahead
