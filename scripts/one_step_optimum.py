@@ -12,8 +12,8 @@ is cached with the relative change between the two (the convergence check) and t
 on each (landed_drift: it must shrink as the mesh refines). One point is solved again
 with a longer horizon after the push (the horizon check). The file records the settings and the
 sha256 of the sources the optimum depends on (the model, the collocation it borrows, the robot file),
-so a stale cache is detected (tests/test_one_step.py). It is written whole or not at all. 15 to
-22 min with two jobs.
+so a stale cache is detected (tests/test_one_step.py). It is written whole or not at all. About
+75 min with two jobs (15 to 22 min for the first series alone).
 
     .venv/bin/python scripts/one_step_optimum.py [--out FILE] [--jobs 2] [--quick]
 """
