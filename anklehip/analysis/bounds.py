@@ -315,6 +315,12 @@ def is_step_forward(ok: bool, landing: float) -> bool:
     return bool(ok) and landing > ONE_STEP_FORWARD
 
 
+def one_step_series(point: dict) -> tuple[float, float]:
+    """A cached one-step point's series: (the lift time after the onset [s], the swing sole's clearance
+    over mid-swing [m]; 0 in caches made before the clearance)."""
+    return point["t_lift"], point.get("clearance", 0.0)
+
+
 def load_one_step_optimum(path=None) -> dict:
     """The cached one-step optimum (JSON written by scripts/one_step_optimum.py): its settings (the push
     height among them), the hashes of its sources, and its points (per landing time). path: the
@@ -334,8 +340,8 @@ def one_step_points(data: dict | None = None, duration: float = 1.0, rise: float
                    and abs(p["rel_change_mesh"]) < ONE_STEP_MESH_TOL
                    and math.isclose(p["duration"], duration, rel_tol=1e-9)
                    and math.isclose(p["rise"], rise, rel_tol=1e-9, abs_tol=1e-12)
-                   and math.isclose(p["t_lift"], t_lift, abs_tol=1e-12)
-                   and math.isclose(p.get("clearance", 0.0), clearance, abs_tol=1e-12)), key=lambda p: p["t_land"])
+                   and all(math.isclose(a, b, abs_tol=1e-12) for a, b in zip(one_step_series(p), (t_lift, clearance)))),
+                  key=lambda p: p["t_land"])
 
 
 def one_step_optimum(duration: float = 1.0, rise: float = 0.05, data: dict | None = None, t_lift: float = 0.0,
@@ -365,10 +371,9 @@ def one_step_table(data: dict | None = None) -> str:
     change, IPOPT's status on the finer, where the step landed, the stance ankle's largest angle and
     the landed foot's drift on each mesh; a point that did not converge to a step forward says so."""
     data = load_one_step_optimum() if data is None else data
-    series = sorted({(p["t_lift"], p.get("clearance", 0.0)) for p in data["points"]})
     out = []
-    for t_lift, clearance in series:
-        pts = sorted((p for p in data["points"] if (p["t_lift"], p.get("clearance", 0.0)) == (t_lift, clearance)),
+    for t_lift, clearance in sorted({one_step_series(p) for p in data["points"]}):
+        pts = sorted((p for p in data["points"] if one_step_series(p) == (t_lift, clearance)),
                      key=lambda p: p["t_land"])
         out.append(f"The step lifting {1000 * t_lift:g} ms after the onset, its sole "
                    + (f"at least {1000 * clearance:g} mm above the ground over mid-swing:" if clearance
