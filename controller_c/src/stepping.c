@@ -55,6 +55,8 @@ void ahc_step_params_default(ahc_step_params *p)
     p->step_push_estimate = 0;
     p->step_observer_gain = 50.0;
     p->step_swing_rate_max = 0.0;
+    p->step_swing_measured = 0.0;
+    p->step_swing_hold = 0.0;
 }
 
 #define SD(field, unit, lo, hi, desc) \
@@ -68,7 +70,7 @@ static const ahc_param_info k_stable[] = {
     SD(step_trigger_x, "m", -0.05, 1.0, "Step when the capture point lies beyond the toe or heel edge by more than this (< 0: inside the sole)"),
     SD(step_trigger_y, "m", 0.0, 1.0, "Step when the capture point lies beyond the outer sole edges by more than this"),
     SD(step_swing_time, "s", 0.05, 2.0, "Planned duration of the swing"),
-    SD(step_height, "m", 0.0, 0.1, "Lift of the swing foot"),
+    SD(step_height, "m", 0.0, 0.1, "Scale of the swing foot's lift: its planned lift peaks at mid-swing at 0.452 times this"),
     SD(step_length_max, "m", 0.0, 0.3, "Landing ankle at most this far forward or back of the stance ankle"),
     SD(step_width_max, "m", 0.0, 0.4, "Landing ankle at most this far sideways from the stance ankle"),
     SD(step_pelvis_drop, "m", 0.0, 0.1, "The hips lower by this while stepping (the legs' reach)"),
@@ -105,6 +107,8 @@ static const ahc_param_info k_stable[] = {
     SI(step_push_estimate, 0.0, 2.0, "The estimated external pitching moment (push_moment) in the step: 1 in its plan (the weight shift, the landing point, the CoM reference); 2 in the decision too (the capture point beyond the feet is xi + u, u = push_moment / (m g)); 0 nowhere"),
     SD(step_observer_gain, "1/s", 1.0, 500.0, "The momentum observer's gain: push_moment follows the external moment as a first-order lag of this bandwidth"),
     SD(step_swing_rate_max, "rad/s", 0.0, 1e3, "The swing leg's joint set points move at most this fast while it swings (a tick's change at most this x sample_period); 0: no limit"),
+    SD(step_swing_measured, "1", 0.0, 1.0, "The swing leg's set points put its foot where the plan sends it from the pelvis as measured (the stance leg's joints and the IMU) by this weight, from the plan's pelvis by 1 minus it: 1 corrects the swing for the trunk's deviation from the plan"),
+    SD(step_swing_hold, "m", 0.0, 1.0, "Past mid-swing the swing foot comes down only as its measured ankle nears the landing point: its planned height stays at least its peak times a quintic of the distance left over this; 0: it comes down on time"),
 };
 #define STABLE_LEN (sizeof k_stable / sizeof k_stable[0])
 
@@ -489,6 +493,12 @@ static double smooth01(double s)
     return s * s * s * (10.0 + s * (-15.0 + 6.0 * s));
 }
 
+/* The swing foot's planned lift over the swing's time fraction u, per step_height: u^3 (1-u)^3 / 0.03456,
+ * symmetric about mid-swing, where it peaks at 0.452 (0.03456 = 0.4^2 0.6^3 is the peak of u^2 (1-u)^3,
+ * up early and down late, which an earlier comment here named; every measurement of docs/controller.md
+ * §12 was made with the formula as it is). */
+static double swing_lift(double u) { return u * u * u * (1.0 - u) * (1.0 - u) * (1.0 - u) / 0.03456; }
+
 /* The sole box of foot `side` shrunk by the ZMP margin: [x lo, x hi, y lo, y hi]. */
 static void sole_box(const ahc_stepper *c, int side, double b[4])
 {
@@ -761,7 +771,7 @@ static void pendulum_tick(ahc_stepper *c, const double xi_meas[2], double p_out[
  * foot's place in the world, flat, swing_z above the ground, is put into the plan's frame: it lands
  * where the ground is. */
 static void plan_joints(ahc_stepper *c, const double r[2], double leg, double roll, double pitch,
-                        double swing_z, double q[2][AHC_LEG_JOINTS])
+                        double swing_z, const double P_meas[3], const double R_meas[9], double q[2][AHC_LEG_JOINTS])
 {
     double R[9], Rt[9], ankle[2][3], Rfw[2][9], P[3], com[3];
     const double kfac = (c->m2 + c->m1 * c->lg1 / c->l1) / c->mass; /* d com / d pelvis */
@@ -842,6 +852,30 @@ static void plan_joints(ahc_stepper *c, const double r[2], double leg, double ro
         }
         mtv(R, d, rel);
         ahc_leg_ik_pose(&c->legs, NULL, rel, Rf, q[s]);
+        if (swinging && c->p.step_swing_measured > 0.0) {
+            /* the same place in the world from the pelvis as measured: the foot flat in the world */
+            const double w = c->p.step_swing_measured;
+            double qm[AHC_LEG_JOINTS], Rfm[9], target[3];
+            target[0] = c->swing_pos[0];
+            target[1] = c->swing_pos[1];
+            target[2] = swing_z;
+            mv(R_meas, v, hip);
+            for (i = 0; i < 3; ++i) d[i] = target[i] - (P_meas[i] + hip[i]);
+            {
+                const double reach = c->l1 * cos(0.1 * smooth01(c->phase_time / (0.3 * c->swing_time))),
+                             hor = hypot(d[0], d[1]);
+                if (hypot(hor, d[2]) > reach && hor > 0.0) {
+                    const double k = sqrt(fmax(reach * reach - d[2] * d[2], 0.0)) / hor;
+                    d[0] *= k;
+                    d[1] *= k;
+                }
+            }
+            mtv(R_meas, d, rel);
+            for (i = 0; i < 3; ++i)
+                for (j = 0; j < 3; ++j) Rfm[3 * i + j] = R_meas[3 * j + i];
+            ahc_leg_ik_pose(&c->legs, NULL, rel, Rfm, qm);
+            for (j = 0; j < AHC_LEG_JOINTS; ++j) q[s][j] = (1.0 - w) * q[s][j] + w * qm[j];
+        }
     }
 }
 
@@ -1140,13 +1174,19 @@ void ahc_step_step(ahc_stepper *c, const ahc_step_sensors *s, const double flat_
             const double Tsw = c->swing_time, u = c->phase_time / Tsw;
             if (u <= 1.0) {
                 const double b = u * (1.0 - u);
-                /* up early, down late: u^2 (1-u)^3, its peak (at u = 0.4) step_height */
-                swing_z = c->ankle_height + c->p.step_height * u * b * b * (1.0 - u) / 0.03456;
+                swing_z = c->ankle_height + c->p.step_height * swing_lift(u);
                 /* the hip hike: the pelvis rolls the swing hip up, which lifts a straight swing leg
                  * (the knee's servo is slow at the straight leg) */
                 roll = (c->swing_side == AHC_LEFT ? 1.0 : -1.0) * c->p.step_hip_hike * 16.0 * b * b;
             } else {
                 swing_z = c->ankle_height - 0.1 * (c->phase_time - Tsw); /* reach for the ground */
+            }
+            if (c->p.step_swing_hold > 0.0 && u > 0.5) {
+                /* past its peak the foot comes down only as its measured ankle nears the landing point */
+                const double *sw = ankle[c->swing_side];
+                const double left = hypot(sw[0] - c->landing[0], sw[1] - c->landing[1]);
+                swing_z = fmax(swing_z, c->ankle_height + c->p.step_height * swing_lift(0.5) *
+                                                              smooth01(left / c->p.step_swing_hold));
             }
         }
         if (one_foot(c->phase)) {
@@ -1163,7 +1203,11 @@ void ahc_step_step(ahc_stepper *c, const ahc_step_sensors *s, const double flat_
         } else {
             c->tilt[0] = c->tilt[1] = 0.0;
         }
-        plan_joints(c, r, z, roll, pitch, swing_z, q);
+        {
+            double R_meas[9];
+            rot_trunk(s->imu_roll, s->imu_pitch, R_meas);
+            plan_joints(c, r, z, roll, pitch, swing_z, P, R_meas, q);
+        }
         lead_alpha = c->p.step_lead_tau > 0.0 ? 1.0 - exp(-c->dt / c->p.step_lead_tau) : 1.0;
         for (side = 0; side < 2; ++side)
             for (j = 0; j < AHC_LEG_JOINTS; ++j) {

@@ -44,12 +44,48 @@ typedef struct {
     double rest_planned;  /* the first SETTLE's planned end (the closing step's earliest start) [s] */
     double close_start;   /* the closing step's weight shift began [s]                         */
     double close_capture[2]; /* the capture point when the closing step's swing began [m]         */
+    /* the first swing's foot, placed by its set points through the measured pelvis (the stance
+     * leg's measured joints and the IMU), from the blend's end to the plan's landing time: */
+    double max_swing_miss;  /* largest horizontal distance from the plan's place for it [m]         */
+    double max_swing_tilt;  /* largest tilt of its sole from flat in the world [rad]                */
+    double late_swing_min_z; /* its lowest height above the ground over the last 20 % of the swing [m] */
 } kinematic_result;
+
+/* What the kinematic robot's measurements do differently from its references while the first step
+ * swings: the stance leg yields (its hip pitches `stance_yield` more than asked, the trunk turning
+ * with it over the flat stance foot: the IMU says so too), or the swing leg's joints stay as they
+ * were at the swing's start (`swing_frozen`: the body carries the leg, not its plan). */
+typedef struct {
+    double stance_yield;
+    int swing_frozen;
+} kinematic_opts;
+
+/* The swing foot's ankle relative to the stance ankle, and its sole's tilt from flat, for the
+ * stance leg's measured joints q_stance, the swing leg's q_swing and the trunk's measured roll and
+ * pitch. */
+static void swing_foot_from_stance(const ahc_leg_geometry *g, int swing, const double q_stance[AHC_LEG_JOINTS],
+                                   const double q_swing[AHC_LEG_JOINTS], double roll, double pitch, double rel[3],
+                                   double *tilt, double *hip_to_ankle)
+{
+    double a_st[3], a_sw[3], Rst[9], Rsw[9], d[3], cr = cos(roll), sr = sin(roll), cp = cos(pitch), sp = sin(pitch);
+    /* the trunk's attitude R = Ry(pitch) Rx(roll), as the layer's */
+    const double R[9] = {cp, sp * sr, sp * cr, 0.0, cr, -sr, -sp, cp * sr, cp * cr};
+    int i;
+    ahc_leg_fk_pose(g, q_stance, a_st, Rst);
+    ahc_leg_fk_pose(g, q_swing, a_sw, Rsw);
+    a_st[1] += swing == AHC_LEFT ? -g->hip_y : g->hip_y;
+    a_sw[1] += swing == AHC_LEFT ? g->hip_y : -g->hip_y;
+    for (i = 0; i < 3; ++i) d[i] = a_sw[i] - a_st[i];
+    for (i = 0; i < 3; ++i) rel[i] = R[3 * i] * d[0] + R[3 * i + 1] * d[1] + R[3 * i + 2] * d[2];
+    /* the sole's normal in the world, R Rsw e_z: its horizontal part is the tilt's sine */
+    *tilt = asin(fmin(1.0, hypot(R[0] * Rsw[2] + R[1] * Rsw[5] + R[2] * Rsw[8], R[3] * Rsw[2] + R[4] * Rsw[5] + R[5] * Rsw[8])));
+    *hip_to_ankle = sqrt(a_sw[0] * a_sw[0] + (a_sw[1] - (swing == AHC_LEFT ? g->hip_y : -g->hip_y)) * (a_sw[1] - (swing == AHC_LEFT ? g->hip_y : -g->hip_y)) + a_sw[2] * a_sw[2]);
+}
 
 /* A robot falling forward about its ankles (both legs pitched by th, all else 0) until the step
  * starts; then its joints are the step's references of the tick before. For `unrest` seconds after
  * the first SETTLE's planned end the right sole reads no load (the robot not yet at rest). */
-static void kinematic_run(const ahc_step_params *st, double unrest, kinematic_result *r)
+static void kinematic_run_with(const ahc_step_params *st, double unrest, const kinematic_opts *o, kinematic_result *r)
 {
     ahc_params sp;
     ahc_frontal_params fp;
@@ -58,10 +94,11 @@ static void kinematic_run(const ahc_step_params *st, double unrest, kinematic_re
     ahc_step_sensors s;
     const ahc_leg_geometry g = ahc_test_hoap2_legs();
     double flat[2][AHC_LEG_JOINTS], prev[2][AHC_LEG_JOINTS];
-    double th = 0.0, dth = 0.0, t;
+    double th = 0.0, dth = 0.0, t, frozen[AHC_LEG_JOINTS];
     const double weight = HOAP2_TOTAL_MASS * HOAP2_G;
-    int k, side, j, last_phase = AHC_STEP_STAND;
+    int k, side, j, last_phase = AHC_STEP_STAND, swings = 0;
     memset(r, 0, sizeof *r);
+    r->late_swing_min_z = INFINITY;
     r->rest_planned = r->close_start = -1.0;
     ahc_params_default(&sp);
     ahc_frontal_params_default(&fp);
@@ -87,6 +124,11 @@ static void kinematic_run(const ahc_step_params *st, double unrest, kinematic_re
             memset(flat, 0, sizeof flat); /* the flat-footed layers would hold the erect posture */
             /* exact tracking: the references of the tick before */
             memcpy(s.q, prev, sizeof prev);
+            if (o && out.phase == AHC_STEP_SWING && swings == 1) {
+                const int stance = out.swing_side == AHC_LEFT ? AHC_RIGHT : AHC_LEFT;
+                s.q[stance][AHC_LEG_HIP_PITCH] += o->stance_yield;
+                if (o->swing_frozen) memcpy(s.q[out.swing_side], frozen, sizeof frozen);
+            }
             {
                 const int stance = out.phase == AHC_STEP_SWING || out.phase == AHC_STEP_CLOSE
                                        ? (out.swing_side == AHC_LEFT ? AHC_RIGHT : AHC_LEFT)
@@ -108,6 +150,20 @@ static void kinematic_run(const ahc_step_params *st, double unrest, kinematic_re
             }
         }
         ahc_step_step(&c, &s, (const double(*)[AHC_LEG_JOINTS])flat, &out);
+        if (out.phase == AHC_STEP_SWING && last_phase != AHC_STEP_SWING && ++swings == 1)
+            memcpy(frozen, s.q[out.swing_side], sizeof frozen);
+        if (out.phase == AHC_STEP_SWING && swings == 1 && c.phase_time > st->step_blend_time + sp.sample_period &&
+            c.phase_time <= c.swing_time) {
+            const int sw = out.swing_side, stance = sw == AHC_LEFT ? AHC_RIGHT : AHC_LEFT;
+            double rel[3], tilt, reach;
+            swing_foot_from_stance(&g, sw, s.q[stance], out.q_ref[sw], s.imu_roll, s.imu_pitch, rel, &tilt, &reach);
+            /* (where the plan's place lies beyond the leg's reach, the layer brings the foot short) */
+            if (reach < c.l1 * cos(0.1) - 1e-6)
+                r->max_swing_miss = fmax(r->max_swing_miss, hypot(c.feet[stance][0] + rel[0] - c.swing_pos[0],
+                                                                  c.feet[stance][1] + rel[1] - c.swing_pos[1]));
+            r->max_swing_tilt = fmax(r->max_swing_tilt, tilt);
+            if (c.phase_time >= 0.8 * c.swing_time) r->late_swing_min_z = fmin(r->late_swing_min_z, rel[2]);
+        }
         if (out.phase == AHC_STEP_SETTLE && c.close_stage == 1 && r->rest_planned < 0.0)
             r->rest_planned = t + c.phase_duration - c.phase_time;
         if (out.phase == AHC_STEP_SHIFT && c.close_stage == 2 && r->close_start < 0.0) r->close_start = t;
@@ -156,6 +212,11 @@ static void kinematic_run(const ahc_step_params *st, double unrest, kinematic_re
         }
     }
     r->steps = out.steps;
+}
+
+static void kinematic_run(const ahc_step_params *st, double unrest, kinematic_result *r)
+{
+    kinematic_run_with(st, unrest, NULL, r);
 }
 
 static void test_kinematic_step(void)
@@ -207,6 +268,59 @@ static void test_swing_rate_max(void)
           "with step_swing_rate_max 5 rad/s it moves at most that (%.4f rad/s)", limited.max_swing_step / sp.sample_period);
     CHECK(limited.ended && limited.steps == 2, "both steps run to the end (%d steps)", limited.steps);
     CHECK(limited.max_jump < 0.02, "the references move at most 0.02 rad per tick (%.4f)", limited.max_jump);
+}
+
+/* step_swing_measured: a stance leg that yields 0.05 rad at the hip turns the trunk with it; the
+ * plan's swing leg, set for the planned trunk, then carries its foot away from where the plan puts
+ * it, and the swing set from the pelvis as measured puts it there (to 1e-9 tracking exactly, within
+ * 0.5 mm with the yield) and flat. */
+static void test_swing_measured(void)
+{
+    ahc_params sp;
+    ahc_frontal_params fp;
+    ahc_step_params st;
+    kinematic_result exact, planned, measured;
+    const kinematic_opts yields = {0.05, 0};
+    defaults(&sp, &fp, &st);
+    st.step_swing_measured = 1.0;
+    kinematic_run_with(&st, 0.0, NULL, &exact);
+    kinematic_run_with(&st, 0.0, &yields, &measured);
+    st.step_swing_measured = 0.0;
+    kinematic_run_with(&st, 0.0, &yields, &planned);
+    CHECK(exact.max_swing_miss < 1e-9 && exact.max_swing_tilt < 1e-9,
+          "tracking exactly, the measured swing puts the foot where the plan does, flat (%.2e m, %.2e rad)",
+          exact.max_swing_miss, exact.max_swing_tilt);
+    CHECK(planned.max_swing_miss > 5e-3 && planned.max_swing_tilt > 0.04,
+          "the stance leg yielding, the plan's swing misses by more than 5 mm, tilted (%.4f m, %.3f rad)",
+          planned.max_swing_miss, planned.max_swing_tilt);
+    /* (within 0.5 mm, not 1e-9: the stance hip's yaw of a few mrad turns the trunk in a way the IMU's
+     * roll and pitch, all the layer reads of its attitude, do not carry) */
+    CHECK(measured.max_swing_miss < 5e-4 && measured.max_swing_tilt < 1e-9,
+          "the stance leg yielding, the measured swing puts the foot where the plan does within 0.5 mm, flat (%.2e m, %.2e rad)",
+          measured.max_swing_miss, measured.max_swing_tilt);
+    CHECK(measured.ended && measured.steps == 2, "both steps run to the end (%d steps)", measured.steps);
+    CHECK(measured.max_jump < 0.06, "the references move at most 0.06 rad per tick (%.4f)", measured.max_jump);
+}
+
+/* step_swing_hold: a swing leg whose joints do not move is carried by the body, its ankle at least
+ * 16 mm short of the landing point; held within 15 mm, past mid-swing the plan keeps the foot at its
+ * peak (0.452 step_height) instead of bringing it down on time. */
+static void test_swing_hold(void)
+{
+    ahc_params sp;
+    ahc_frontal_params fp;
+    ahc_step_params st;
+    kinematic_result on_time, held;
+    const kinematic_opts frozen = {0.0, 1};
+    defaults(&sp, &fp, &st);
+    kinematic_run_with(&st, 0.0, &frozen, &on_time);
+    st.step_swing_hold = 0.015;
+    kinematic_run_with(&st, 0.0, &frozen, &held);
+    CHECK(on_time.late_swing_min_z < 0.2 * 0.452 * st.step_height,
+          "on time, the foot's set point comes down over the swing's last 20 %% (lowest %.4f m)", on_time.late_swing_min_z);
+    CHECK(held.late_swing_min_z > 0.9 * 0.452 * st.step_height && held.late_swing_min_z < 1.1 * 0.452 * st.step_height,
+          "held, it stays at the peak, 0.452 step_height = %.4f m (lowest %.4f m)", 0.452 * st.step_height,
+          held.late_swing_min_z);
 }
 
 /* The closing step's rest (step_close_rest): off, it starts at SETTLE's planned end; on (the default), it waits
@@ -770,5 +884,7 @@ int main(void)
     test_state_validate();
     test_kinematic_step();
     test_swing_rate_max();
+    test_swing_measured();
+    test_swing_hold();
     TEST_MAIN_END();
 }

@@ -130,6 +130,11 @@ typedef struct {
                                   moment with this bandwidth [1/s]                               */
     double step_swing_rate_max; /* the swing leg's set points move at most this fast while it swings
                                   (docs/controller.md §12.4 item 4); 0: no limit [rad/s]          */
+    double step_swing_measured; /* the swing leg's set points from the measured pelvis (the stance
+                                  leg's joints and the IMU) rather than the plan's, by this weight
+                                  (0: the plan's; 1: the measured one's) [1]                     */
+    double step_swing_hold;    /* the swing foot stays at step_height until its measured ankle is
+                                  within this of the landing point; 0: off [m]                   */
 } ahc_step_params;
 
 /* HOAP-2 defaults (docs/controller.md §12): stepping off. */
