@@ -765,6 +765,18 @@ static void pendulum_tick(ahc_stepper *c, const double xi_meas[2], double p_out[
 
 /* ---- the joints ------------------------------------------------------------------------------- */
 
+/* The swing leg stays bent by at least 0.2 rad at the knee: its foot, d from the hip, comes short
+ * horizontally of a place the leg cannot reach (a straight leg's knee rate is unbounded). */
+static void within_swing_reach(const ahc_stepper *c, double d[3])
+{
+    const double reach = c->l1 * cos(0.1 * smooth01(c->phase_time / (0.3 * c->swing_time))), hor = hypot(d[0], d[1]);
+    if (hypot(hor, d[2]) > reach && hor > 0.0) {
+        const double k = sqrt(fmax(reach * reach - d[2] * d[2], 0.0)) / hor;
+        d[0] *= k;
+        d[1] *= k;
+    }
+}
+
 /* The planned joint angles: the pelvis that carries the CoM reference r over the feet (the stance
  * sole flat), the trunk at roll and pitch. The plan's frame is the stance foot's; when the stance
  * foot turns on a sole edge (c->tilt, measured) the world turns with it in that frame, and the swing
@@ -839,17 +851,7 @@ static void plan_joints(ahc_stepper *c, const double r[2], double leg, double ro
         v[0] = 0.0; v[1] = hip_offset_y(c, s); v[2] = 0.0;
         mv(R, v, hip);
         for (i = 0; i < 3; ++i) d[i] = ankle[s][i] - (P[i] + hip[i]);
-        if (swinging) {
-            /* the swing leg stays bent by at least 0.2 rad at the knee: the foot comes short of a
-             * place the leg cannot reach (a straight leg's knee rate is unbounded) */
-            const double reach = c->l1 * cos(0.1 * smooth01(c->phase_time / (0.3 * c->swing_time))),
-                         hor = hypot(d[0], d[1]);
-            if (hypot(hor, d[2]) > reach && hor > 0.0) {
-                const double k = sqrt(fmax(reach * reach - d[2] * d[2], 0.0)) / hor;
-                d[0] *= k;
-                d[1] *= k;
-            }
-        }
+        if (swinging) within_swing_reach(c, d);
         mtv(R, d, rel);
         ahc_leg_ik_pose(&c->legs, NULL, rel, Rf, q[s]);
         if (swinging && c->p.step_swing_measured > 0.0) {
@@ -861,15 +863,7 @@ static void plan_joints(ahc_stepper *c, const double r[2], double leg, double ro
             target[2] = swing_z;
             mv(R_meas, v, hip);
             for (i = 0; i < 3; ++i) d[i] = target[i] - (P_meas[i] + hip[i]);
-            {
-                const double reach = c->l1 * cos(0.1 * smooth01(c->phase_time / (0.3 * c->swing_time))),
-                             hor = hypot(d[0], d[1]);
-                if (hypot(hor, d[2]) > reach && hor > 0.0) {
-                    const double k = sqrt(fmax(reach * reach - d[2] * d[2], 0.0)) / hor;
-                    d[0] *= k;
-                    d[1] *= k;
-                }
-            }
+            within_swing_reach(c, d);
             mtv(R_meas, d, rel);
             for (i = 0; i < 3; ++i)
                 for (j = 0; j < 3; ++j) Rfm[3 * i + j] = R_meas[3 * j + i];
