@@ -781,7 +781,8 @@ static void within_swing_reach(const ahc_stepper *c, double d[3])
  * sole flat), the trunk at roll and pitch. The plan's frame is the stance foot's; when the stance
  * foot turns on a sole edge (c->tilt, measured) the world turns with it in that frame, and the swing
  * foot's place in the world, flat, swing_z above the ground, is put into the plan's frame: it lands
- * where the ground is. */
+ * where the ground is. With step_swing_measured the swing leg is also set from the measured pelvis
+ * P_meas and trunk attitude R_meas (read only then). */
 static void plan_joints(ahc_stepper *c, const double r[2], double leg, double roll, double pitch,
                         double swing_z, const double P_meas[3], const double R_meas[9], double q[2][AHC_LEG_JOINTS])
 {
@@ -1198,8 +1199,8 @@ void ahc_step_step(ahc_stepper *c, const ahc_step_sensors *s, const double flat_
             c->tilt[0] = c->tilt[1] = 0.0;
         }
         {
-            double R_meas[9];
-            rot_trunk(s->imu_roll, s->imu_pitch, R_meas);
+            double R_meas[9] = {0};
+            if (c->p.step_swing_measured > 0.0) rot_trunk(s->imu_roll, s->imu_pitch, R_meas);
             plan_joints(c, r, z, roll, pitch, swing_z, P, R_meas, q);
         }
         lead_alpha = c->p.step_lead_tau > 0.0 ? 1.0 - exp(-c->dt / c->p.step_lead_tau) : 1.0;
