@@ -6,7 +6,8 @@
 //   byte % 4 == 0: a *shallow* program of FMI 2.0 calls on up to two instances (ShallowProgram):
 //     instantiation with odd arguments, set-up and mode changes in any order, get/set of every type
 //     with valid and invalid value references, arrays of up to thousands of entries, special values
-//     (NaN, +-Inf, +-1e308, denormals, -0), steps of any size and at any time, FMU states got, set,
+//     (NaN, +-Inf, +-1e308, denormals, -0), steps of any size and at any time (those the FMU takes
+//     within two of its largest steps' work per input, ShallowProgram::affordable), FMU states got, set,
 //     freed, serialized and deserialized (bit-flipped, truncated, foreign, another instance's),
 //     reset, terminate, cancel, status queries with any kind, debug logging with unknown categories;
 //   otherwise a *deep*, structure-aware program (DeepProgram) through FMI 2.0 (% 4 == 1, 3) or FMI
@@ -42,6 +43,7 @@
 #include "fmi2Functions.h"
 #include "fmi3Functions.h"
 #include "fmuglue/glue.hpp"
+#include "instance.hpp"  // the glue's instance: a step's work against the model's largest step
 
 namespace {
 
@@ -129,6 +131,22 @@ struct ShallowProgram {
   double now(fmi2Component c) {
     fmi2Real t = 0.0;
     return fmi2GetRealStatus(c, fmi2LastSuccessfulTime, &t) == fmi2OK ? t : 0.0;
+  }
+
+  // The steps of one program do at most kStepWork of the FMU's largest steps' work
+  // (Model::max_step_size, each about 0.1 s of native computation, docs/fmu.md): an input's time
+  // stays far below libFuzzer's -timeout under the sanitizers, whatever its steps (four 1000 s steps
+  // of the 3D controller took 27 s). A step the FMU must refuse (h beyond its largest, or not > 0)
+  // is always made; one the budget cannot pay for is not.
+  static constexpr double kStepWork = 2.0;
+  double work = 0.0;
+  bool affordable(fmi2Component c, double h) {
+    const fmuglue::Instance* inst = static_cast<const fmuglue::Instance*>(c);
+    const double hmax = inst->model ? inst->model->max_step_size(inst->ctx) : 0.0;
+    if (!(h > 0.0) || !(h <= hmax)) return true;
+    if (work + h / hmax > kStepWork) return false;
+    work += h / hmax;
+    return true;
   }
 
   // Passes any int as fmi2Type, as a C caller can: the glue must read it without loading an
@@ -274,7 +292,7 @@ struct ShallowProgram {
   void step_many(fmi2Component c, Bytes& in) {
     const int k = in.u8() % 64;
     double t = now(c);
-    for (int i = 0; i < k; ++i) {
+    for (int i = 0; i < k && affordable(c, 1e-3); ++i) {
       if (fmi2DoStep(c, t, 1e-3, fmi2False) > fmi2Warning) break;
       t += 1e-3;
     }
@@ -307,7 +325,7 @@ struct ShallowProgram {
           const std::uint8_t f = in.u8();
           const double t = (f & 1) ? in.real() : now(c);
           const double h = in.real();
-          fmi2DoStep(c, t, h, (f >> 1) & 1);
+          if (affordable(c, h)) fmi2DoStep(c, t, h, (f >> 1) & 1);
           break;
         }
         case 13: step_many(c, in); break;
