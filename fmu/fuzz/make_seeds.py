@@ -57,7 +57,8 @@ SEEDS = {
 
 
 # Deep programs (DeepProgram::run). The initialization reads: logging, number of parameters set
-# (then per parameter: which, kind, value bytes), start time, stop flag. Operations (op % 20): 0-9 a
+# (its residue mod 6; a byte whose sixth is 1 mod 3 turns DeepProgram::stepping_mode on; then per
+# parameter: which, kind, value bytes), start time, stop flag. Operations (op % 20): 0-9 a
 # step (size byte, then input bytes), 10-11 a run of 1 ms steps, 12 a parameter change, 13 get a
 # state, 14 set one, 15-16 restore into the twin and compare, 17 a forged state, 18 reset and
 # initialize, 19 terminate.
@@ -110,6 +111,15 @@ DEEP = {
     # forged-but-re-signed states at several places, between steps
     "deep_forged": deep(2, steps(25) + [FORGE, 0x10, 0x00, 0, 1, 200] + steps(5) + [FORGE, 0x80, 0x01, 0, 0, 13]
                         + steps(5) + [FORGE, 0x33, 0x02, 0, 17, 64] + steps(10)),
+    # the 3D controller's stepping (the parameter-count byte 6: no parameter set, DeepProgram::stepping_mode
+    # on, a step at 0.1 s) in 10 ms steps: a state got in the weight shift or the swing, restores compared
+    # and a forgery while the step runs, to its settling
+    "deep_stepping": deep(2, compact_steps(40, 7) + [GET] + compact_steps(30, 7) + [COMPARE, 15, 0, 0, 5, 0, 9, 0]
+                          + compact_steps(60, 7) + [FORGE, 0x10, 0x00, 0, 1, 200] + compact_steps(40, 7),
+                          init=[0, 6, 0, 1], compact=True),
+    "deep_stepping_fmi3": deep(3, compact_steps(25, 7) + [COMPARE, 15, 0, 0, 5, 0, 9, 0] + compact_steps(25, 7)
+                               + [COMPARE, 15, 0, 0, 5, 0, 9, 0] + compact_steps(100, 7), init=[0, 6, 0, 1],
+                               compact=True),
     # parameters at their bounds and outside at initialization, changed while running, reset
     "deep_params": deep(2, steps(20) + [PARAM, 1, 3, 8, 128] + steps(20) + [PARAM, 0, 7, 14, 200] + steps(10)
                         + [RESET, 0, 3, 5, 6, 0, 9, 7, 0, 11, 12, 50, 0, 1] + steps(30) + [TERMINATE] + steps(10),
