@@ -6,9 +6,9 @@
 #   2. each shipped FMU's libFuzzer harness for ANKLEHIP_FUZZ_SECONDS (default 60) from the
 #      committed seed corpus (fmu/fuzz/corpus), leaks and slow inputs (> 10 s) included;
 #   3. closed-loop scenarios from Python through the sanitized FMUs (ASan runtime preloaded): the
-#      sagittal loop (hip_saves_push) and the 3D one (side_push_frontal: AnkleHipController3D on
-#      Hoap2Plant3D), so every shipped FMU runs sanitized;
-#   4. a Valgrind memcheck of the same two closed loops through the shipped FMUs, and of the
+#      sagittal loop (hip_saves_push) and the 3D ones (side_push_frontal, and step_recovery_3d with
+#      the stepping layer: AnkleHipController3D on Hoap2Plant3D), so every shipped FMU runs sanitized;
+#   4. a Valgrind memcheck of the same closed loops through the shipped FMUs, and of the
 #      controller's FMI 3.0 Scheduled Execution variant and the 3D plant's FMI 3.0 arrays (the known
 #      errors of the interpreter, NumPy, lxml and the loader suppressed by scripts/valgrind-python.supp).
 # Usage: bash scripts/reliability.sh            (after bash scripts/setup.sh --sanitize)
@@ -37,7 +37,7 @@ out="$(mktemp -d)"
 trap 'rm -rf "$out"' EXIT
 # The interpreter's own allocations at exit are not ours: leak checking is the fuzzers' and
 # Valgrind's job here; every other report aborts the run.
-for scenario in hip_saves_push side_push_frontal; do
+for scenario in hip_saves_push side_push_frontal step_recovery_3d; do
   if ! ANKLEHIP_FMU_DIR="$root/$sbuild/fmus" LD_PRELOAD="$asan_rt" ASAN_OPTIONS="abort_on_error=1:detect_leaks=0" \
       .venv/bin/anklehip run "$scenario" --out "$out/$scenario" --no-progress >"$out/$scenario.log" 2>&1; then
     tail -n 60 "$out/$scenario.log"
@@ -51,10 +51,12 @@ for scenario in hip_saves_push side_push_frontal; do
 done
 
 echo "== 4/4 Valgrind memcheck of the closed loops"
-# Three single-threaded runs at once, each report printed whole and in order (81, 46 and 36 s one
-# after the other on the 2-core machine, 103 s together); the last one is the FMI 3.0 paths the
-# loops do not take: Scheduled Execution and the 3D plant's arrays.
-vg_args=("hip_saves_push --stop-time 1.5" "side_push_frontal --stop-time 1.5" "--fmi3-extras")
+# Four single-threaded runs at once, each report printed whole and in order (81, 46, 36 and 54 s
+# one after the other on the 2-core machine); the stepping loop to 3 s takes the recovery step and
+# the closing step's swing; the --fmi3-extras run is the FMI 3.0 paths the loops do not take:
+# Scheduled Execution and the 3D plant's arrays.
+vg_args=("hip_saves_push --stop-time 1.5" "side_push_frontal --stop-time 1.5" "--fmi3-extras"
+         "step_recovery_3d --stop-time 3")
 vg_pids=()
 for i in "${!vg_args[@]}"; do
   # shellcheck disable=SC2086  # each entry is the script's arguments, split on purpose
