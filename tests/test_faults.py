@@ -112,6 +112,9 @@ def test_parameter_faults_scale_exactly_the_documented_parameters():
     assert c["I2"] == pytest.approx(0.02 * 1.2 * 0.81)
     assert "Ka" not in c
     assert parameter_faults(Faults(), ctrl, plant) == ({}, {})
+    # the 3D controller's leg segments scale with l1, whose sum they must stay
+    c3, _ = parameter_faults(Faults(length_mismatch=-0.1), {**ctrl, "thigh": 0.1, "shank": 0.1}, plant)
+    assert c3["thigh"] + c3["shank"] == pytest.approx(c3["l1"]) == pytest.approx(0.18)
 
 
 @pytest.mark.parametrize("opts, needle", [
@@ -253,3 +256,23 @@ def test_robustness_cli(tmp_path, fmu_dir, capsys):
     assert "--grid delay_step=0,1: expected KEY=GRID" in capsys.readouterr().err
     assert main(args + ["--grid", "delay_steps=0,5000"]) == 2
     assert "faults.delay_steps: must be <= 1000, got 5000" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("scenario, study, level", [
+    ("step_recovery_3d", "lost packets (NaN)", 0.05),   # NaN packets through the recovery step
+    ("side_push_frontal", "lost packets (NaN)", 0.05),  # both fault masks change and are logged
+    ("step_recovery_3d", "model lengths", -0.1),        # the 3D controller's segments scale with l1
+])
+def test_closed_loop_invariants_hold_on_the_3d_controller(fmu_dir, scenario, study, level):
+    """The invariants on AnkleHipController3D: a non-finite reading raises a non-finite bit of fault
+    or fault_y also while a step runs (the flat-footed layers rest then), each change of either
+    mask is logged once, the mismatched model is accepted; these scenarios expect no hip-strategy
+    cycle, so standing to the end is surviving."""
+    from anklehip.files.paths import find_scenario
+    from anklehip.running.robustness import run_point, study_by_label
+    r = run_point(str(find_scenario(scenario)), str(fmu_dir), study_by_label(study), level)
+    assert r["invariants_ok"], r
+    assert r["outcome"] == "completed" and r["survived"] and r["cycles_needed"] == 0, r
+    if study.startswith("lost"):
+        assert r["nonfinite_input_rows"] > 100 and r["unflagged_rows"] == 0
+        assert r["fault_logs"] == r["fault_changes"] > 10

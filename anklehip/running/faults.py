@@ -32,6 +32,8 @@ DROP_MODES = ("nan", "repeat")
 # scale with mass and with length squared.
 MODEL_MASSES = ("m1", "m2", "feet_mass")
 MODEL_LENGTHS = ("l1", "lg1", "lg2")
+# and, where the controller has them (the 3D one), the leg's segments, whose sum must stay l1
+MODEL_LEG_SEGMENTS = ("thigh", "shank")
 MODEL_INERTIAS = ("I1", "I2")
 SENSED_PREFIX = "sensed."
 
@@ -64,8 +66,8 @@ KEYS: tuple[FaultKey, ...] = (
              "1,0.8,0.6,0.4,0.3,0.25,0.2,0.175,0.15,0.125,0.1"),
     FaultKey("mass_mismatch", "", -0.5, 0.5, "the controller's model masses m1, m2, feet_mass (and I1, I2) "
              "times (1 + this)", "-0.5:0.5:0.05"),
-    FaultKey("length_mismatch", "", -0.5, 0.5, "the controller's model lengths l1, lg1, lg2 times (1 + this) "
-             "(I1, I2 times its square)", "-0.5:0.5:0.05"),
+    FaultKey("length_mismatch", "", -0.5, 0.5, "the controller's model lengths l1, lg1, lg2 (and the 3D "
+             "controller's thigh and shank) times (1 + this) (I1, I2 times its square)", "-0.5:0.5:0.05"),
     FaultKey("transition_push", "N", -1000.0, 1000.0, "peak of an extra pulse (+ = on the back) that starts when "
              "the phase enters transition_phase", "0:10:1"),
     FaultKey("transition_push_duration", "s", 0.002, 10.0, "total duration of the transition push"),
@@ -154,6 +156,9 @@ def parameter_faults(f: Faults, controller: dict[str, Any], plant: dict[str, Any
             c[n] = float(controller[n]) * ms
         for n in MODEL_LENGTHS:
             c[n] = float(controller[n]) * ls
+        for n in MODEL_LEG_SEGMENTS:
+            if n in controller:
+                c[n] = float(controller[n]) * ls
         for n in MODEL_INERTIAS:
             c[n] = float(controller[n]) * ms * ls * ls
     return c, p

@@ -2,14 +2,18 @@
 
 For every fault the closed loop runs once per level (the other faults as the scenario sets
 them). A run *survives* when the robot stands to the end and completes the scenario's
-``expect.min_cycles`` push cycles (0 -> 1 -> 2 -> 3 -> 0), and no more cycles than it has pushes
-(a cycle without a push is the hip strategy set off by the fault). Whatever the level, every run must also
+``expect.min_cycles`` push cycles (0 -> 1 -> 2 -> 3 -> 0; unset, one per push where the scenario
+expects the hip strategy, phase 3 in ``expect.phases_reached``, and none otherwise, as in the 3D
+stepping and side-push scenarios), and no more cycles than it has pushes (a cycle without a push is
+the hip strategy set off by the fault). Whatever the level, every run must also
 keep the invariants (``invariants_ok``):
 
 * the controller never emits a non-finite value (every real controller output, every row);
-* every step whose inputs had a non-finite value raises a non-finite fault bit (bits 0-3);
-* every change of the fault mask is logged (logEvents "fault mask ...") and every episode of
-  non-finite input is warned about once (logStatusWarning "non-finite input ...");
+* every step whose inputs had a non-finite value raises a non-finite fault bit (bits 0-3 of
+  ``fault``, or, with the 3D controller, bits 0-1 of ``fault_y``);
+* every change of a fault mask is logged (logEvents "fault mask ..."; the 3D controller's frontal
+  one "frontal fault mask ...") and every episode of non-finite input is warned about once
+  (logStatusWarning "non-finite input ...");
 * the outcome is "completed" or "fell": a falling robot is reported as fallen, never as an error.
 
 The table gives, per fault, the range of levels around the harmless one (the faults' default) in
@@ -27,6 +31,7 @@ import numpy as np
 from .faults import KEY_BY_NAME, SENSED_PREFIX, Faults
 
 NONFINITE_BITS = 0xF      # AHC_FAULT_{THETA_ANKLE,THETA_HIP,ZMP,FZ}_NONFINITE
+NONFINITE_BITS_Y = 0x3    # AHC_FFAULT_{ZMP_Y,ANGLE}_NONFINITE (the 3D controller's fault_y)
 LOG_CATEGORIES = ["logEvents", "logStatusWarning"]
 
 
@@ -99,12 +104,14 @@ def run_point(scenario_path: str, fmu_dir: str | None, study: Study, level: floa
     for c in sensed:
         bad_in |= ~np.isfinite(d[c])
     fault = d["fault"].astype(np.int64)
-    unflagged = int(np.count_nonzero(bad_in & ((fault & NONFINITE_BITS) == 0)))
+    fault_y = d["fault_y"].astype(np.int64) if "fault_y" in d.dtype.names else np.zeros_like(fault)
+    unflagged = int(np.count_nonzero(bad_in & ((fault & NONFINITE_BITS) == 0) & ((fault_y & NONFINITE_BITS_Y) == 0)))
     episodes = int(np.count_nonzero(bad_in & ~np.concatenate([[False], bad_in[:-1]])))
-    changes = int(np.count_nonzero(fault != np.concatenate([[0], fault[:-1]])))
-    fault_logs = sum("fault mask" in m for m in events)
+    changes = sum(int(np.count_nonzero(f != np.concatenate([[0], f[:-1]]))) for f in (fault, fault_y))
+    fault_logs = sum("fault mask" in m for m in events)    # either mask's (the frontal: "frontal fault mask")
     nonfinite_logs = sum("non-finite input" in m for m in warnings)
-    need = sc.expect.min_cycles if sc.expect.min_cycles is not None else len(sc.push.events())
+    need = sc.expect.min_cycles if sc.expect.min_cycles is not None else (
+        len(sc.push.events()) if 3 in sc.expect.phases_reached else 0)    # a cycle per push where the hip strategy is expected
     most = max(need, len(sc.push.events()))     # more cycles than pushes: the hip strategy without a push
     cycles = count_cycles(res.data["phase"])
     ok = (nonfinite_out == 0 and unflagged == 0 and fault_logs == changes and nonfinite_logs == episodes

@@ -371,7 +371,7 @@ static void law_ankle_strategy_planned(ahc_controller *c, const tick_ctx *k)
 
 /* ------------------------------------------------------------------------------------------- */
 
-static unsigned classify(const ahc_params *p, const ahc_sensors *s)
+unsigned ahc_sensor_faults(const ahc_params *p, const ahc_sensors *s)
 {
     unsigned f = 0;
     if (!isfinite(s->theta_ankle))
@@ -555,7 +555,7 @@ void ahc_step(ahc_controller *c, const ahc_sensors *s, ahc_outputs *out)
         return;
     }
     k.h = p->sample_period;
-    f = classify(p, s);
+    f = ahc_sensor_faults(p, s);
 
     if (f & AHC_FAULT_HOLD_MASK) {
         /* Hold a safe reference: angles frozen, rates zero, timers paused, no NaN anywhere. */
@@ -742,7 +742,7 @@ int ahc_state_validate(const ahc_controller *c, char *msg, size_t msg_size)
 
     {
         /* Values with a physical range: the reference angles are clamped to the joint limits, the
-         * measured angles and the (filtered) ZMP were accepted by classify(), k_w is a weight. */
+         * measured angles and the (filtered) ZMP were accepted by ahc_sensor_faults(), k_w is a weight. */
         const double am = p->angle_fault_margin, zm = p->zmp_fault_margin;
         const struct { const char *name; double v, lo, hi; } ranged[] = {
             {"th1", c->th1, p->ankle_min, p->ankle_max},

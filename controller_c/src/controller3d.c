@@ -44,26 +44,31 @@ void ahc3d_reset(ahc3d *c)
 }
 
 /* The flat-footed layers: the paper's sagittal controller, the frontal one, the legs' set points. */
+/* The frontal layer's sensors: the frontal angles measured on the pivot leg the frontal reference
+ * names (NaN when a joint reading is not finite). */
+static void frontal_sensors(const ahc3d *c, const ahc3d_sensors *s, ahc_frontal_sensors *fs)
+{
+    int side, j, finite = 1;
+    fs->zmp_y = s->zmp_y;
+    fs->fz = s->sag.fz;
+    fs->fz_left = s->fz_left;
+    fs->fz_right = s->fz_right;
+    fs->phi = fs->psi = NAN;
+    for (side = 0; side < 2; ++side)
+        for (j = 0; j < AHC_LEG_JOINTS; ++j) finite = finite && isfinite(s->q[side][j]);
+    if (finite) ahc_legs_frontal_angles(&c->legs, s->q, c->frontal.psi >= 0.0, &fs->phi, &fs->psi);
+    /* the feet's roll toward +y: the trunk's lean toward +y (-imu_roll) less link 2's lean on flat feet */
+    fs->foot_roll = -s->imu_roll - fs->psi;
+}
+
 static void flat_footed(ahc3d *c, const ahc3d_sensors *s, ahc3d_outputs *out)
 {
     ahc_frontal_sensors fs;
     int side, j;
     /* 1. the paper's controller, on the sagittal sensors alone */
     ahc_step(&c->sag, &s->sag, &out->sag);
-    /* 2. the frontal angles, measured on the pivot leg the frontal reference names */
-    fs.zmp_y = s->zmp_y;
-    fs.fz = s->sag.fz;
-    fs.fz_left = s->fz_left;
-    fs.fz_right = s->fz_right;
-    fs.phi = fs.psi = NAN;
-    {
-        int finite = 1;
-        for (side = 0; side < 2; ++side)
-            for (j = 0; j < AHC_LEG_JOINTS; ++j) finite = finite && isfinite(s->q[side][j]);
-        if (finite) ahc_legs_frontal_angles(&c->legs, s->q, c->frontal.psi >= 0.0, &fs.phi, &fs.psi);
-    }
-    /* the feet's roll toward +y: the trunk's lean toward +y (-imu_roll) less link 2's lean on flat feet */
-    fs.foot_roll = -s->imu_roll - fs.psi;
+    /* 2. the frontal angles */
+    frontal_sensors(c, s, &fs);
     /* 3. the frontal controller */
     ahc_frontal_step(&c->frontal, &fs, &out->frontal);
     /* 4. the legs: both planes' references minus the sagittal ones alone, which are the pitch
@@ -111,6 +116,14 @@ static void from_step(ahc3d_outputs *out)
     }
 }
 
+/* The sensor faults reported while a step runs: the non-finite readings and angles outside the
+ * joint ranges. Not an implausible load: a landing's impact reads above fz_max (10 x the weight) for
+ * a sample (704 N on Hoap2Plant3D under a 17.5 mm ZMP bias). */
+#define STEP_SENSOR_FAULTS                                                                        \
+    (AHC_FAULT_THETA_ANKLE_NONFINITE | AHC_FAULT_THETA_HIP_NONFINITE | AHC_FAULT_ZMP_NONFINITE | \
+     AHC_FAULT_FZ_NONFINITE | AHC_FAULT_ANGLE_RANGE)
+#define STEP_FRONTAL_SENSOR_FAULTS (AHC_FFAULT_ZMP_Y_NONFINITE | AHC_FFAULT_ANGLE_NONFINITE)
+
 void ahc3d_step(ahc3d *c, const ahc3d_sensors *s, ahc3d_outputs *out)
 {
     ahc_step_sensors ss;
@@ -140,9 +153,16 @@ void ahc3d_step(ahc3d *c, const ahc3d_sensors *s, ahc3d_outputs *out)
          * (their bumpless start) and the step's last set points blend into theirs */
         ahc_step_step(&c->step, &ss, NULL, &out->step);
         if (out->step.phase != AHC_STEP_STAND) {
+            ahc_frontal_sensors fs;
             /* the resting layers' clocks run on (their tick counts are the instance's time) */
             c->sag.tick++;
             c->frontal.tick++;
+            /* and their sensor checks report on (the step holds its estimate through a bad reading):
+             * those that hold whatever the stance (STEP_SENSOR_FAULTS); a ZMP beyond the feet side
+             * by side, or a lifted robot, is not a fault while the feet are apart or one swings */
+            frontal_sensors(c, s, &fs);
+            out->sag.fault = ahc_sensor_faults(&c->sag.p, &s->sag) & STEP_SENSOR_FAULTS;
+            out->frontal.fault = ahc_frontal_sensor_faults(&c->frontal, &fs) & STEP_FRONTAL_SENSOR_FAULTS;
         } else {
             const unsigned long long sag_tick = c->sag.tick, frontal_tick = c->frontal.tick;
             ahc_reset(&c->sag);

@@ -543,7 +543,7 @@ static double update_lean(ahc_frontal *c, double ext, const ahc_frontal_sensors 
 
 /* ------------------------------------------------------------------------------------------- */
 
-static unsigned classify(const ahc_frontal *c, const ahc_frontal_sensors *s)
+unsigned ahc_frontal_sensor_faults(const ahc_frontal *c, const ahc_frontal_sensors *s)
 {
     unsigned fl = 0;
     const double edge = c->f.ankle_y + 0.5 * c->f.sole_width + c->f.zmp_fault_margin_y;
@@ -646,7 +646,7 @@ void ahc_frontal_step(ahc_frontal *c, const ahc_frontal_sensors *s, ahc_frontal_
         c->tick++;
         return;
     }
-    fl = classify(c, s);
+    fl = ahc_frontal_sensor_faults(c, s);
     if (fl & AHC_FFAULT_HOLD_MASK) {
         /* hold a safe reference: angles frozen, rates 0, timers paused */
         c->holding = 1;

@@ -603,6 +603,52 @@ static void test_nonfinite_inputs(void)
     CHECK(ahc_step_state_validate(&c, NULL, 0) == AHC_OK, "the state stays valid");
 }
 
+/* While a step runs the flat-footed layers rest, and the 3D controller's fault masks still report
+ * the readings: a non-finite one raises its non-finite bits (fault and fault_y) on that tick; a
+ * finite one raises nothing, though the measured ZMP, from the ankles' mid-point, lies beyond the
+ * toes of feet side by side (the landed foot is ahead) and a landing's load exceeds fz_max. */
+static void test_faults_while_stepping(void)
+{
+    ahc_params sp;
+    ahc_frontal_params fp;
+    ahc_step_params st;
+    static ahc3d c;
+    ahc3d_sensors s;
+    ahc3d_outputs o;
+    int k, steps_ticks = 0, flagged = 0, nan_ticks = 0, false_alarms = 0, frontal_flagged = 0, prev = AHC_STEP_STAND;
+    defaults(&sp, &fp, &st);
+    st.stepping_enabled = 1;
+    st.step_trigger_time = 0.1;
+    CHECK(ahc3d_init_stepping(&c, &sp, &fp, &st) == AHC_OK, "init");
+    for (k = 0; k < 1500; ++k) {
+        const int bad = k % 50 == 25;
+        memset(&s, 0, sizeof s);
+        s.fz_left = s.fz_right = 35.0;
+        s.sag.fz = k % 50 == 40 ? 1.5 * sp.fz_max : 70.0; /* a landing's impact, now and then */
+        s.sag.zmp_x = 0.1;                                /* beyond the toes of feet side by side */
+        if (bad) s.sag.theta_ankle = s.zmp_y = NAN;
+        ahc3d_step(&c, &s, &o);
+        /* (the tick a step starts on, the flat-footed layers ran and classified as ever) */
+        if (o.step.phase == AHC_STEP_STAND || prev == AHC_STEP_STAND) {
+            prev = o.step.phase;
+            continue;
+        }
+        prev = o.step.phase;
+        steps_ticks++;
+        if (bad) {
+            nan_ticks++;
+            flagged += (o.sag.fault & AHC_FAULT_THETA_ANKLE_NONFINITE) != 0;
+            frontal_flagged += (o.frontal.fault & AHC_FFAULT_ZMP_Y_NONFINITE) != 0;
+        } else {
+            false_alarms += o.sag.fault != 0 || o.frontal.fault != 0;
+        }
+    }
+    CHECK(steps_ticks > 200, "a step ran");
+    CHECK(nan_ticks > 3 && flagged == nan_ticks, "every non-finite reading in the step raises its sagittal bit");
+    CHECK(frontal_flagged == nan_ticks, "and its frontal bit");
+    CHECK(false_alarms == 0, "finite readings raise no fault while stepping");
+}
+
 /* The second trigger (the trunk leaning step_trigger_lean toward the edge the measured ZMP is at)
  * and the impact hold, on a robot standing still, its feet flat, its trunk leaned forward by the
  * hips: the step starts on the tick the rule says, and not otherwise. With jump_tick > 0 the trunk's
@@ -870,6 +916,7 @@ static void test_push_held_on_one_foot(void)
 
 int main(void)
 {
+    test_faults_while_stepping();
     test_push_observer();
     test_push_decision();
     test_push_planned_at_decision();

@@ -336,6 +336,11 @@ int ahc_update_params(ahc_controller *c, const ahc_params *p);
  * Never writes NaN/Inf to the outputs. s and out must not be NULL. */
 void ahc_step(ahc_controller *c, const ahc_sensors *s, ahc_outputs *out);
 
+/* The AHC_FAULT_* bits the sensor readings alone raise (ahc_step classifies every tick's readings
+ * so): non-finite values, angles outside the joint ranges, a ZMP beyond the foot, a lifted or an
+ * implausibly loaded robot. */
+unsigned ahc_sensor_faults(const ahc_params *p, const ahc_sensors *s);
+
 /* Largest tick count a state may hold: 2^53, where a double still counts every tick (285 000
  * years at 1 ms). ahc_state_validate refuses a larger one; a caller that converts a time into a
  * tick count (the FMU) refuses a step that would pass it. */

@@ -197,6 +197,9 @@ int ahc_frontal_init(ahc_frontal *c, const ahc_frontal_params *f, const ahc_para
 void ahc_frontal_reset(ahc_frontal *c);
 /* One tick of sp.sample_period. Never writes NaN/Inf. */
 void ahc_frontal_step(ahc_frontal *c, const ahc_frontal_sensors *s, ahc_frontal_outputs *out);
+/* The AHC_FFAULT_* bits the sensor readings alone raise (ahc_frontal_step classifies every tick's
+ * readings so): zmp_y or a frontal angle non-finite, zmp_y beyond the soles, a lifted robot. */
+unsigned ahc_frontal_sensor_faults(const ahc_frontal *c, const ahc_frontal_sensors *s);
 /* Whether c holds a state init and step could have produced (as ahc_state_validate). */
 int ahc_frontal_state_validate(const ahc_frontal *c, char *msg, size_t msg_size);
 
