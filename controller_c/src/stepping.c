@@ -1284,6 +1284,9 @@ int ahc_step_state_consistent(const ahc_stepper *c, const ahc_params *sp, const 
     return ahc_step_state_validate(c, msg, msg_size);
 }
 
+/* The largest magnitude a restored stepping state's positions, rates, angles and moments may have. */
+#define STEP_STATE_MAX 1e3
+
 int ahc_step_state_validate(const ahc_stepper *c, char *msg, size_t msg_size)
 {
     int side, j, i;
@@ -1303,27 +1306,48 @@ int ahc_step_state_validate(const ahc_stepper *c, char *msg, size_t msg_size)
     if (!(c->swing_time >= 0.0 && c->swing_time <= 2.0) || ((c->phase == AHC_STEP_SWING || c->phase == AHC_STEP_CLOSE) && !(c->swing_time > 0.0)))
         return ahc_fail_message(msg, msg_size, AHC_ERR_INCONSISTENT, "stepping swing time %g invalid", c->swing_time);
     {
-        const double v[] = {c->phase_time, c->phase_duration, c->step_clock, c->blend_time, c->pitch_time, c->since_impact, c->xi_prev[0], c->xi_prev[1],
+        /* the clocks: from 0 to the time since the start (the tick count's; the impact hold's
+         * clock starts at step_impact_hold), each at most a tick more than it can have run */
+        const double elapsed = (double)c->tick * c->dt * (1.0 + 1e-12) + c->dt;
+        const double clocks[] = {c->phase_time, c->step_clock, c->blend_time, c->pitch_time, c->since_impact,
+                                 c->obs_loaded_time - c->p.step_impact_hold};
+        /* the rest (positions [m], rates [m/s, rad/s], angles [rad], moments [N m], momenta [N m s]):
+         * finite and within STEP_STATE_MAX, far beyond any a step reaches but short of what
+         * overflows the plan's arithmetic (a forged phase time of -1.4e308 was accepted and made
+         * the next tick's set points non-finite) */
+        const double v[] = {c->phase_duration, c->xi_prev[0], c->xi_prev[1],
                             c->pitch_prev, c->pitch_rate,
                             c->knee_settle, c->com_prev[0], c->com_prev[1], c->com_rate[0], c->com_rate[1], c->c0[0],
                             c->c0[1], c->v0[0], c->v0[1], c->cref[0], c->cref[1], c->vref[0], c->vref[1], c->zmp[0], c->zmp[1],
                             c->settle_mid[0], c->settle_mid[1], c->settle_capture_time, c->tilt[0], c->tilt[1],
-                            c->pelvis_z, c->knee_settle, c->feet[0][0], c->feet[0][1], c->obs_pred, c->push_moment, c->push_planned,
-                            c->obs_loaded_time, c->obs_pitch_prev, c->obs_leg_prev[0], c->obs_leg_prev[1], c->obs_H[0], c->obs_H[1],
+                            c->pelvis_z, c->feet[0][0], c->feet[0][1], c->obs_pred, c->push_moment, c->push_planned,
+                            c->obs_pitch_prev, c->obs_leg_prev[0], c->obs_leg_prev[1], c->obs_H[0], c->obs_H[1],
                             c->obs_H[2], c->obs_H[3],
-                            c->feet[1][0], c->feet[1][1], c->landing[0], c->landing[1], c->swing_pos[0],
-                            c->swing_pos[1]};
-        for (i = 0; i < (int)(sizeof v / sizeof v[0]); ++i)
+                            c->feet[1][0], c->feet[1][1], c->landing[0], c->landing[1], c->swing_from[0], c->swing_from[1],
+                            c->swing_pos[0], c->swing_pos[1], c->swing_vel[0], c->swing_vel[1], c->swing_acc[0],
+                            c->swing_acc[1]};
+        for (i = 0; i < (int)(sizeof clocks / sizeof clocks[0]); ++i)
+            if (!(clocks[i] >= -1e-12 && clocks[i] <= elapsed))
+                return ahc_fail_message(msg, msg_size, AHC_ERR_RANGE, "stepping clock %d = %g outside [0, %g] s (the time since the start)",
+                                        i, clocks[i], elapsed);
+        for (i = 0; i < (int)(sizeof v / sizeof v[0]); ++i) {
             if (!isfinite(v[i])) return ahc_fail_message(msg, msg_size, AHC_ERR_NONFINITE, "stepping state value %d not finite", i);
+            if (!(fabs(v[i]) <= STEP_STATE_MAX))
+                return ahc_fail_message(msg, msg_size, AHC_ERR_RANGE, "stepping state value %d = %g beyond %g", i, v[i], STEP_STATE_MAX);
+        }
+        if (!(c->phase_duration >= 0.0 && c->settle_capture_time >= 0.0))
+            return ahc_fail_message(msg, msg_size, AHC_ERR_RANGE, "stepping phase duration negative");
     }
     for (side = 0; side < 2; ++side)
         for (j = 0; j < AHC_LEG_JOINTS; ++j)
-            if (!isfinite(c->q_out[side][j]) || !isfinite(c->q_prev[side][j]) || isinf(c->blend_from[side][j]))
-                return ahc_fail_message(msg, msg_size, AHC_ERR_NONFINITE, "stepping joint reference not finite");
+            if (!(fabs(c->q_out[side][j]) <= STEP_STATE_MAX) || !(fabs(c->q_prev[side][j]) <= STEP_STATE_MAX) ||
+                !(fabs(c->q_rate[side][j]) <= STEP_STATE_MAX) ||
+                (!isnan(c->blend_from[side][j]) && !(fabs(c->blend_from[side][j]) <= STEP_STATE_MAX)))
+                return ahc_fail_message(msg, msg_size, AHC_ERR_RANGE, "stepping joint reference not finite or beyond %g", STEP_STATE_MAX);
     for (i = 0; i < BODIES; ++i)
         for (j = 0; j < 3; ++j)
-            if (!isfinite(c->obs_body_prev[i][j]))
-                return ahc_fail_message(msg, msg_size, AHC_ERR_NONFINITE, "stepping observer state not finite");
+            if (!(fabs(c->obs_body_prev[i][j]) <= STEP_STATE_MAX))
+                return ahc_fail_message(msg, msg_size, AHC_ERR_RANGE, "stepping observer state not finite or beyond %g", STEP_STATE_MAX);
     {
         /* the swing foot's and the trunk's quintics: T within the parameters' longest (5 s), every
          * coefficient finite, and sum |c_k| T^k (a bound on |x(t)| over [0, T]) below 1e9 (m, rad),

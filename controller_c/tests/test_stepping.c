@@ -489,6 +489,43 @@ static void test_foot_choice(void)
 }
 
 /* A forged state is refused. */
+/* Every state the validation accepts steps with finite set points: a genuine state with one 8-byte
+ * slot overwritten (at each aligned offset after the parameters, and straddling two fields, as a
+ * re-signed blob can be), by values at and beyond what the validation allows; each accepted forgery
+ * is stepped for 10 ticks. Returns the number accepted; *bad the number that gave a non-finite
+ * set point. (The deep fuzzer found a forged phase time of -1.4e308 accepted, its step non-finite.) */
+static int forged_steps(const ahc_stepper *genuine, int *bad)
+{
+    static const double values[] = {NAN, INFINITY, -1e308, 1e308, 999.0, -999.0, 1e3 * 1.001, 0.5, -0.5, 1e-300};
+    static ahc_stepper f;
+    ahc_step_sensors s;
+    ahc_step_outputs out;
+    const double flat[2][AHC_LEG_JOINTS] = {{0}};
+    const size_t first = offsetof(ahc_stepper, tick);
+    size_t off;
+    int accepted = 0, shift, v, k, side, j;
+    memset(&s, 0, sizeof s);
+    s.fz_left = s.fz_right = 35.0;
+    *bad = 0;
+    for (shift = 0; shift < 8; shift += 7)
+        for (off = first + (size_t)shift; off + 8 <= sizeof f; off += 8)
+            for (v = 0; v < (int)(sizeof values / sizeof values[0]); ++v) {
+                int finite = 1;
+                f = *genuine;
+                memcpy((char *)&f + off, &values[v], 8);
+                if (ahc_step_state_validate(&f, NULL, 0) != AHC_OK) continue;
+                accepted++;
+                for (k = 0; k < 10; ++k) {
+                    ahc_step_step(&f, &s, f.phase == AHC_STEP_STAND ? flat : NULL, &out);
+                    for (side = 0; side < 2; ++side)
+                        for (j = 0; j < AHC_LEG_JOINTS; ++j) finite = finite && isfinite(out.q_ref[side][j]);
+                }
+                if (!finite && !(*bad)++)
+                    printf("forged stepping state: offset %zu = %g accepted, then a non-finite set point\n", off, values[v]);
+            }
+    return accepted;
+}
+
 static void test_state_validate(void)
 {
     ahc_params sp;
@@ -530,6 +567,11 @@ static void test_state_validate(void)
             if (!have_swing && run.phase == AHC_STEP_SWING && run.phase_time > 0.02) {
                 swing = run;
                 have_swing = 1;
+            }
+            if (k % 150 == 0) { /* forgeries of states through the step: SHIFT, SWING, TRANSFER, SETTLE ... */
+                int bad, n = forged_steps(&run, &bad);
+                CHECK(n > 0 && bad == 0, "tick %d (phase %d): %d of %d accepted forgeries stepped non-finite", k,
+                      run.phase, bad, n);
             }
         }
         CHECK(have_swing && run.steps >= 1, "a step ran (%d)", run.steps);
