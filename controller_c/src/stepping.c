@@ -328,6 +328,14 @@ void ahc_step_reset(ahc_stepper *c)
     c->feet[AHC_RIGHT][1] = -c->ankle_y;
 }
 
+/* The CoM reference's reach: it stays within REF_MAX [m] of the frame's origin and moves at most
+ * REF_RATE_MAX [m/s] (a reference beyond them, on a robot that does not follow it, is of a robot that
+ * has fallen); with them every value the plan keeps stays within STEP_STATE_MAX, which a restored
+ * state's must too (ahc_step_state_validate). */
+#define REF_MAX 100.0
+#define REF_RATE_MAX 100.0
+#define STEP_STATE_MAX 1e3
+
 /* ---- the estimate ----------------------------------------------------------------------------- */
 
 static int stance_of(const ahc_stepper *c) { return c->swing_side == AHC_LEFT ? AHC_RIGHT : AHC_LEFT; }
@@ -757,8 +765,8 @@ static void pendulum_tick(ahc_stepper *c, const double xi_meas[2], double p_out[
         const double fb = c->p.step_dcm_feedback ? (1.0 + c->p.step_dcm_gain / c->omega) * (xi_meas[i] - xi_ref) : 0.0;
         const double plan = hold ? hold[i] + 2.0 * (xi_ref - hold[i]) : c->zmp[i];
         const double p = clampd(plan + fb, lo[i], hi[i]);
-        c->vref[i] += c->omega * c->omega * (c->cref[i] - p + u) * c->dt;
-        c->cref[i] += c->vref[i] * c->dt;
+        c->vref[i] = clampd(c->vref[i] + c->omega * c->omega * (c->cref[i] - p + u) * c->dt, -REF_RATE_MAX, REF_RATE_MAX);
+        c->cref[i] = clampd(c->cref[i] + c->vref[i] * c->dt, -REF_MAX, REF_MAX);
         p_out[i] = p;
     }
 }
@@ -908,8 +916,8 @@ static void start_step(ahc_stepper *c, const double com[2], const double xi[2])
     else c->swing_side = xi[1] >= feet_mid_y(c) ? AHC_RIGHT : AHC_LEFT;
     sigma_swing = c->swing_side == AHC_LEFT ? 1 : -1;
     for (i = 0; i < 2; ++i) {
-        c->c0[i] = c->cref[i] = com[i];
-        c->v0[i] = c->vref[i] = c->com_rate[i];
+        c->c0[i] = c->cref[i] = clampd(com[i], -REF_MAX, REF_MAX);
+        c->v0[i] = c->vref[i] = clampd(c->com_rate[i], -REF_RATE_MAX, REF_RATE_MAX);
     }
     c->phase_time = 0.0;
     c->step_clock = 0.0;
@@ -1284,9 +1292,6 @@ int ahc_step_state_consistent(const ahc_stepper *c, const ahc_params *sp, const 
     return ahc_step_state_validate(c, msg, msg_size);
 }
 
-/* The largest magnitude a restored stepping state's positions, rates, angles and moments may have. */
-#define STEP_STATE_MAX 1e3
-
 int ahc_step_state_validate(const ahc_stepper *c, char *msg, size_t msg_size)
 {
     int side, j, i;
@@ -1306,26 +1311,29 @@ int ahc_step_state_validate(const ahc_stepper *c, char *msg, size_t msg_size)
     if (!(c->swing_time >= 0.0 && c->swing_time <= 2.0) || ((c->phase == AHC_STEP_SWING || c->phase == AHC_STEP_CLOSE) && !(c->swing_time > 0.0)))
         return ahc_fail_message(msg, msg_size, AHC_ERR_INCONSISTENT, "stepping swing time %g invalid", c->swing_time);
     {
-        /* the clocks: from 0 to the time since the start (the tick count's; the impact hold's
-         * clock starts at step_impact_hold), each at most a tick more than it can have run */
+        /* the clocks: from 0 to the time since the start (the tick count's), each at most a tick
+         * more than it can have run; the soles' loaded time starts at step_impact_hold (and drops
+         * to 0 when a sole unloads) */
         const double elapsed = (double)c->tick * c->dt * (1.0 + 1e-12) + c->dt;
-        const double clocks[] = {c->phase_time, c->step_clock, c->blend_time, c->pitch_time, c->since_impact,
-                                 c->obs_loaded_time - c->p.step_impact_hold};
-        /* the rest (positions [m], rates [m/s, rad/s], angles [rad], moments [N m], momenta [N m s]):
-         * finite and within STEP_STATE_MAX, far beyond any a step reaches but short of what
-         * overflows the plan's arithmetic (a forged phase time of -1.4e308 was accepted and made
-         * the next tick's set points non-finite) */
-        const double v[] = {c->phase_duration, c->xi_prev[0], c->xi_prev[1],
-                            c->pitch_prev, c->pitch_rate,
-                            c->knee_settle, c->com_prev[0], c->com_prev[1], c->com_rate[0], c->com_rate[1], c->c0[0],
-                            c->c0[1], c->v0[0], c->v0[1], c->cref[0], c->cref[1], c->vref[0], c->vref[1], c->zmp[0], c->zmp[1],
-                            c->settle_mid[0], c->settle_mid[1], c->settle_capture_time, c->tilt[0], c->tilt[1],
-                            c->pelvis_z, c->feet[0][0], c->feet[0][1], c->obs_pred, c->push_moment, c->push_planned,
-                            c->obs_pitch_prev, c->obs_leg_prev[0], c->obs_leg_prev[1], c->obs_H[0], c->obs_H[1],
-                            c->obs_H[2], c->obs_H[3],
-                            c->feet[1][0], c->feet[1][1], c->landing[0], c->landing[1], c->swing_from[0], c->swing_from[1],
-                            c->swing_pos[0], c->swing_pos[1], c->swing_vel[0], c->swing_vel[1], c->swing_acc[0],
-                            c->swing_acc[1]};
+        const double clocks[] = {c->phase_time, c->step_clock, c->blend_time, c->pitch_time, c->since_impact};
+        /* the plan's values (positions [m], rates [m/s], angles [rad], times [s]): finite and within
+         * STEP_STATE_MAX, which the plan keeps them in (the CoM reference's REF_MAX, REF_RATE_MAX);
+         * a forged phase time of -1.4e308 was accepted and made the next tick's set points
+         * non-finite */
+        const double v[] = {c->phase_duration, c->knee_settle, c->c0[0], c->c0[1], c->v0[0], c->v0[1], c->cref[0],
+                            c->cref[1], c->vref[0], c->vref[1], c->zmp[0], c->zmp[1], c->settle_mid[0], c->settle_mid[1],
+                            c->settle_capture_time, c->tilt[0], c->tilt[1], c->pelvis_z, c->feet[0][0], c->feet[0][1],
+                            c->feet[1][0], c->feet[1][1], c->landing[0], c->landing[1], c->swing_from[0],
+                            c->swing_from[1], c->swing_pos[0], c->swing_pos[1], c->swing_vel[0], c->swing_vel[1],
+                            c->swing_acc[0], c->swing_acc[1]};
+        /* the measured ones (the estimate, the observer): finite, whatever the sensors read */
+        const double measured[] = {c->xi_prev[0], c->xi_prev[1], c->pitch_prev, c->pitch_rate, c->com_prev[0],
+                                   c->com_prev[1], c->com_rate[0], c->com_rate[1], c->obs_pred, c->push_moment,
+                                   c->push_planned, c->obs_pitch_prev, c->obs_leg_prev[0], c->obs_leg_prev[1],
+                                   c->obs_H[0], c->obs_H[1], c->obs_H[2], c->obs_H[3]};
+        for (i = 0; i < (int)(sizeof measured / sizeof measured[0]); ++i)
+            if (!isfinite(measured[i]))
+                return ahc_fail_message(msg, msg_size, AHC_ERR_NONFINITE, "stepping estimate value %d not finite", i);
         for (i = 0; i < (int)(sizeof clocks / sizeof clocks[0]); ++i)
             if (!(clocks[i] >= -1e-12 && clocks[i] <= elapsed))
                 return ahc_fail_message(msg, msg_size, AHC_ERR_RANGE, "stepping clock %d = %g outside [0, %g] s (the time since the start)",
@@ -1335,19 +1343,22 @@ int ahc_step_state_validate(const ahc_stepper *c, char *msg, size_t msg_size)
             if (!(fabs(v[i]) <= STEP_STATE_MAX))
                 return ahc_fail_message(msg, msg_size, AHC_ERR_RANGE, "stepping state value %d = %g beyond %g", i, v[i], STEP_STATE_MAX);
         }
+        if (!(c->obs_loaded_time <= elapsed + c->p.step_impact_hold)) /* (>= 0: the flags' check) */
+            return ahc_fail_message(msg, msg_size, AHC_ERR_RANGE, "stepping loaded time %g beyond %g s (the time since the start and step_impact_hold)",
+                                    c->obs_loaded_time, elapsed + c->p.step_impact_hold);
         if (!(c->phase_duration >= 0.0 && c->settle_capture_time >= 0.0))
             return ahc_fail_message(msg, msg_size, AHC_ERR_RANGE, "stepping phase duration negative");
     }
     for (side = 0; side < 2; ++side)
         for (j = 0; j < AHC_LEG_JOINTS; ++j)
-            if (!(fabs(c->q_out[side][j]) <= STEP_STATE_MAX) || !(fabs(c->q_prev[side][j]) <= STEP_STATE_MAX) ||
-                !(fabs(c->q_rate[side][j]) <= STEP_STATE_MAX) ||
-                (!isnan(c->blend_from[side][j]) && !(fabs(c->blend_from[side][j]) <= STEP_STATE_MAX)))
-                return ahc_fail_message(msg, msg_size, AHC_ERR_RANGE, "stepping joint reference not finite or beyond %g", STEP_STATE_MAX);
+            if (!isfinite(c->q_out[side][j]) || !(fabs(c->q_prev[side][j]) <= STEP_STATE_MAX) ||
+                !isfinite(c->q_rate[side][j]) || isinf(c->blend_from[side][j]))
+                return ahc_fail_message(msg, msg_size, AHC_ERR_NONFINITE,
+                                        "stepping joint reference not finite (or a planned angle beyond %g)", STEP_STATE_MAX);
     for (i = 0; i < BODIES; ++i)
         for (j = 0; j < 3; ++j)
-            if (!(fabs(c->obs_body_prev[i][j]) <= STEP_STATE_MAX))
-                return ahc_fail_message(msg, msg_size, AHC_ERR_RANGE, "stepping observer state not finite or beyond %g", STEP_STATE_MAX);
+            if (!isfinite(c->obs_body_prev[i][j]))
+                return ahc_fail_message(msg, msg_size, AHC_ERR_NONFINITE, "stepping observer state not finite");
     {
         /* the swing foot's and the trunk's quintics: T within the parameters' longest (5 s), every
          * coefficient finite, and sum |c_k| T^k (a bound on |x(t)| over [0, T]) below 1e9 (m, rad),

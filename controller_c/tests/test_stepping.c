@@ -555,13 +555,18 @@ static void test_state_validate(void)
         ahc_step_outputs out;
         const double flat[2][AHC_LEG_JOINTS] = {{0}};
         static ahc_stepper swing;
-        int k, side, j, finite = 1, have_swing = 0, refused = 0;
+        int k, side, j, finite = 1, have_swing = 0, refused = 0, reloading = 0;
         go.step_trigger_x = -0.05; /* steps at once */
         CHECK(ahc_step_init(&run, &go, &sp, &fp) == AHC_OK, "init");
         memset(&s, 0, sizeof s);
         s.fz_left = s.fz_right = 35.0;
         for (k = 0; k < 3000; ++k) { /* every genuine state of a step is accepted */
+            /* the swing sole carries nothing while it swings: the soles' loaded time restarts from 0 */
+            const int swinging = run.phase == AHC_STEP_SWING || run.phase == AHC_STEP_CLOSE;
+            s.fz_left = swinging && run.swing_side == AHC_LEFT ? 0.0 : swinging ? 70.0 : 35.0;
+            s.fz_right = swinging && run.swing_side == AHC_RIGHT ? 0.0 : swinging ? 70.0 : 35.0;
             ahc_step_step(&run, &s, flat, &out);
+            reloading |= run.obs_loaded_time < run.p.step_impact_hold;
             if (ahc_step_state_validate(&run, msg, sizeof msg) != AHC_OK && !refused++)
                 CHECK(0, "tick %d (phase %d) refused: %s", k, run.phase, msg);
             if (!have_swing && run.phase == AHC_STEP_SWING && run.phase_time > 0.02) {
@@ -575,6 +580,7 @@ static void test_state_validate(void)
             }
         }
         CHECK(have_swing && run.steps >= 1, "a step ran (%d)", run.steps);
+        CHECK(reloading, "states with the soles' loaded time below step_impact_hold were among them");
         run = swing;
         f = run;
         f.swing[0].c[3] = NAN;
