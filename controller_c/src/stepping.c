@@ -334,6 +334,9 @@ void ahc_step_reset(ahc_stepper *c)
  * state's must too (ahc_step_state_validate). */
 #define REF_MAX 100.0
 #define REF_RATE_MAX 100.0
+/* The trunk's pitch plan starts from the measured pitch and rate within these [rad], [rad/s]. */
+#define PITCH_PLAN_MAX 1.6
+#define PITCH_RATE_PLAN_MAX 50.0
 #define STEP_STATE_MAX 1e3
 
 /* ---- the estimate ----------------------------------------------------------------------------- */
@@ -439,6 +442,7 @@ static void observe_push(ahc_stepper *c, const ahc_step_sensors *s, const double
         H += (c->I2 * (s->imu_pitch - c->obs_pitch_prev) +
               0.5 * c->I1 * ((leg[0] - c->obs_leg_prev[0]) + (leg[1] - c->obs_leg_prev[1]))) / c->dt;
         torque = c->mass * c->g * com[0] - px * fz;
+        if (!isfinite(torque) || !isfinite(H)) return; /* readings finite but too large to multiply: the estimate holds */
         {
             /* the median of the last five ticks' H: a jump of the estimate (a sole unloading, the foot's
              * rocking edge changing) moves the bodies by a millimetre in a tick, and their finite
@@ -1029,8 +1033,11 @@ void ahc_step_step(ahc_stepper *c, const ahc_step_sensors *s, const double flat_
         const int trigger = c->p.stepping_enabled && c->est_valid && c->tick > 20 && flat_q &&
                             (((beyond || at_limit) && c->since_impact >= c->p.step_impact_hold - 1e-12) || at_set_time);
         if (trigger) {
-            ahc_quintic_init(&c->pitch_plan, c->pitch_prev, c->pitch_rate, 0.0, c->pitch_erect, 0.0, 0.0,
-                             c->p.step_pitch_time);
+            /* from the measured pitch and rate, within what a trunk that has not fallen does (a
+             * reading of 1e30 made a plan whose genuine state the restore refused) */
+            ahc_quintic_init(&c->pitch_plan, clampd(c->pitch_prev, -PITCH_PLAN_MAX, PITCH_PLAN_MAX),
+                             clampd(c->pitch_rate, -PITCH_RATE_PLAN_MAX, PITCH_RATE_PLAN_MAX), 0.0, c->pitch_erect, 0.0,
+                             0.0, c->p.step_pitch_time);
             c->pitch_time = 0.0;
             c->push_planned = c->push_moment;
             start_step(c, c->com_prev, xi_push); /* the estimate (held through a non-finite reading) */

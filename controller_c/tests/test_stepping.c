@@ -649,6 +649,33 @@ static void test_nonfinite_inputs(void)
     CHECK(stepped, "a step ran");
     CHECK(finite, "every output finite through non-finite readings");
     CHECK(ahc_step_state_validate(&c, NULL, 0) == AHC_OK, "the state stays valid");
+    {
+        /* huge finite readings (an FMU input may be any finite value): every state of the steps that
+         * follow is one the restore accepts (a 1e30 trunk pitch at a decision made a pitch plan the
+         * restore refused, found by the deep fuzzer), every output finite */
+        static const double huge[] = {1e30, -1e30, 1e300};
+        char msgbuf[200];
+        int h, refused = 0;
+        for (h = 0; h < 3; ++h) {
+            CHECK(ahc_step_init(&c, &st, &sp, &fp) == AHC_OK, "init");
+            for (k = 0; k < 1500; ++k) {
+                memset(&s, 0, sizeof s);
+                s.fz_left = s.fz_right = 35.0;
+                if (k % 11 == 5 && k > 20) {
+                    s.imu_pitch = huge[h];
+                    s.q[k % 2][k % AHC_LEG_JOINTS] = huge[h];
+                    s.zmp_x = huge[h];
+                    s.fz_right = fabs(huge[h]);
+                }
+                ahc_step_step(&c, &s, c.phase == AHC_STEP_STAND ? flat : NULL, &out);
+                for (side = 0; side < 2; ++side)
+                    for (j = 0; j < AHC_LEG_JOINTS; ++j) finite = finite && isfinite(out.q_ref[side][j]);
+                if (ahc_step_state_validate(&c, msgbuf, sizeof msgbuf) != AHC_OK && !refused++) printf("refused at k=%d h=%d phase %d: %s\n", k, h, c.phase, msgbuf);
+            }
+        }
+        CHECK(finite, "every output finite through huge readings");
+        CHECK(refused == 0, "every state through huge readings is one the restore accepts (%d refused)", refused);
+    }
 }
 
 /* While a step runs the flat-footed layers rest, and the 3D controller's fault masks still report
