@@ -45,8 +45,9 @@ void ahc3d_reset(ahc3d *c)
 
 /* The flat-footed layers: the paper's sagittal controller, the frontal one, the legs' set points. */
 /* The frontal layer's sensors: the frontal angles measured on the pivot leg the frontal reference
- * names (NaN when a joint reading is not finite). */
-static void frontal_sensors(const ahc3d *c, const ahc3d_sensors *s, ahc_frontal_sensors *fs)
+ * names (NaN when a joint reading is not finite); without `angles`, 0 in their place when the
+ * readings are finite (for the sensor checks, which read only whether they are). */
+static void frontal_sensors(const ahc3d *c, const ahc3d_sensors *s, int angles, ahc_frontal_sensors *fs)
 {
     int side, j, finite = 1;
     fs->zmp_y = s->zmp_y;
@@ -56,7 +57,8 @@ static void frontal_sensors(const ahc3d *c, const ahc3d_sensors *s, ahc_frontal_
     fs->phi = fs->psi = NAN;
     for (side = 0; side < 2; ++side)
         for (j = 0; j < AHC_LEG_JOINTS; ++j) finite = finite && isfinite(s->q[side][j]);
-    if (finite) ahc_legs_frontal_angles(&c->legs, s->q, c->frontal.psi >= 0.0, &fs->phi, &fs->psi);
+    if (finite && angles) ahc_legs_frontal_angles(&c->legs, s->q, c->frontal.psi >= 0.0, &fs->phi, &fs->psi);
+    else if (finite) fs->phi = fs->psi = 0.0;
     /* the feet's roll toward +y: the trunk's lean toward +y (-imu_roll) less link 2's lean on flat feet */
     fs->foot_roll = -s->imu_roll - fs->psi;
 }
@@ -68,7 +70,7 @@ static void flat_footed(ahc3d *c, const ahc3d_sensors *s, ahc3d_outputs *out)
     /* 1. the paper's controller, on the sagittal sensors alone */
     ahc_step(&c->sag, &s->sag, &out->sag);
     /* 2. the frontal angles */
-    frontal_sensors(c, s, &fs);
+    frontal_sensors(c, s, 1, &fs);
     /* 3. the frontal controller */
     ahc_frontal_step(&c->frontal, &fs, &out->frontal);
     /* 4. the legs: both planes' references minus the sagittal ones alone, which are the pitch
@@ -160,7 +162,7 @@ void ahc3d_step(ahc3d *c, const ahc3d_sensors *s, ahc3d_outputs *out)
             /* and their sensor checks report on (the step holds its estimate through a bad reading):
              * those that hold whatever the stance (STEP_SENSOR_FAULTS); a ZMP beyond the feet side
              * by side, or a lifted robot, is not a fault while the feet are apart or one swings */
-            frontal_sensors(c, s, &fs);
+            frontal_sensors(c, s, 0, &fs);
             out->sag.fault = ahc_sensor_faults(&c->sag.p, &s->sag) & STEP_SENSOR_FAULTS;
             out->frontal.fault = ahc_frontal_sensor_faults(&c->frontal, &fs) & STEP_FRONTAL_SENSOR_FAULTS;
         } else {
