@@ -43,7 +43,6 @@ void ahc3d_reset(ahc3d *c)
     geometry(c);
 }
 
-/* The flat-footed layers: the paper's sagittal controller, the frontal one, the legs' set points. */
 /* The frontal layer's sensors: the frontal angles measured on the pivot leg the frontal reference
  * names (NaN when a joint reading is not finite); without `angles`, 0 in their place when the
  * readings are finite (for the sensor checks, which read only whether they are). */
@@ -63,6 +62,7 @@ static void frontal_sensors(const ahc3d *c, const ahc3d_sensors *s, int angles, 
     fs->foot_roll = -s->imu_roll - fs->psi;
 }
 
+/* The flat-footed layers: the paper's sagittal controller, the frontal one, the legs' set points. */
 static void flat_footed(ahc3d *c, const ahc3d_sensors *s, ahc3d_outputs *out)
 {
     ahc_frontal_sensors fs;

@@ -632,14 +632,21 @@ struct DeepProgram {
   // other (param_value); a short settling leaves the robot still moving at the start, a state
   // its steps, restores and forgeries must handle all the same.
   void quick_start(Api& api) {
-    static const struct {
-      const char* name;
-      double value;
-    } kQuick[] = {{"settle_time", 0.02}};
+    static const NamedValue kQuick[] = {{"settle_time", 0.02}};
+    set_named(api, kQuick);
+  }
+
+  // The parameters of `table` this model has, set to their values (each inside its declared range,
+  // so a refusal is a finding).
+  struct NamedValue {
+    const char* name;
+    double value;
+  };
+  template <std::size_t N>
+  void set_named(Api& api, const NamedValue (&table)[N]) {
     for (const fmuglue::Variable* v : params)
-      for (const auto& q : kQuick)
-        if (v->name == q.name && v->type == fmuglue::Type::Real && allowed(*v, q.value) &&
-            set_param(api, *v, q.value) != fmi2OK)
+      for (const NamedValue& q : table)
+        if (v->name == q.name && allowed(*v, q.value) && set_param(api, *v, q.value) != fmi2OK)
           finding("parameter set", (v->name + " refused a value inside its range").c_str());
   }
 
@@ -651,14 +658,8 @@ struct DeepProgram {
   // decided only when the capture point leaves the feet, and the fuzzer never reached the layer's
   // step function (bash scripts/fuzz.sh: 0 of its 892 edges in 60 s).
   void stepping_mode(Api& api) {
-    static const struct {
-      const char* name;
-      double value;
-    } kStepping[] = {{"stepping_enabled", 1.0}, {"step_trigger_time", 0.1}};
-    for (const fmuglue::Variable* v : params)
-      for (const auto& m : kStepping)
-        if (v->name == m.name && allowed(*v, m.value) && set_param(api, *v, m.value) != fmi2OK)
-          finding("parameter set", (v->name + " refused a value inside its range").c_str());
+    static const NamedValue kStepping[] = {{"stepping_enabled", 1.0}, {"step_trigger_time", 0.1}};
+    set_named(api, kStepping);
   }
 
   // Instantiate (if needed), set parameters, initialize. False: the model refused them (the
