@@ -670,7 +670,8 @@ static void test_nonfinite_inputs(void)
                 ahc_step_step(&c, &s, c.phase == AHC_STEP_STAND ? flat : NULL, &out);
                 for (side = 0; side < 2; ++side)
                     for (j = 0; j < AHC_LEG_JOINTS; ++j) finite = finite && isfinite(out.q_ref[side][j]);
-                if (ahc_step_state_validate(&c, msgbuf, sizeof msgbuf) != AHC_OK && !refused++) printf("refused at k=%d h=%d phase %d: %s\n", k, h, c.phase, msgbuf);
+                if (ahc_step_state_validate(&c, msgbuf, sizeof msgbuf) != AHC_OK && !refused++)
+                    CHECK(0, "tick %d (reading %g, phase %d) refused: %s", k, huge[h], c.phase, msgbuf);
             }
         }
         CHECK(finite, "every output finite through huge readings");
