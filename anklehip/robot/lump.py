@@ -41,12 +41,15 @@ class Lump:
 
 
 def lump(bodies: list[Body]) -> Lump:
-    """Mass, CoM and pitch inertia of a set of bodies (hoap2/lump.py's lump())."""
-    m = sum(b.mass for b in bodies)
+    """Mass, CoM and pitch inertia of a set of bodies (hoap2/lump.py's lump()). The sums are exactly
+    rounded (math.fsum), so the result does not depend on the bodies' order: callers pass sets, whose
+    order follows Python's hash seed, and a last-bit change there made IPOPT stop the one-step
+    optimum on a different iterate from one run to the next (docs/capability.md section 9.3)."""
+    m = math.fsum(b.mass for b in bodies)
     if not m > 0:
         return Lump(0.0, np.zeros(3), 0.0)
-    c = sum(b.mass * b.com for b in bodies) / m
-    iyy = sum(b.inertia[1, 1] + b.mass * ((b.com[0] - c[0]) ** 2 + (b.com[2] - c[2]) ** 2) for b in bodies)
+    c = np.array([math.fsum(b.mass * b.com[i] for b in bodies) for i in range(3)]) / m
+    iyy = math.fsum(b.inertia[1, 1] + b.mass * ((b.com[0] - c[0]) ** 2 + (b.com[2] - c[2]) ** 2) for b in bodies)
     return Lump(m, c, float(iyy))
 
 
