@@ -359,13 +359,35 @@ URDF_JOINT = ("joint_1", "joint_3", "joint_2", "joint_4", "joint_5", "joint_6")
 URDF_SENSE = (1.0, -1.0, 1.0, 1.0, -1.0, 1.0)
 
 
-def swings(scenario, models, engine, overrides, settings) -> int:
+def urdf_legs():
+    """hoap2/hoap2.urdf through Pinocchio: its model, data and, per leg, the configuration indices of
+    JOINTS (URDF_JOINT)."""
     import pinocchio as pin
     root = Path(__file__).resolve().parents[1]
     model = pin.buildModelFromUrdf(str(root / "hoap2" / "hoap2.urdf"))
-    data = model.createData()
     idx = {side: [model.joints[model.getJointId(f"{side[0]}leg_{j}")].idx_q for j in URDF_JOINT]
            for side in ("left", "right")}
+    return model, model.createData(), idx
+
+
+def measured_pose(legs, d, k):
+    """The robot file's legs at row k's measured joints (forward kinematics into legs' data, the trunk's
+    frame), and the IMU's attitude R = Ry(pitch) Rx(roll) that turns that frame into the world's."""
+    import pinocchio as pin
+    model, data, idx = legs
+    q = pin.neutral(model)
+    for side in ("left", "right"):
+        for i, (j, sense) in enumerate(zip(JOINTS, URDF_SENSE)):
+            q[idx[side][i]] = sense * col(d, f"q_{side}_{j}")[k]
+    pin.framesForwardKinematics(model, data, q)
+    roll, pitch = d["imu_roll"][k], d["imu_pitch"][k]
+    cr, sr, cp, sp = np.cos(roll), np.sin(roll), np.cos(pitch), np.sin(pitch)
+    return np.array([[cp, sp * sr, sp * cr], [0.0, cr, -sr], [-sp, cp * sr, cp * cr]])
+
+
+def swings(scenario, models, engine, overrides, settings) -> int:
+    legs = urdf_legs()
+    model, data, _ = legs
     sole = {side: model.getFrameId(f"{side[0]}_sole") for side in ("left", "right")}
     print("1 s back pushes (50 ms ramps), stepping on" + (f" ({', '.join(settings)})" if settings else "")
           + ": the first swing from the plant's joints and IMU, from its start to the swing sole's first load "
@@ -396,14 +418,7 @@ def swings(scenario, models, engine, overrides, settings) -> int:
             k1 = min(k1, k0 + int(left[0]))
         rise, pitch, tip, ahead = -np.inf, -np.inf, -np.inf, np.nan
         for k in range(k0, k1 + 1):
-            q = pin.neutral(model)
-            for side in ("left", "right"):
-                for i, (j, sense) in enumerate(zip(JOINTS, URDF_SENSE)):
-                    q[idx[side][i]] = sense * col(d, f"q_{side}_{j}")[k]
-            pin.framesForwardKinematics(model, data, q)
-            roll, pitch_imu = d["imu_roll"][k], d["imu_pitch"][k]
-            cr, sr, cpt, spt = np.cos(roll), np.sin(roll), np.cos(pitch_imu), np.sin(pitch_imu)
-            R = np.array([[cpt, spt * sr, spt * cr], [0.0, cr, -sr], [-spt, cpt * sr, cpt * cr]])  # Ry(pitch) Rx(roll)
+            R = measured_pose(legs, d, k)
             pose = {side: (R @ data.oMf[sole[side]].translation, R @ data.oMf[sole[side]].rotation)
                     for side in ("left", "right")}
             low = {side: min((p + Rs @ c)[2] for c in corners) for side, (p, Rs) in pose.items()}

@@ -185,3 +185,53 @@ def test_swing_table_is_the_docs(fmu_dir):
         assert stance_pitch > -0.005, r
         if abs(ahead) < 5.0:  # came down where it stood
             assert clearance < 1.0, r
+
+
+ANATOMY_ARGS = ["--force", "20", "--set", "step_push_estimate=2", "--set", "step_swing_measured=1", "--set",
+                "step_swing_hold=0.04", "--set", "step_length_max=0.2"]
+
+
+def _rows(block):
+    """A printed table's rows as lists of floats (a leading '+' kept as the sign)."""
+    lines = [line.strip() for line in block.splitlines()]
+    lines = [line for line in lines if line.startswith("| ") and not line.startswith("| t [ms]")]
+    return [[float(c) for c in line.strip("|").split("|")] for line in lines]
+
+
+def test_one_step_anatomy_is_the_docs(fmu_dir):
+    """docs/capability.md §9.3: `scripts/one_step_anatomy.py` with the docs' settings prints what the docs
+    show — the layer's table on the plant exactly (a deterministic run), the optimum's within 5 mm and
+    0.02 rad (the same at every run here; another BLAS could move IPOPT's last iterate) — and both are
+    sound where they can be checked: at the onset the robot stands erect (each stance hip over its
+    ankle within 3 mm, the optimum's CoM height unchanged), the optimum's swing ankle comes down at the
+    landing it reports, and a malformed --set is refused with exit 2."""
+    import os
+    import subprocess
+    import sys
+    from conftest import REPO_ROOT
+    pytest.importorskip("casadi")
+    pytest.importorskip("pinocchio")
+    script = str(REPO_ROOT / "scripts" / "one_step_anatomy.py")
+    env = {**os.environ, "ANKLEHIP_FMU_DIR": str(fmu_dir)}
+    out = subprocess.run([sys.executable, script, *ANATOMY_ARGS], capture_output=True, text=True, check=True,
+                         env=env, timeout=600).stdout
+    doc = (REPO_ROOT / "docs" / "capability.md").read_text()
+    blocks = out.strip().split("\n\n")
+    assert len(blocks) == 4, out
+    layer = blocks[3]
+    assert "\n".join("  " + line for line in layer.splitlines()) in doc
+    doc_block = doc.split("numbers: .venv/bin/python scripts/one_step_anatomy.py", 1)[1].split("\n\n")[1]
+    got, want = _rows(blocks[1]), _rows(doc_block)
+    assert len(got) == len(want) >= 8
+    for g, w in zip(got, want):
+        assert g[0] == w[0]
+        for i, (a, b) in enumerate(zip(g[1:], w[1:]), 1):
+            tol = 0.021 if i in (5, 6, 7) else 5.01
+            assert abs(a - b) <= tol, (g, w)
+    landing = float(blocks[0].split(" ms after it ")[1].split(" mm ahead")[0])
+    first, at_landing = got[0], next(r for r in got if r[0] == 300)
+    assert abs(first[4]) <= 3 and first[2] == 0 and abs(_rows(layer)[0][4]) <= 3
+    assert at_landing[8] == landing and at_landing[9] == 0
+    bad = subprocess.run([sys.executable, script, "--set", "step_length_max"], capture_output=True, text=True,
+                         env=env, timeout=60)
+    assert bad.returncode == 2 and "--set 'step_length_max'" in bad.stderr and "Traceback" not in bad.stderr
