@@ -35,7 +35,7 @@ from anklehip.analysis.flat_footed import push_shape  # noqa: E402
 
 DURATION, RISE, T_AFTER, DT = 1.0, 0.05, 0.5, 0.05   # as scripts/one_step_optimum.py's coarse mesh
 T_LIFT, T_LAND, CLEARANCE = 0.06, 0.3, 0.01           # its second series' 300 ms point
-TIMES = (0.0, 0.05, 0.1, 0.15, 0.2, 0.25, 0.3, 0.35, 0.4, 0.5)
+TIMES = (0.0, 0.05, 0.1, 0.15, 0.2, 0.25, 0.3, 0.35, 0.4, 0.45, 0.5, 0.6, 0.8, 1.0, 1.2)
 
 
 def optimum():
@@ -111,7 +111,8 @@ def layer_rows(force, settings):
         rows.append((tt, c, d["com_z"][k] - d["com_z"][k0], st.pushed_capture_point(r, k, k0, g),
                      stance_hip_ahead(legs, d, k, side), d["imu_pitch"][k],
                      st.col(d, f"q_{side}_ankle")[k], st.col(d, f"q_{side}_knee")[k], st.col(d, "steps")[k],
-                     st.col(d, "landing_x")[k]))
+                     st.col(d, "landing_x")[k], d[f"fz_{side}"][k], d["fz_left" if side == "right" else "fz_right"][k],
+                     d["imu_roll"][k]))
     return r, rows
 
 
@@ -152,11 +153,11 @@ def main(argv=None) -> int:
     print()
     print("| t [ms] | CoM ahead of the stance ankle [mm] | CoM height change [mm] | pushed capture point xi + u ahead "
           "of the stance ankle [mm] | stance hip ahead of its ankle [mm] | trunk pitch (IMU) [rad] | stance ankle [rad] | stance knee [rad] | steps landed | "
-          "landing point ahead [mm] |")
-    print("|---|---|---|---|---|---|---|---|---|---|")
-    for t, c, dz, xi, hip, pitch, qa, qk, n, land in rows:
+          "landing point ahead [mm] | stance (rear) sole's load [N] | the other sole's [N] | trunk roll (IMU) [rad] |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+    for t, c, dz, xi, hip, pitch, qa, qk, n, land, f_stance, f_other, roll in rows:
         print(f"| {1000 * t:.0f} | {1000 * c:.0f} | {1000 * dz:+.0f} | {1000 * xi:.0f} | {1000 * hip:.0f} | {pitch:+.2f} | {qa:+.2f} | "
-              f"{qk:+.2f} | {int(n)} | {1000 * land:.0f} |")
+              f"{qk:+.2f} | {int(n)} | {1000 * land:.0f} | {f_stance:.0f} | {f_other:.0f} | {roll:+.2f} |")
     return 0
 
 

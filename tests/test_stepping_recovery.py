@@ -235,3 +235,30 @@ def test_one_step_anatomy_is_the_docs(fmu_dir):
     bad = subprocess.run([sys.executable, script, "--set", "step_length_max"], capture_output=True, text=True,
                          env=env, timeout=60)
     assert bad.returncode == 2 and "--set 'step_length_max'" in bad.stderr and "Traceback" not in bad.stderr
+
+
+HIPS_LEAD = ["--set", "step_push_estimate=2", "--set", "step_swing_measured=1", "--set", "step_swing_hold=0.04", "--set",
+             "step_length_max=0.2", "--set", "step_trunk_back=0.5", "--set", "step_trunk_gain=3", "--set",
+             "step_stance_tilt_gain=3"]
+
+
+def test_hips_lead_landing_table_is_the_docs(fmu_dir):
+    """docs/controller.md §12.5: with the push-aware decision and swing, steps up to 200 mm, the trunk
+    planned back and fed back through the hips and the stance ankle yielding to its sole's roll
+    (`scripts/stepping_trials.py --landing` with those settings), the first table is what the script
+    prints now, and it shows what the docs claim of it: every push of 12-20 N lands its first step
+    within 270 ms of the onset, at least 165 mm ahead, with the pushed capture point inside the landed
+    toe — where the one-step optimum lands (docs/capability.md §9.3) — and falls all the same, later."""
+    import os
+    import subprocess
+    import sys
+    from conftest import REPO_ROOT
+    out = subprocess.run([sys.executable, str(REPO_ROOT / "scripts" / "stepping_trials.py"), "--landing", *HIPS_LEAD],
+                         capture_output=True, text=True, check=True, env={**os.environ, "ANKLEHIP_FMU_DIR": str(fmu_dir)})
+    table = out.stdout.strip().split("\n\n")[0].split("\n", 1)[1]
+    assert table in (REPO_ROOT / "docs" / "controller.md").read_text()
+    rows = {int(r[0]): r for r in (line.strip("|").split("|") for line in table.splitlines()[2:])}
+    for force in (12, 14, 16, 18, 20):
+        r = [c.strip() for c in rows[force]]
+        assert r[1].startswith("fell"), r
+        assert int(r[3]) <= 270 and int(r[5]) >= 165 and int(r[9]) <= 0, r

@@ -57,6 +57,9 @@ void ahc_step_params_default(ahc_step_params *p)
     p->step_swing_rate_max = 0.0;
     p->step_swing_measured = 0.0;
     p->step_swing_hold = 0.0;
+    p->step_trunk_back = 0.0;
+    p->step_trunk_gain = 0.0;
+    p->step_stance_tilt_gain = 0.0;
 }
 
 #define SD(field, unit, lo, hi, desc) \
@@ -109,6 +112,9 @@ static const ahc_param_info k_stable[] = {
     SD(step_swing_rate_max, "rad/s", 0.0, 1e3, "The swing leg's joint set points move at most this fast while it swings (a tick's change at most this x sample_period); 0: no limit"),
     SD(step_swing_measured, "1", 0.0, 1.0, "The swing leg's set points put its foot where the plan sends it from the pelvis as measured (the stance leg's joints and the IMU) by this weight, from the plan's pelvis by 1 minus it: 1 corrects the swing for the trunk's deviation from the plan"),
     SD(step_swing_hold, "m", 0.0, 1.0, "Past mid-swing the swing foot comes down only as its measured ankle nears the landing point: its planned height stays at least its peak times a quintic of the distance left over this; 0: it comes down on time"),
+    SD(step_trunk_back, "rad", 0.0, 1.0, "The step's trunk pitch plan aims this far back of erect, reached over step_pitch_time from the decision, back to erect over step_pitch_time from the landing: the hips lead the CoM; 0: the trunk returns to erect from the decision"),
+    SD(step_trunk_gain, "1", 0.0, 20.0, "The supporting legs' hip pitch set points move by this times the trunk's measured pitch less the plan's, against it: trunk attitude feedback through the hips; 0: off"),
+    SD(step_stance_tilt_gain, "1", 0.0, 20.0, "On one foot the stance ankle's pitch set point moves by this times the stance sole's measured pitch (toes down +): the ankle yields as the sole rolls onto its toe or heel; 0: off"),
 };
 #define STABLE_LEN (sizeof k_stable / sizeof k_stable[0])
 
@@ -1036,8 +1042,8 @@ void ahc_step_step(ahc_stepper *c, const ahc_step_sensors *s, const double flat_
             /* from the measured pitch and rate, within what a trunk that has not fallen does (a
              * reading of 1e30 made a plan whose genuine state the restore refused) */
             ahc_quintic_init(&c->pitch_plan, clampd(c->pitch_prev, -PITCH_PLAN_MAX, PITCH_PLAN_MAX),
-                             clampd(c->pitch_rate, -PITCH_RATE_PLAN_MAX, PITCH_RATE_PLAN_MAX), 0.0, c->pitch_erect, 0.0,
-                             0.0, c->p.step_pitch_time);
+                             clampd(c->pitch_rate, -PITCH_RATE_PLAN_MAX, PITCH_RATE_PLAN_MAX), 0.0,
+                             c->pitch_erect - c->p.step_trunk_back, 0.0, 0.0, c->p.step_pitch_time);
             c->pitch_time = 0.0;
             c->push_planned = c->push_moment;
             start_step(c, c->com_prev, xi_push); /* the estimate (held through a non-finite reading) */
@@ -1105,6 +1111,14 @@ void ahc_step_step(ahc_stepper *c, const ahc_step_sensors *s, const double flat_
                 /* the landed foot's place is measured, not planned: the legs' references move with
                  * it, and that jump is blended out */
                 blend_from_last(c);
+                if (c->phase == AHC_STEP_SWING && c->p.step_trunk_back > 0.0) {
+                    /* the trunk back to erect from where its plan is, over step_pitch_time */
+                    double pitch_now, pitch_rate_now;
+                    ahc_quintic_eval(&c->pitch_plan, c->pitch_time, &pitch_now, &pitch_rate_now, NULL);
+                    ahc_quintic_init(&c->pitch_plan, pitch_now, pitch_rate_now, 0.0, c->pitch_erect, 0.0, 0.0,
+                                     c->p.step_pitch_time);
+                    c->pitch_time = 0.0;
+                }
                 if (c->phase == AHC_STEP_SWING) {
                     /* both feet down: the reference goes on from where it is (starting it again from the
                      * measured state, with the jump blended out, fell in every trial: docs §12.4) */
@@ -1217,6 +1231,17 @@ void ahc_step_step(ahc_stepper *c, const ahc_step_sensors *s, const double flat_
             double R_meas[9] = {0};
             if (c->p.step_swing_measured > 0.0) rot_trunk(s->imu_roll, s->imu_pitch, R_meas);
             plan_joints(c, r, z, roll, pitch, swing_z, P, R_meas, q);
+        }
+        /* feedback on what the joints did not do: the trunk's pitch through the supporting hips, the
+         * stance sole's roll onto an edge through its ankle (docs/controller.md §12.5) */
+        if (c->p.step_trunk_gain > 0.0 && isfinite(s->imu_pitch))
+            for (side = 0; side < 2; ++side)
+                if (!(one_foot(c->phase) && side == c->swing_side))
+                    q[side][AHC_LEG_HIP_PITCH] -= c->p.step_trunk_gain * (s->imu_pitch - pitch);
+        if (one_foot(c->phase) && c->p.step_stance_tilt_gain > 0.0) {
+            const int stance = stance_of(c);
+            const double sole_pitch = asin(clampd(-Rfw[stance][6], -1.0, 1.0));
+            if (isfinite(sole_pitch)) q[stance][AHC_LEG_ANKLE_PITCH] += c->p.step_stance_tilt_gain * sole_pitch;
         }
         lead_alpha = c->p.step_lead_tau > 0.0 ? 1.0 - exp(-c->dt / c->p.step_lead_tau) : 1.0;
         for (side = 0; side < 2; ++side)

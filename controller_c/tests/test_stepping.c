@@ -990,6 +990,87 @@ static void test_push_held_on_one_foot(void)
           "at the step's end the estimate is back at the moment (%g N m, applied %g)", prev, M);
 }
 
+/* The trunk's and the stance sole's feedback (step_trunk_gain, step_stance_tilt_gain) and the trunk
+ * plan's lean back (step_trunk_back), docs/controller.md §12.5: robots in lockstep on the same
+ * readings (standing still, pitched forward by 0.02 rad on flat joints, both soles loaded), stepping at
+ * a set time. Once a switch's blend is out, the trunk gain moves only the supporting legs' hip pitch
+ * set points, by -gain (measured pitch - the plan's); the tilt gain only the stance ankle's on one
+ * foot, by gain times the stance sole's pitch (here the IMU's: the joints are flat); everything else
+ * is bit-identical. The lean back: the plan's pitch is erect - step_trunk_back step_pitch_time after
+ * the decision, and erect again step_pitch_time after the landing. */
+static void test_trunk_and_tilt_feedback(void)
+{
+    enum { PLAIN, TRUNK, TILT, BACK, ROBOTS };
+    ahc_step_params st[ROBOTS];
+    static ahc_stepper c[ROBOTS];
+    ahc_step_sensors s;
+    ahc_step_outputs out[ROBOTS];
+    const double flat[2][AHC_LEG_JOINTS] = {{0}};
+    const double theta = 0.02;
+    double worst_trunk = 0.0, worst_tilt = 0.0, back_at_swing = NAN, back_after = NAN, t_land = -1.0;
+    int k, r, side, j, others_same = 1, compared = 0, tilted_ticks = 0, landed_phase_seen = 0;
+    for (r = 0; r < ROBOTS; ++r) {
+        moment_params(&st[r], 1.0, 50.0, 0); /* no rule fires: the step starts at the set time */
+        st[r].step_trigger_time = 0.1;
+    }
+    st[TRUNK].step_trunk_gain = 2.0;
+    st[TILT].step_stance_tilt_gain = 3.0;
+    st[BACK].step_trunk_back = 0.3;
+    st[BACK].step_pitch_time = 0.08; /* (the step in place lands 0.1 s into its swing) */
+    for (r = 0; r < ROBOTS; ++r) stand_under_moment(&c[r], &st[r], 0.0, &s);
+    s.imu_pitch = theta;
+    s.zmp_x = 0.0;
+    for (k = 2; k < 4000; ++k) {
+        double plan_pitch;
+        for (r = 0; r < ROBOTS; ++r) ahc_step_step(&c[r], &s, flat, &out[r]);
+        if (out[PLAIN].phase == AHC_STEP_STAND && c[PLAIN].steps > 0) break;
+        if (!out[PLAIN].active) continue;
+        /* the pitch the plan used this tick (its clock has moved on by a tick) */
+        ahc_quintic_eval(&c[PLAIN].pitch_plan, c[PLAIN].pitch_time - c[PLAIN].dt, &plan_pitch, NULL, NULL);
+        if (t_land < 0.0 && out[BACK].phase != AHC_STEP_TRANSFER && c[BACK].pitch_time - c[BACK].dt >= st[BACK].step_pitch_time &&
+            isnan(back_at_swing))
+            ahc_quintic_eval(&c[BACK].pitch_plan, c[BACK].pitch_time - c[BACK].dt, &back_at_swing, NULL, NULL);
+        if (out[BACK].phase == AHC_STEP_TRANSFER && t_land < 0.0) t_land = k * c[BACK].dt;
+        if (t_land >= 0.0 && k * c[BACK].dt >= t_land + st[BACK].step_pitch_time && isnan(back_after)) {
+            ahc_quintic_eval(&c[BACK].pitch_plan, c[BACK].pitch_time - c[BACK].dt, &back_after, NULL, NULL);
+            landed_phase_seen = out[BACK].phase;
+        }
+        if (c[PLAIN].blend_time < st[PLAIN].step_blend_time + c[PLAIN].dt || c[TRUNK].blend_time < st[TRUNK].step_blend_time + c[TRUNK].dt ||
+            c[TILT].blend_time < st[TILT].step_blend_time + c[TILT].dt || out[TRUNK].phase != out[PLAIN].phase ||
+            out[TILT].phase != out[PLAIN].phase)
+            continue;
+        ++compared;
+        for (side = 0; side < 2; ++side) {
+            const int one_foot = out[PLAIN].phase == AHC_STEP_SWING || out[PLAIN].phase == AHC_STEP_CLOSE;
+            const int supporting = !(one_foot && side == out[PLAIN].swing_side);
+            for (j = 0; j < AHC_LEG_JOINTS; ++j) {
+                const double d_trunk = out[TRUNK].q_ref[side][j] - out[PLAIN].q_ref[side][j];
+                const double d_tilt = out[TILT].q_ref[side][j] - out[PLAIN].q_ref[side][j];
+                if (j == AHC_LEG_HIP_PITCH && supporting)
+                    worst_trunk = fmax(worst_trunk, fabs(d_trunk + 2.0 * (theta - plan_pitch)));
+                else
+                    others_same = others_same && d_trunk == 0.0;
+                if (j == AHC_LEG_ANKLE_PITCH && one_foot && supporting) {
+                    worst_tilt = fmax(worst_tilt, fabs(d_tilt - 3.0 * theta));
+                    ++tilted_ticks;
+                } else {
+                    others_same = others_same && d_tilt == 0.0;
+                }
+            }
+        }
+    }
+    CHECK(k < 4000 && compared > 500 && tilted_ticks > 40, "the steps ran to the end (%d ticks compared, %d on one foot)",
+          compared, tilted_ticks);
+    CHECK(worst_trunk < 1e-12, "the trunk gain moves the supporting hips by -2 (pitch - plan) (worst %.2e rad)", worst_trunk);
+    CHECK(worst_tilt < 1e-9, "the tilt gain moves the stance ankle by 3 x the sole's pitch (worst %.2e rad)", worst_tilt);
+    CHECK(others_same, "every other set point is bit-identical to the plain layer's");
+    CHECK(fabs(back_at_swing - (c[BACK].pitch_erect - 0.3)) < 1e-12,
+          "the lean back: the plan's pitch is erect - 0.3 rad step_pitch_time after the decision (%.6f, erect %.6f)",
+          back_at_swing, c[BACK].pitch_erect);
+    CHECK(t_land > 0.0 && fabs(back_after - c[BACK].pitch_erect) < 1e-12,
+          "and erect step_pitch_time after the landing (%.6f, phase %d)", back_after, landed_phase_seen);
+}
+
 int main(void)
 {
     test_faults_while_stepping();
@@ -1009,5 +1090,6 @@ int main(void)
     test_swing_rate_max();
     test_swing_measured();
     test_swing_hold();
+    test_trunk_and_tilt_feedback();
     TEST_MAIN_END();
 }

@@ -135,6 +135,15 @@ typedef struct {
                                   (0: the plan's; 1: the measured one's) [1]                     */
     double step_swing_hold;    /* the swing foot stays at step_height until its measured ankle is
                                   within this of the landing point; 0: off [m]                   */
+    double step_trunk_back;    /* the step's trunk plan aims this far back of erect (reached over
+                                  step_pitch_time from the decision; back to erect over it from the
+                                  landing): the hips lead the CoM, as in the one-step optimum
+                                  (docs/capability.md §9.3); 0: erect [rad]                      */
+    double step_trunk_gain;    /* the supporting legs' hip pitch set points take the trunk's measured
+                                  pitch error times this back out; 0: off [1]                    */
+    double step_stance_tilt_gain; /* on one foot, the stance ankle's pitch set point moves by the
+                                  stance sole's measured pitch (toes down +) times this: the ankle
+                                  yields as the sole rolls onto its edge; 0: off [1]             */
 } ahc_step_params;
 
 /* HOAP-2 defaults (docs/controller.md §12): stepping off. */
