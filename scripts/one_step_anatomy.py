@@ -4,15 +4,16 @@
 1. The one-step optimum (anklehip.analysis.one_step) of the 1 s back push (50 ms ramps) for the step
    lifting 60 ms after the onset with its sole 10 mm clear over mid-swing and landing 300 ms after
    it, on the 50 ms mesh, warm-started as scripts/one_step_optimum.py's chain starts (from the step
-   lifting at the onset, solved from rest); about 30 s. Its motion at the mesh points from the onset
-   to 500 ms: the whole robot's CoM ahead of the stance ankle and its height change, the pushed
+   lifting at the onset, solved from rest); about 30 s. Its motion at mesh points (TIMES) from the onset
+   to 1.2 s: the whole robot's CoM ahead of the stance ankle and its height change, the pushed
    pendulum's capture point xi + u ahead of the stance ankle (xi = c + c'/omega, omega = sqrt(g / c_z),
    u = F h / (m g) with the push then), the upper body's pitch (+ forward), the stance ankle's and
    knee's angles and the swing ankle's place.
 2. The stepping layer on the 3D plant (Hoap2Plant3D, the 3D controller with stepping on; its defaults,
    or --set NAME=VALUE ...) under the same push at --force N (default 16 N): the same quantities
    from the plant's truth at the same times (the stance ankle is the ankles' mid-point at the onset:
-   the feet stand side by side; the joints as measured, the trunk's pitch from the IMU).
+   the feet stand side by side; the joints as measured, the trunk's pitch from the IMU), up to a fall,
+   and the layer's landing point, both soles' loads and the trunk's roll.
 
     .venv/bin/python scripts/one_step_anatomy.py [--force N] [--set NAME=VALUE ...]
 """
