@@ -33,6 +33,7 @@ sys.path.insert(0, str(ROOT / "scripts"))
 from anklehip.analysis import one_step as os_  # noqa: E402
 from anklehip.analysis.bounds import is_step_forward  # noqa: E402
 from anklehip.analysis.flat_footed import push_shape  # noqa: E402
+import stepping_trials as st  # noqa: E402  (scripts/: the plant runs and the Pinocchio legs)
 
 DURATION, RISE, T_AFTER, DT = 1.0, 0.05, 0.5, 0.05   # as scripts/one_step_optimum.py's coarse mesh
 T_LIFT, T_LAND, CLEARANCE = 0.06, 0.3, 0.01           # its second series' 300 ms point
@@ -77,7 +78,6 @@ def stance_hip_ahead(legs, d, k, side):
     """The stance leg's hip pitch axis ahead of its ankle pitch axis [m] at row k, from the plant's measured
     joints and IMU: the robot file's legs through Pinocchio as `stepping_trials.py --swing` reads them
     (stepping_trials.measured_pose; tests/test_leg_ik_crosscheck.py checks the joints' map)."""
-    import stepping_trials as st
     model, data, _ = legs
     R = st.measured_pose(legs, d, k)
     at = lambda j: data.oMi[model.getJointId(f"{side[0]}leg_{j}")].translation
@@ -85,7 +85,6 @@ def stance_hip_ahead(legs, d, k, side):
 
 
 def layer_rows(force, settings):
-    import stepping_trials as st
     from anklehip.files.paths import find_scenario
     from anklehip.files.scenario import load_scenario
     from anklehip.running import native

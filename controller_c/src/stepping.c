@@ -1184,6 +1184,7 @@ void ahc_step_step(ahc_stepper *c, const ahc_step_sensors *s, const double flat_
     out->push_moment = c->push_moment;
     if (c->phase != AHC_STEP_STAND) {
         double r[2], v[2], a[2], q[2][AHC_LEG_JOINTS], z, pitch, roll = 0.0, swing_z = c->ankle_height, lead_alpha;
+        double stance_sole_pitch = NAN; /* on one foot: the stance sole's measured pitch (toes down +) */
         /* the supporting legs' length (drop_knee); the hips' height follows from the legs' lean */
         double knee = drop_knee(c);
         double p_cmd[2];
@@ -1217,6 +1218,7 @@ void ahc_step_step(ahc_stepper *c, const ahc_step_sensors *s, const double flat_
             /* the stance foot's tilt (pitch toes down +, roll left edge up +), low-passed */
             const double *F = Rfw[stance_of(c)];
             const double tp = asin(clampd(-F[6], -1.0, 1.0)), tr = atan2(F[7], F[8]);
+            stance_sole_pitch = tp;
             const double al = c->p.step_velocity_tau > 0.0 ? 1.0 - exp(-c->dt / c->p.step_velocity_tau) : 1.0;
             if (isfinite(tp) && isfinite(tr)) {
                 const double w = c->tilt_valid ? al : 1.0;
@@ -1238,11 +1240,8 @@ void ahc_step_step(ahc_stepper *c, const ahc_step_sensors *s, const double flat_
             for (side = 0; side < 2; ++side)
                 if (!(one_foot(c->phase) && side == c->swing_side))
                     q[side][AHC_LEG_HIP_PITCH] -= c->p.step_trunk_gain * (s->imu_pitch - pitch);
-        if (one_foot(c->phase) && c->p.step_stance_tilt_gain > 0.0) {
-            const int stance = stance_of(c);
-            const double sole_pitch = asin(clampd(-Rfw[stance][6], -1.0, 1.0));
-            if (isfinite(sole_pitch)) q[stance][AHC_LEG_ANKLE_PITCH] += c->p.step_stance_tilt_gain * sole_pitch;
-        }
+        if (one_foot(c->phase) && c->p.step_stance_tilt_gain > 0.0 && isfinite(stance_sole_pitch))
+            q[stance_of(c)][AHC_LEG_ANKLE_PITCH] += c->p.step_stance_tilt_gain * stance_sole_pitch;
         lead_alpha = c->p.step_lead_tau > 0.0 ? 1.0 - exp(-c->dt / c->p.step_lead_tau) : 1.0;
         for (side = 0; side < 2; ++side)
             for (j = 0; j < AHC_LEG_JOINTS; ++j) {
