@@ -60,6 +60,65 @@ void ahc_step_params_default(ahc_step_params *p)
     p->step_trunk_back = 0.0;
     p->step_trunk_gain = 0.0;
     p->step_stance_tilt_gain = 0.0;
+    p->step_feet_tilt_gain = 0.0;
+    p->step_settle_on_axis = 0;
+}
+
+/* 1 s back pushes above the sustained-push limit, held with one step (docs/controller.md §12.6,
+ * each setting measured one at a time by scripts/stepping_trials.py --lasting --ablation): the
+ * decision on the pushed pendulum's capture point alone and the step under the push as estimated
+ * (§12.1, §12.4-12.5), steps up to 200 mm with the hips leading, a quick step, and the robot left at
+ * rest on the feet apart. */
+static void step_params_lasting_push(ahc_step_params *p)
+{
+    ahc_step_params_default(p);
+    p->stepping_enabled = 1;
+    p->step_push_estimate = 2;
+    p->step_trigger_lean = 0.0;
+    p->step_length_max = 0.2;
+    p->step_swing_measured = 1.0;
+    p->step_swing_hold = 0.04;
+    p->step_trunk_back = 0.5;
+    p->step_trunk_gain = 3.0;
+    p->step_stance_tilt_gain = 3.0;
+    p->step_shift_time_max = 0.0;
+    p->step_swing_time = 0.15;
+    p->step_feet_tilt_gain = 1.0;
+    p->step_settle_on_axis = 1;
+    p->step_settle_time = 1.0;
+    p->step_close = 0;
+}
+
+static const struct {
+    const char *name;
+    const char *description;
+    void (*fill)(ahc_step_params *);
+} k_step_configs[] = {
+    {"lasting_push", "1 s back pushes above the sustained-push limit (19.1 N) on the 3D robot, held with one step: "
+                     "the stepping layer on, the push-aware decision and step up to 200 mm with the hips leading, a "
+                     "quick step, the robot left at rest on the feet apart; on short pushes it falls, so not the "
+                     "default (docs/controller.md section 12.6)",
+     step_params_lasting_push},
+};
+#define N_STEP_CONFIGS (sizeof k_step_configs / sizeof k_step_configs[0])
+
+size_t ahc_step_config_count(void) { return N_STEP_CONFIGS; }
+
+const char *ahc_step_config_name(size_t i) { return i < N_STEP_CONFIGS ? k_step_configs[i].name : NULL; }
+
+const char *ahc_step_config_description(size_t i) { return i < N_STEP_CONFIGS ? k_step_configs[i].description : NULL; }
+
+int ahc_step_params_named(ahc_step_params *p, const char *name)
+{
+    size_t i;
+    if (!p) return AHC_ERR_NULL;
+    for (i = 0; name && i < N_STEP_CONFIGS; ++i)
+        if (strcmp(name, k_step_configs[i].name) == 0) {
+            k_step_configs[i].fill(p);
+            return AHC_OK;
+        }
+    ahc_step_params_default(p);
+    return AHC_ERR_UNKNOWN_NAME;
 }
 
 #define SD(field, unit, lo, hi, desc) \
@@ -115,6 +174,8 @@ static const ahc_param_info k_stable[] = {
     SD(step_trunk_back, "rad", 0.0, 1.0, "The step's trunk pitch plan aims this far back of erect, reached over step_pitch_time from the decision, back to erect over step_pitch_time from the landing: the hips lead the CoM; 0: the trunk returns to erect from the decision"),
     SD(step_trunk_gain, "1", 0.0, 20.0, "The supporting legs' hip pitch set points move by this times the trunk's measured pitch less the plan's, against it: trunk attitude feedback through the hips; 0: off"),
     SD(step_stance_tilt_gain, "1", 0.0, 20.0, "On one foot the stance ankle's pitch set point moves by this times the stance sole's measured pitch (toes down +): the ankle yields as the sole rolls onto its toe or heel; 0: off"),
+    SD(step_feet_tilt_gain, "1", 0.0, 20.0, "On both feet (the weight shift, the landed foot's transfer, the settling) each ankle's pitch set point moves by this times its sole's measured pitch (toes down +): the ankles yield as the soles roll onto an edge; 0: off"),
+    SI(step_settle_on_axis, 0.0, 1.0, "1: the settling holds the capture point, across, on the line between the ankles at the CoM reference's x (the feet one ahead of the other: the middle of their support there); 0: at the feet's mid-point"),
 };
 #define STABLE_LEN (sizeof k_stable / sizeof k_stable[0])
 
@@ -745,6 +806,21 @@ static void start_close_shift(ahc_stepper *c)
     c->close_stage = 2;
 }
 
+/* SETTLE's hold with step_settle_on_axis: across, the line between the ankles at the CoM
+ * reference's x (with the feet one ahead of the other, a point between them is inside their support
+ * only near that line: the feet's mid-point lies on it, a CoM held back by a push does not), blended
+ * into the mid-point as the feet come side by side (their x apart less than a sole's length). */
+static void settle_on_axis(const ahc_stepper *c, double hold[2])
+{
+    const double *back = c->feet[AHC_LEFT][0] <= c->feet[AHC_RIGHT][0] ? c->feet[AHC_LEFT] : c->feet[AHC_RIGHT];
+    const double *front = back == c->feet[AHC_LEFT] ? c->feet[AHC_RIGHT] : c->feet[AHC_LEFT];
+    const double dx = front[0] - back[0];
+    const double w = clampd(dx / (c->toe_x - c->heel_x), 0.0, 1.0);
+    const double t = dx > 0.0 ? clampd((c->cref[0] - back[0]) / dx, 0.0, 1.0) : 0.5;
+    hold[0] = c->settle_mid[0];
+    hold[1] = c->settle_mid[1] + w * (back[1] + t * (front[1] - back[1]) - c->settle_mid[1]);
+}
+
 /* One tick of the pendulum reference: its ZMP is the
  * phase's planned one moved by the capture point's error, p = zmp + (1 + step_dcm_gain / omega)
  * (xi_measured - xi_reference) (the capture-point tracking law of Englsberger et al. 2015), inside
@@ -759,7 +835,12 @@ static void pendulum_tick(ahc_stepper *c, const double xi_meas[2], double p_out[
     const double *hold = c->phase == AHC_STEP_SETTLE && c->phase_time >= c->settle_capture_time ? c->settle_mid
                          : c->phase == AHC_STEP_CLOSE                                           ? c->zmp
                                                                                                 : NULL;
+    double on_axis[2];
     int i;
+    if (hold == c->settle_mid && c->p.step_settle_on_axis) {
+        settle_on_axis(c, on_axis);
+        hold = on_axis;
+    }
     if (one_foot(c->phase)) {
         double b[4];
         sole_box(c, stance_of(c), b);
@@ -1235,13 +1316,18 @@ void ahc_step_step(ahc_stepper *c, const ahc_step_sensors *s, const double flat_
             plan_joints(c, r, z, roll, pitch, swing_z, P, R_meas, q);
         }
         /* feedback on what the joints did not do: the trunk's pitch through the supporting hips, the
-         * stance sole's roll onto an edge through its ankle (docs/controller.md §12.5) */
+         * supporting soles' roll onto an edge through their ankles (docs/controller.md §12.5) */
         if (c->p.step_trunk_gain > 0.0 && isfinite(s->imu_pitch))
             for (side = 0; side < 2; ++side)
                 if (!(one_foot(c->phase) && side == c->swing_side))
                     q[side][AHC_LEG_HIP_PITCH] -= c->p.step_trunk_gain * (s->imu_pitch - pitch);
         if (one_foot(c->phase) && c->p.step_stance_tilt_gain > 0.0 && isfinite(stance_sole_pitch))
             q[stance_of(c)][AHC_LEG_ANKLE_PITCH] += c->p.step_stance_tilt_gain * stance_sole_pitch;
+        if (!one_foot(c->phase) && c->p.step_feet_tilt_gain > 0.0)
+            for (side = 0; side < 2; ++side) {
+                const double sole_pitch = asin(clampd(-Rfw[side][6], -1.0, 1.0));
+                if (isfinite(sole_pitch)) q[side][AHC_LEG_ANKLE_PITCH] += c->p.step_feet_tilt_gain * sole_pitch;
+            }
         lead_alpha = c->p.step_lead_tau > 0.0 ? 1.0 - exp(-c->dt / c->p.step_lead_tau) : 1.0;
         for (side = 0; side < 2; ++side)
             for (j = 0; j < AHC_LEG_JOINTS; ++j) {

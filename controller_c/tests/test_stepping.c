@@ -389,6 +389,38 @@ static void test_close_inset(void)
 }
 
 /* Validation names the parameter and its value. */
+/* The named stepping configurations (ahc_step_params_named): lasting_push is the stepping layer on
+ * with docs/controller.md §12.6's settings and valid on HOAP-2; an unknown name (or NULL) is an error
+ * that leaves the defaults. */
+static void test_named_step_configs(void)
+{
+    ahc_params sp;
+    ahc_frontal_params fp;
+    ahc_step_params st, def;
+    char msg[256];
+    size_t i;
+    defaults(&sp, &fp, &st);
+    memset(&def, 0x5a, sizeof def); /* (the padding as the one below: the structs compare bytewise) */
+    ahc_step_params_default(&def);
+    CHECK(ahc_step_config_count() == 1 && strcmp(ahc_step_config_name(0), "lasting_push") == 0 &&
+              ahc_step_config_name(1) == NULL && ahc_step_config_description(0) != NULL &&
+              ahc_step_config_description(1) == NULL,
+          "one named stepping configuration, lasting_push");
+    CHECK(ahc_step_params_named(&st, "lasting_push") == AHC_OK, "lasting_push by name");
+    CHECK(st.stepping_enabled == 1 && st.step_push_estimate == 2 && st.step_trigger_lean == 0.0 &&
+              st.step_length_max == 0.2 && st.step_swing_time == 0.15 && st.step_shift_time_max == 0.0 &&
+              st.step_feet_tilt_gain == 1.0 && st.step_settle_on_axis == 1 && st.step_close == 0,
+          "its settings (docs/controller.md 12.6)");
+    CHECK(ahc_step_params_validate(&st, &sp, &fp, msg, sizeof msg) == AHC_OK, "valid on HOAP-2: %s", msg);
+    for (i = 0; i < 2; ++i) {
+        memset(&st, 0x5a, sizeof st);
+        CHECK(ahc_step_params_named(&st, i ? NULL : "Lasting_push") == AHC_ERR_UNKNOWN_NAME &&
+                  memcmp(&st, &def, sizeof st) == 0,
+              "an unknown name is AHC_ERR_UNKNOWN_NAME and leaves the defaults (%s)", i ? "NULL" : "Lasting_push");
+    }
+    CHECK(ahc_step_params_named(NULL, "lasting_push") == AHC_ERR_NULL, "NULL parameters: AHC_ERR_NULL");
+}
+
 static void test_params(void)
 {
     ahc_params sp;
@@ -1071,9 +1103,87 @@ static void test_trunk_and_tilt_feedback(void)
           "and erect step_pitch_time after the landing (%.6f, phase %d)", back_after, landed_phase_seen);
 }
 
+/* The feet-apart options of docs/controller.md §12.6. step_feet_tilt_gain: robots in lockstep on the
+ * same readings (standing still, pitched forward by 0.02 rad on flat joints: each sole pitched by it),
+ * stepping at a set time; once a switch's blend is out, the gain moves only the ankles' pitch set
+ * points on both feet (SHIFT, TRANSFER, SETTLE), each by gain times its sole's pitch, and on one foot
+ * nothing. step_settle_on_axis: the same robots in SETTLE, their feet then put one ahead of the other
+ * (the left 180 mm ahead) and the step's push estimate set, so that the CoM reference rests behind
+ * the feet's mid-point; after 3 s the plain layer's reference rests across at the mid-point, the
+ * axis layer's on the line between the ankles at its x, both at the same x. */
+static void test_feet_apart_options(void)
+{
+    enum { PLAIN, FEET, AXIS, ROBOTS };
+    ahc_step_params st[ROBOTS];
+    static ahc_stepper c[ROBOTS];
+    ahc_step_sensors s;
+    ahc_step_outputs out[ROBOTS];
+    const double flat[2][AHC_LEG_JOINTS] = {{0}};
+    const double theta = 0.02, gain = 1.5, M = 4.0;
+    double worst = 0.0, u, axis_y;
+    int k, r, side, j, others_same = 1, compared = 0, on_two = 0, on_one = 0;
+    for (r = 0; r < ROBOTS; ++r) {
+        moment_params(&st[r], 1.0, 50.0, 2); /* no rule fires: the step starts at the set time */
+        st[r].step_trigger_time = 0.1;
+        st[r].step_close = 0;
+    }
+    st[FEET].step_feet_tilt_gain = gain;
+    st[AXIS].step_settle_on_axis = 1;
+    for (r = 0; r < ROBOTS; ++r) stand_under_moment(&c[r], &st[r], 0.0, &s);
+    s.imu_pitch = theta;
+    s.zmp_x = 0.0;
+    for (k = 2; k < 3000; ++k) {
+        for (r = 0; r < ROBOTS; ++r) ahc_step_step(&c[r], &s, flat, &out[r]);
+        if (out[PLAIN].phase == AHC_STEP_SETTLE && c[PLAIN].phase_time > 0.5) break;
+        if (!out[PLAIN].active || c[PLAIN].blend_time < st[PLAIN].step_blend_time + c[PLAIN].dt ||
+            c[FEET].blend_time < st[FEET].step_blend_time + c[FEET].dt || out[FEET].phase != out[PLAIN].phase)
+            continue;
+        ++compared;
+        {
+            const int one_foot = out[PLAIN].phase == AHC_STEP_SWING || out[PLAIN].phase == AHC_STEP_CLOSE;
+            on_one += one_foot;
+            on_two += !one_foot;
+            for (side = 0; side < 2; ++side)
+                for (j = 0; j < AHC_LEG_JOINTS; ++j) {
+                    const double d = out[FEET].q_ref[side][j] - out[PLAIN].q_ref[side][j];
+                    if (j == AHC_LEG_ANKLE_PITCH && !one_foot) worst = fmax(worst, fabs(d - gain * theta));
+                    else others_same = others_same && d == 0.0;
+                }
+        }
+    }
+    CHECK(k < 3000 && on_two > 300 && on_one > 40, "the step ran into SETTLE (%d ticks on both feet, %d on one)", on_two,
+          on_one);
+    CHECK(worst < 1e-9, "on both feet the ankles' pitch moves by 1.5 x the sole's pitch (worst %.2e rad)", worst);
+    CHECK(others_same, "every other set point, and all on one foot, bit-identical to the plain layer's");
+    /* the settling on the feet one ahead of the other, under the step's push estimate */
+    for (r = 0; r < ROBOTS; ++r) {
+        c[r].feet[AHC_LEFT][0] += 0.18;
+        for (j = 0; j < 2; ++j) c[r].settle_mid[j] = 0.5 * (c[r].feet[AHC_LEFT][j] + c[r].feet[AHC_RIGHT][j]);
+        c[r].push_planned = M;
+    }
+    for (k = 0; k < 3000; ++k)
+        for (r = 0; r < ROBOTS; ++r) ahc_step_step(&c[r], &s, flat, &out[r]);
+    u = M / (c[PLAIN].mass * c[PLAIN].g);
+    axis_y = c[AXIS].feet[AHC_RIGHT][1] + (c[AXIS].cref[0] - c[AXIS].feet[AHC_RIGHT][0]) /
+                                             (c[AXIS].feet[AHC_LEFT][0] - c[AXIS].feet[AHC_RIGHT][0]) *
+                                             (c[AXIS].feet[AHC_LEFT][1] - c[AXIS].feet[AHC_RIGHT][1]);
+    CHECK(out[PLAIN].phase == AHC_STEP_SETTLE && out[AXIS].phase == AHC_STEP_SETTLE, "both still settle (%d, %d)",
+          out[PLAIN].phase, out[AXIS].phase);
+    CHECK(fabs(c[PLAIN].cref[0] - (c[PLAIN].settle_mid[0] - u)) < 1e-4 && fabs(c[AXIS].cref[0] - c[PLAIN].cref[0]) < 1e-4,
+          "both CoM references rest u = %.1f mm behind the mid-point (%.4f, %.4f; mid %.4f)", 1e3 * u, c[PLAIN].cref[0],
+          c[AXIS].cref[0], c[PLAIN].settle_mid[0]);
+    CHECK(fabs(c[PLAIN].cref[1] - c[PLAIN].settle_mid[1]) < 1e-4, "the plain one across at the mid-point (%.4f, mid %.4f)",
+          c[PLAIN].cref[1], c[PLAIN].settle_mid[1]);
+    CHECK(fabs(c[AXIS].cref[1] - axis_y) < 1e-4 && fabs(axis_y - c[AXIS].settle_mid[1]) > 0.01,
+          "the axis one on the line between the ankles at its x (%.4f, the line %.4f, mid %.4f)", c[AXIS].cref[1], axis_y,
+          c[AXIS].settle_mid[1]);
+}
+
 int main(void)
 {
     test_faults_while_stepping();
+    test_feet_apart_options();
+    test_named_step_configs();
     test_push_observer();
     test_push_decision();
     test_push_planned_at_decision();

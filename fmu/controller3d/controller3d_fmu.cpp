@@ -32,6 +32,22 @@ std::string frontalRows(const char* config) {
   return ahcfmu::differingRows(table, count, &f, &def);
 }
 
+// configurations.toml's stepping configurations (ahc_step_params_named): the 3D controller's own,
+// their sagittal and frontal parts the defaults
+std::string stepConfigs() {
+  ahc_step_params def, p;
+  ahc_step_params_default(&def);
+  size_t count = 0;
+  const ahc_param_info* table = ahc_step_param_table(&count);
+  std::string s;
+  for (size_t c = 0; c < ahc_step_config_count(); ++c) {
+    ahc_step_params_named(&p, ahc_step_config_name(c));
+    s += std::string("\n[") + ahc_step_config_name(c) + "]\ndescription = \"" + ahc_step_config_description(c) + "\"\n";
+    s += ahcfmu::differingRows(table, count, &p, &def);
+  }
+  return s;
+}
+
 namespace vr {
 enum : fmi2ValueReference {
   // the sagittal FMU's
@@ -194,7 +210,7 @@ ModelInfo makeInfo() {
   table = ahc_step_param_table(&count);
   ahcfmu::addParamVariables(m, table, count, vr::first_step_param, &stdef, isTunable);
   // the named configurations of both planes
-  m.resources.emplace_back("configurations.toml", ahcfmu::configurationsToml("AnkleHipController3D", frontalRows));
+  m.resources.emplace_back("configurations.toml", ahcfmu::configurationsToml("AnkleHipController3D", frontalRows, stepConfigs));
   // FMI 3.0: the legs' joint angles in and per-leg set points out also as [side, joint] arrays, named as
   // Hoap2Plant3D's (q out of the plant, q_leg_ref into it: the arrays connect by name too); docs/fmu.md §8
   std::vector<fmi2ValueReference> q_in, q_out;

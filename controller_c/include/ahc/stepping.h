@@ -144,10 +144,27 @@ typedef struct {
     double step_stance_tilt_gain; /* on one foot, the stance ankle's pitch set point moves by the
                                   stance sole's measured pitch (toes down +) times this: the ankle
                                   yields as the sole rolls onto its edge; 0: off [1]             */
+    double step_feet_tilt_gain; /* on both feet, each ankle's pitch set point moves by its sole's
+                                  measured pitch (toes down +) times this; 0: off [1]            */
+    int step_settle_on_axis;   /* 1: SETTLE holds the capture point, across, on the line between the
+                                  ankles at the CoM reference's x (the feet one ahead of the other:
+                                  the middle of their support there); 0: at the feet's mid-point */
 } ahc_step_params;
 
 /* HOAP-2 defaults (docs/controller.md §12): stepping off. */
 void ahc_step_params_default(ahc_step_params *p);
+
+/* The stepping layer's named configurations (the 3D controller's, beside ahc_params_named's, whose
+ * stepping part is the defaults): "lasting_push", the settings that hold 1 s back pushes above the
+ * sustained-push limit with one step (docs/controller.md §12.6; not the default: on short pushes
+ * they fall). ahc_step_config_name / _description return NULL past the end. The 3D controller FMU
+ * lists them, with the values that differ from the defaults, in resources/configurations.toml. */
+size_t ahc_step_config_count(void);
+const char *ahc_step_config_name(size_t i);
+const char *ahc_step_config_description(size_t i);
+/* Fill p with the named configuration: AHC_OK, or AHC_ERR_UNKNOWN_NAME for an unknown name (or NULL)
+ * (p is then the defaults). */
+int ahc_step_params_named(ahc_step_params *p, const char *name);
 /* Validate against itself and the robot (sp, fp). AHC_OK or AHC_ERR_*, message as ahc_params_validate. */
 int ahc_step_params_validate(const ahc_step_params *p, const ahc_params *sp, const ahc_frontal_params *fp, char *msg,
                              size_t msg_size);

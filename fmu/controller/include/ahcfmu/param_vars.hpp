@@ -153,8 +153,10 @@ inline void addPhaseEnumeration(fmuglue::ModelInfo& m) {
 // resources/configurations.toml: every named configuration of the C library (ahc_params_named)
 // with the parameter values that differ from the defaults, for importers that select a
 // configuration by name (anklehip: `controller_config = "paper"`); `more_rows`, when given, adds an
-// FMU's own rows per configuration name (the 3D controller's frontal ones). Generated, never edited.
-inline std::string configurationsToml(const char* model, std::string (*more_rows)(const char* config) = nullptr) {
+// FMU's own rows per configuration name (the 3D controller's frontal ones), `more_configs` an FMU's
+// own configurations after them (the 3D controller's stepping ones). Generated, never edited.
+inline std::string configurationsToml(const char* model, std::string (*more_rows)(const char* config) = nullptr,
+                                      std::string (*more_configs)() = nullptr) {
   ahc_params def;
   ahc_params_default(&def);
   size_t count = 0;
@@ -169,6 +171,7 @@ inline std::string configurationsToml(const char* model, std::string (*more_rows
     s += differingRows(table, count, &p, &def);
     if (more_rows) s += more_rows(ahc_config_name(c));
   }
+  if (more_configs) s += more_configs();
   return s;
 }
 
