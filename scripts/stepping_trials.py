@@ -15,13 +15,14 @@ paper_five_pushes_3d's base, run with the 3D controller:
 3. side (90 deg) and diagonal (45 and 30 deg: back and left) pushes, stepping on and flat-footed
    (stepping on, its thresholds out of reach, the lean rule off): the outcome and the steps landed.
 
-    .venv/bin/python scripts/stepping_trials.py [--set NAME=VALUE ...]
+    .venv/bin/python scripts/stepping_trials.py [--config NAME] [--set NAME=VALUE ...]
     .venv/bin/python scripts/stepping_trials.py --sweep NAME=V1,V2,... [--set ...]
     .venv/bin/python scripts/stepping_trials.py --map [--set ...]
     .venv/bin/python scripts/stepping_trials.py --map --sweep NAME=V1,V2,... [--set ...]
     .venv/bin/python scripts/stepping_trials.py --landing [--set ...]
     .venv/bin/python scripts/stepping_trials.py --touchdown [--set ...]
     .venv/bin/python scripts/stepping_trials.py --swing [--set ...]
+    .venv/bin/python scripts/stepping_trials.py --lasting [--ablation] [--set ...]
 
 --map: the boundary (the largest force below which every 1 N step stands) of back pushes of each
 duration, flat-footed (the 3D controller's defaults, stepping off) and with stepping, and their ratio.
@@ -54,6 +55,13 @@ largest pitch toes down relative to the stance sole, the stance sole's own large
 and where the swing ankle was, ahead of the stance ankle, when the sole came down against where the
 layer sent it.
 
+--lasting: 1 s back pushes with scenarios/step_lasting_push_3d.toml's settings (the 3D controller's
+configuration lasting_push, docs/controller.md §12.6; runs of 8 s): stood or fell for every force of 8-24 N, with the push's
+ramps of 20, 50 and 100 ms and onsets at 1, 1.011 and 1.37 s; then 19-23 N on plant variants (the
+contacts 4 times stiffer and softer, both ODE steps 16 times shorter, noisy load cells, friction 0.6);
+with --ablation, then, one at a time, each of the settings back at the layer's default: how many of
+those 153 pushes stand (some 15 minutes).
+
 --touchdown: what the first landing does to the robot, over back pushes around the stepping boundary
 of each duration: the time no sole touches the ground after it, the largest sole load within 0.3 s of
 it, and the largest change of a joint set point in one tick after it.
@@ -74,6 +82,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from anklehip.files.paths import find_scenario  # noqa: E402
 from anklehip.files.scenario import PushProfile, PushSegment, load_scenario  # noqa: E402
 from anklehip.running import native  # noqa: E402
+from anklehip.running.fmu import FMUError  # noqa: E402
 from anklehip.running.master import Models, simulate  # noqa: E402
 
 FLAT = [(14, 0.2), (17, 0.2), (19, 0.2), (20, 0.2), (21, 0.2), (22, 0.2), (-10, 0.2), (-13, 0.2), (-14, 0.2),
@@ -88,13 +97,14 @@ ONSET = 1.0  # every push's onset [s]
 TOUCHDOWN_FORCES = {0.15: (28, 44), 0.2: (20, 32), 0.3: (15, 21), 0.5: (11, 14), 1.0: (10, 12)}
 
 
-def run(scenario, models, engine, force, duration, overrides, angle=0.0):
+def run(scenario, models, engine, force, duration, overrides, angle=0.0, *, onset=ONSET, rise=0.05, stop_time=6.0,
+        plant=None):
     a = np.radians(angle)
-    push, push_y = (PushProfile.from_segments([PushSegment("pulse", t=ONSET, force=float(f), duration=duration, rise=0.05)])
+    push, push_y = (PushProfile.from_segments([PushSegment("pulse", t=onset, force=float(f), duration=duration, rise=rise)])
                     for f in (force * np.cos(a), force * np.sin(a)))
-    sc = dataclasses.replace(scenario, controller_model="3d", push=push, stop_time=6.0,
+    sc = dataclasses.replace(scenario, controller_model="3d", push=push, stop_time=stop_time,
                              **({"push_y": push_y} if angle else {}))
-    return simulate(sc, models, controller_overrides=overrides, progress=False, engine=engine)
+    return simulate(sc, models, controller_overrides=overrides, plant_overrides=plant, progress=False, engine=engine)
 
 
 def col(d, name):
@@ -115,6 +125,9 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
                     help="a stepping (or any controller) parameter for part 2")
+    ap.add_argument("--config", metavar="NAME",
+                    help="the controller's named configuration (e.g. lasting_push, docs/controller.md §12.6) under "
+                         "any --set")
     ap.add_argument("--sweep", metavar="NAME=V1,V2,...",
                     help="one parameter over these values, on 0.2 s back pushes of 20-30 N; with --map, the boundaries "
                          "per value (nothing else runs)")
@@ -127,6 +140,11 @@ def main(argv=None) -> int:
     ap.add_argument("--swing", action="store_true",
                     help="1 s back pushes: the first swing's clearance, foot pitch and reach from the plant's joints "
                          "(nothing else runs)")
+    ap.add_argument("--lasting", action="store_true",
+                    help="1 s back pushes with scenarios/step_lasting_push_3d.toml's settings over forces, ramps, "
+                         "onsets, plant variants and each setting left out (nothing else runs)")
+    ap.add_argument("--ablation", action="store_true",
+                    help="with --lasting: then each setting back at its default, one at a time (some 15 minutes)")
     ap.add_argument("--map", action="store_true",
                     help="the boundaries of back pushes per duration, flat-footed and with stepping (nothing else runs)")
     args = ap.parse_args(argv)
@@ -136,6 +154,14 @@ def main(argv=None) -> int:
         extra[k] = float(v)
     scenario = load_scenario(find_scenario("paper_five_pushes_3d"))
     models = Models.load(None, plant_model="3d", controller_model="3d")
+    if args.config:
+        try:
+            named = models.controller.configuration(args.config, "--config")
+        except FMUError as e:
+            print(f"stepping_trials.py: {e}", file=sys.stderr)
+            return 2
+        args.set = [f"{k}={v:g}" for k, v in named.items()] + args.set
+        extra = {**named, **extra}
     engine = native.default_engine()
     def boundary(duration, overrides):
         force = 1
@@ -143,6 +169,8 @@ def main(argv=None) -> int:
             force += 1
         return force - 1
 
+    if args.lasting:
+        return lasting(models, engine, extra, args.ablation)
     if args.landing:
         return landing_times(scenario, models, engine, extra, args.set)
     if args.touchdown:
@@ -504,6 +532,59 @@ def touchdowns(scenario, models, engine, extra, settings) -> int:
         print(f"| {duration:g} | {lo}-{hi} | {len(rows)} | {int(stood.sum())} | {int((flight > 0.005).sum())} | "
               f"{1000 * flight.max():.0f} | {np.median(load):.0f} / {load.max():.0f} | "
               f"{np.median(jump):.3f} / {jump.max():.3f} |")
+    return 0
+
+
+LASTING_FORCES = range(8, 25)
+LASTING_PUSHES = [(rise, onset) for rise in (0.02, 0.05, 0.1) for onset in (1.0, 1.011, 1.37)]  # (ramp, onset) [s]
+# the plant's contact damping stays critical for its stiffness (docs/plant3d.md: c ~ sqrt(k))
+LASTING_PLANTS = {"the default plant": {},
+                  "contacts 4x stiffer": {"contact_stiffness": 8e8, "contact_damping": 3.35e5},
+                  "contacts 4x softer": {"contact_stiffness": 5e7, "contact_damping": 8.375e4},
+                  "ODE steps 1/16 ms": {"internal_step": 6.25e-5, "rocking_step": 6.25e-5},
+                  "load cells' noise 0.5 N": {"sensor_noise": 0.5},
+                  "friction 0.6": {"mu": 0.6}}
+
+
+def lasting(models, engine, extra, ablation=False) -> int:
+    """1 s back pushes with step_lasting_push_3d's settings (docs/controller.md §12.6)."""
+    scenario = load_scenario(find_scenario("step_lasting_push_3d"))
+    settings = {**models.controller.configuration(scenario.controller_config), **scenario.controller, **extra}
+    def stood(force, overrides, rise=0.05, onset=ONSET, plant=None):
+        r = run(scenario, models, engine, force, 1.0, overrides, rise=rise, onset=onset, stop_time=8.0, plant=plant)
+        return r.outcome == "completed"
+
+    print(f"1 s back pushes, step_lasting_push_3d's settings (configuration {scenario.controller_config})"
+          + (f" and {extra}" if extra else "")
+          + ": S stood to 8 s, F fell")
+    print("| ramp [ms] | onset [s] | " + " | ".join(f"{f} N" for f in LASTING_FORCES) + " |")
+    print("|---|---|" + "---|" * len(LASTING_FORCES))
+    for rise, onset in LASTING_PUSHES:
+        cells = ["S" if stood(f, settings, rise, onset) else "F" for f in LASTING_FORCES]
+        print(f"| {1000 * rise:.0f} | {onset:g} | " + " | ".join(cells) + " |")
+
+    forces = range(19, 24)
+    print("\nthe same settings on plant variants (50 ms ramps, onset 1 s)")
+    print("| plant | " + " | ".join(f"{f} N" for f in forces) + " |")
+    print("|---|" + "---|" * len(forces))
+    for name, plant in LASTING_PLANTS.items():
+        print(f"| {name} | " + " | ".join("S" if stood(f, settings, plant=plant) else "F" for f in forces) + " |")
+
+    if not ablation:
+        return 0
+    forces = LASTING_FORCES
+    defaults = {name: models.controller.vars[name].start for name in settings}  # the FMU's start values
+    def count(overrides):
+        return sum(stood(f, overrides, rise, onset) for rise, onset in LASTING_PUSHES for f in forces)
+    print("\neach setting back at the layer's default, one at a time: how many of the "
+          f"{len(LASTING_PUSHES) * len(forces)} pushes of {forces[0]}-{forces[-1]} N (the ramps and onsets above) stand")
+    print("| setting | its value -> the default | stood |")
+    print("|---|---|---|")
+    print(f"| none | - | {count(settings)} |")
+    for name, value in settings.items():
+        if name == "stepping_enabled":
+            continue
+        print(f"| `{name}` | {value:g} -> {defaults[name]:g} | {count({**settings, name: defaults[name]})} |")
     return 0
 
 

@@ -71,3 +71,17 @@ def test_sweep_variant_config_and_bad_variants(fmu_dir, capsys):
                       ("y:config=papr", "has no configuration 'papr' (--variant y)")]:
         assert main(["--fmu-dir", str(fmu_dir), "sweep", "ankle_small_push", "--forces", "1", "--variant", spec]) == 2
         assert msg in capsys.readouterr().err
+
+
+def test_3d_fmu_ships_the_stepping_configuration(fmu_dir):
+    """AnkleHipController3D.fmu lists the C library's stepping configuration lasting_push
+    (ahc_step_params_named; docs/controller.md §12.6) after the shared ones: the stepping layer on and
+    only values that differ from the defaults; the sagittal FMU, which has no stepping layer, does not."""
+    m3 = Models.load(fmu_dir, plant_model="3d", controller_model="3d")
+    confs = m3.controller.configurations()
+    assert list(confs)[:3] == ["default", "paper", "omnidirectional"] and list(confs)[-1] == "lasting_push"
+    named = m3.controller.configuration("lasting_push")
+    params = m3.controller.parameters()
+    assert named["stepping_enabled"] == 1 and named["step_push_estimate"] == 2 and named["step_close"] == 0
+    assert all(k.startswith("step") and v != params[k].start for k, v in named.items())
+    assert "lasting_push" not in Models.load(fmu_dir).controller.configurations()
